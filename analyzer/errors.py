@@ -1,0 +1,50 @@
+"""One exception hierarchy for the analyzer (STYLE.md, habit 4).
+
+Every error subclasses :class:`AnalyzerError` *and* a built-in, so callers can
+catch either.  Input errors carry a JSON pointer (``field``) into the request
+and the rule that was broken; the CLI maps them to exit code 2 and the HTTP
+service to status 422.
+"""
+
+from __future__ import annotations
+
+
+class AnalyzerError(Exception):
+    """Base class of every error raised by :mod:`analyzer`."""
+
+
+class InvalidInput(AnalyzerError, ValueError):
+    """The request breaks a rule.
+
+    Parameters
+    ----------
+    field:
+        JSON pointer (RFC 6901) to the offending value, e.g. ``/system/A/0/1``.
+    rule:
+        The rule that was broken, in one sentence.
+    """
+
+    def __init__(self, field: str, rule: str) -> None:
+        self.field = field or "/"
+        self.rule = rule
+        super().__init__(f"{self.field}: {rule}")
+
+
+class AssumptionViolation(InvalidInput):
+    """The request is well formed but outside the hypotheses of the theorem used.
+
+    Example: a channel probability of exactly 0 or 1 violates Assumption 1 of
+    seed 001, so Theorem 1 gives no verdict for it.
+    """
+
+
+class LimitExceeded(InvalidInput):
+    """A size limit (dimension, Markov order, digits, steps, ...) is exceeded."""
+
+
+class BudgetExceeded(AnalyzerError, TimeoutError):
+    """A computation needed more work than its budget allows."""
+
+
+class NumericalFailure(AnalyzerError, ArithmeticError):
+    """A numerical step could not be completed or certified."""

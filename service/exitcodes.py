@@ -1,0 +1,10 @@
+"""Exit codes of the ``kfio`` CLI (a public contract: tools test them)."""
+
+STABLE = 0  #: verdict stable, or a non-verdict command succeeded
+UNSTABLE = 1  #: verdict unstable
+INVALID_INPUT = 2  #: the request broke a rule; one message on stderr names the field
+BOUNDARY = 3  #: verdict on the boundary |alpha|^2 sigma = 1 (Theorem 1's gap)
+BUDGET = 4  #: the work did not finish within its budget
+INTERNAL = 70  #: anything else: a bug (EX_SOFTWARE)
+
+BY_VERDICT = {"stable": STABLE, "unstable": UNSTABLE, "boundary": BOUNDARY}

@@ -1,0 +1,60 @@
+"""Input and output helpers shared by the CLI commands."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from typing import Any, Callable
+
+from analyzer.errors import BudgetExceeded, InvalidInput
+from analyzer.limits import Limits
+
+from . import exitcodes
+
+MAX_REQUEST_BYTES = 1 << 20
+
+
+def read_request_text(path: str) -> bytes:
+    """Read a request from ``path`` (``-`` for stdin), at most 1 MiB."""
+    try:
+        if path == "-":
+            data = sys.stdin.buffer.read(MAX_REQUEST_BYTES + 1)
+        else:
+            with open(path, "rb") as fh:
+                data = fh.read(MAX_REQUEST_BYTES + 1)
+    except OSError as exc:
+        raise InvalidInput("/", f"cannot read {path!r}: {exc.strerror}") from None
+    if len(data) > MAX_REQUEST_BYTES:
+        raise InvalidInput("/", f"request is larger than {MAX_REQUEST_BYTES} bytes")
+    return data
+
+
+def add_request_arguments(p: argparse.ArgumentParser) -> None:
+    """Arguments every request-taking command shares."""
+    p.add_argument("file", metavar="FILE", help="request JSON file, or - for standard input")
+    p.add_argument("--json", action="store_true", help="print the JSON report instead of a summary")
+
+
+def dump_json(report: dict[str, Any]) -> str:
+    """Stable JSON text: fixed key order as built, two-space indent."""
+    return json.dumps(report, indent=2, allow_nan=False)
+
+
+def limits_from_args(args: argparse.Namespace) -> Limits:
+    return Limits()
+
+
+def run_guarded(body: Callable[[], int]) -> int:
+    """Run a command body, mapping errors to exit codes and one stderr line."""
+    try:
+        return body()
+    except InvalidInput as exc:
+        print(f"kfio: invalid input at {exc.field}: {exc.rule}", file=sys.stderr)
+        return exitcodes.INVALID_INPUT
+    except BudgetExceeded as exc:
+        print(f"kfio: budget exceeded: {exc}", file=sys.stderr)
+        return exitcodes.BUDGET
+    except KeyboardInterrupt:
+        print("kfio: interrupted", file=sys.stderr)
+        return 130
