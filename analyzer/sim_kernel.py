@@ -1,0 +1,171 @@
+"""One step of the stochastic Riccati recursion for a batch of covariances.
+
+Seed 001, eq. (2) (one packet) and MATH.md section 1 (a set ``S`` of packets):
+
+.. math::
+
+    \\Phi_S(P) = A P A' + Q - A P C_S' (C_S P C_S' + R_{SS})^{-1} C_S P A',
+
+with ``Phi_0`` (nothing arrived) the open loop ``A P A' + Q``.  Covariances
+come as a batch ``(M, n, n)``; ``A``, ``C``, ``Q``, ``R`` are shared.
+
+We never form the gain.  With ``L L' = C_S P C_S' + R_SS`` (Cholesky) and
+``V = L^{-1} C_S P`` the correction is ``V' V``, positive semidefinite by
+construction, so ``P - V'V`` loses definiteness only through rounding.
+``V'V`` is exactly symmetric in floating point (the same products summed in
+the same order), and for ``n <= 4`` the open loop is one product with a
+symmetrized Kronecker matrix (below), so every step returns an exactly
+symmetric batch without a symmetrizing pass.
+
+Per-trajectory arrival sets are handled by *masking*: rows of lost packets
+are zeroed in ``C P`` and their block of ``S`` is replaced by the identity,
+which makes them contribute exactly nothing.  :class:`GroupedRiccatiStep` is
+the alternative (gather the trajectories of each arrival pattern, update with
+``C_S``, scatter); ``bench/bench_simulate.py`` measures both.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+#: A trajectory whose ``trace(P)`` exceeds this is declared diverged: one
+#: more step could overflow float64 (products of entries reach ``1e300``).
+DIVERGENCE_TRACE = 1e150
+
+#: Up to this many rows the Cholesky factorisation is unrolled over the batch.
+_SMALL_P = 4
+#: Up to this state dimension the open loop uses the ``n^2 x n^2`` Kronecker form.
+_KRON_N = 4
+
+
+def _whiten(S: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """``L^{-1} B`` for ``S = L L'`` (batched Cholesky, ``S`` is ``(M, p, p)``)."""
+    p = S.shape[-1]
+    if p == 1:
+        return B / np.sqrt(S)
+    if p > _SMALL_P:
+        return np.linalg.solve(np.linalg.cholesky(S), B)
+    # Unrolled over p: a handful of whole-batch operations beat a LAPACK call per matrix.
+    L = np.zeros_like(S)
+    V = np.empty_like(B)
+    for j in range(p):
+        d = S[:, j, j] - np.einsum("mk,mk->m", L[:, j, :j], L[:, j, :j])
+        L[:, j, j] = np.sqrt(d)
+        for i in range(j + 1, p):
+            L[:, i, j] = (S[:, i, j] - np.einsum("mk,mk->m", L[:, i, :j], L[:, j, :j])) / L[:, j, j]
+        V[:, j, :] = (B[:, j, :] - np.einsum("mk,mkn->mn", L[:, j, :j], V[:, :j, :])) / L[:, j, j, None]
+    return V
+
+
+def symmetric_kron(A: np.ndarray) -> np.ndarray:
+    """``Ks'`` with ``vec(A X A') = Ks vec(X)`` for symmetric ``X``, rows ``(i,l)`` and ``(l,i)`` equal.
+
+    ``Ks = (K + Pi K) / 2`` where ``K = A (x) A`` and ``Pi`` swaps the output
+    index ``(i, l) <-> (l, i)``: for symmetric ``X`` both give ``A X A'``,
+    and identical rows make the two entries bitwise equal.  Returned
+    transposed, ready for ``vec(X)' Ks'``.
+    """
+    n = A.shape[0]
+    K = np.kron(A, A)
+    swap = np.arange(n * n).reshape(n, n).T.reshape(-1)
+    return np.ascontiguousarray(((K + K[swap]) / 2).T)
+
+
+@dataclass(frozen=True, eq=False)
+class RiccatiStep:
+    """``Phi_S`` for a fixed set of rows that may arrive, applied to batches.
+
+    Build once per system with :meth:`build`; call with a batch ``P`` and an
+    optional ``(M, p)`` 0/1 row mask (``None``: every row arrived for every
+    trajectory).  With no rows (``p = 0``) it is the open loop ``Phi_0``.
+    """
+
+    A: np.ndarray
+    Q: np.ndarray
+    C: np.ndarray
+    R: np.ndarray
+    kron_t: np.ndarray | None
+
+    @classmethod
+    def build(cls, A: np.ndarray, Q: np.ndarray, C: np.ndarray, R: np.ndarray) -> RiccatiStep:
+        kron_t = symmetric_kron(A) if A.shape[0] <= _KRON_N else None
+        return cls(A=A, Q=Q, C=C, R=R, kron_t=kron_t)
+
+    def open_loop(self, P: np.ndarray) -> np.ndarray:
+        """``Phi_0(P) = A P A' + Q`` for a batch of symmetric ``P``."""
+        M, n = P.shape[0], self.A.shape[0]
+        if self.kron_t is not None:
+            out = np.matmul(P.reshape(M, 1, n * n), self.kron_t).reshape(M, n, n)
+        else:
+            out = np.matmul(np.matmul(self.A, P), self.A.T)
+            out += np.swapaxes(out, -1, -2)
+            out *= 0.5
+        out += self.Q
+        return out
+
+    def __call__(self, P: np.ndarray, rowmask: np.ndarray | None = None) -> np.ndarray:
+        """``Phi_S(P)`` for a batch ``(M, n, n)``.
+
+        ``rowmask`` is ``(M, p)`` of 0/1 (which rows arrived), or ``(M, 1)``
+        when all rows of a trajectory arrive or are lost together (one
+        packet); ``None`` means every row arrived.
+        """
+        p = self.C.shape[0]
+        if p == 0:
+            return self.open_loop(P)
+        CP = np.einsum("pi,mij->mpj", self.C, P)
+        S = np.einsum("mpj,qj->mpq", CP, self.C)
+        S += self.R
+        if rowmask is not None and rowmask.shape[1] > 1:
+            # Decouple lost rows: their block of S becomes the identity, so that
+            # L is block diagonal and zeroing their rows of V removes them exactly.
+            S *= rowmask[:, :, None] * rowmask[:, None, :]
+            S.reshape(len(S), p * p)[:, :: p + 1] += 1.0 - rowmask
+        V = _whiten(S, CP)
+        if rowmask is not None:
+            V *= rowmask[:, :, None]
+        return self.open_loop(P - np.matmul(np.swapaxes(V, -1, -2), V))
+
+
+@dataclass(frozen=True, eq=False)
+class GroupedRiccatiStep:
+    """Same map as a masked :class:`RiccatiStep`, by grouping trajectories.
+
+    Each distinct row pattern is updated with its own ``C_S``, ``R_SS``.
+    """
+
+    A: np.ndarray
+    Q: np.ndarray
+    C: np.ndarray
+    R: np.ndarray
+
+    def __call__(self, P: np.ndarray, rowmask: np.ndarray) -> np.ndarray:
+        out = np.empty_like(P)
+        patterns, inverse = np.unique(rowmask.astype(bool), axis=0, return_inverse=True)
+        inverse = inverse.reshape(-1)
+        for k, pat in enumerate(patterns):
+            idx = np.flatnonzero(inverse == k)
+            rows = np.flatnonzero(pat)
+            step = RiccatiStep.build(self.A, self.Q, self.C[rows], self.R[np.ix_(rows, rows)])
+            out[idx] = step(P[idx])
+        return out
+
+
+def traces(P: np.ndarray) -> np.ndarray:
+    """``trace(P_m)`` for a batch."""
+    return np.einsum("mii->m", P)
+
+
+def healthy(P: np.ndarray, tr: np.ndarray) -> np.ndarray:
+    """``(M,)`` flags: finite and ``trace(P) <= DIVERGENCE_TRACE``.
+
+    For a positive semidefinite ``P``, ``|P_ij| <= sqrt(P_ii P_jj)``, so a
+    bounded finite diagonal bounds every entry; the whole-batch sum catches a
+    NaN off the diagonal that rounding might have produced.
+    """
+    ok = tr <= DIVERGENCE_TRACE  # False for NaN
+    if not np.isfinite(P.sum()):
+        ok &= np.isfinite(P).all(axis=(1, 2))
+    return ok
