@@ -1,0 +1,183 @@
+"""Errors as ``application/problem+json`` (RFC 9457), mapped in one place.
+
+Every error the service answers with, whether raised in a worker process or
+in the event loop, becomes a :class:`Problem`.  :func:`problem_from_exception`
+is the single mapping from exceptions to problems (workers use it too, and
+send the problem back, because analyzer exceptions do not pickle), and
+:func:`problem_handler` is the single exception handler of the app.
+
+=========================  ======  ===========================================
+exception                  status  type (``urn:kfio:problem:...``)
+=========================  ======  ===========================================
+``InvalidInput``           422     ``invalid-input``
+``LimitExceeded``          422     ``limit-exceeded``
+``AssumptionViolation``    422     ``assumption-violation``
+``NumericalFailure``       422     ``numerical-failure``
+``BudgetExceeded``         504     ``budget-exceeded``
+``PoolTimeout``            504     ``budget-exceeded`` (the worker was killed)
+``PoolBusy``               503     ``busy`` (with ``Retry-After``)
+``WorkerCrashed``          503     ``worker-crashed`` (with ``Retry-After``)
+analyzer part missing      501     ``not-implemented``
+anything else              500     ``internal`` (a bug; logged, never detailed)
+=========================  ======  ===========================================
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import asdict, dataclass
+from typing import Any
+
+from fastapi import Request
+from fastapi.exceptions import RequestValidationError
+from fastapi.responses import JSONResponse
+from starlette.exceptions import HTTPException as StarletteHTTPException
+
+from analyzer.errors import (
+    AnalyzerError,
+    AssumptionViolation,
+    BudgetExceeded,
+    InvalidInput,
+    LimitExceeded,
+    NumericalFailure,
+)
+
+from .pool import PoolBusy, PoolTimeout, WorkerCrashed
+
+log = logging.getLogger("kfio.service")
+
+MEDIA_TYPE = "application/problem+json"
+_PREFIX = "urn:kfio:problem:"
+
+
+@dataclass(frozen=True)
+class Problem:
+    """One problem document.
+
+    Attributes
+    ----------
+    status:
+        HTTP status code.
+    kind:
+        Short slug; the document's ``type`` is ``urn:kfio:problem:<kind>``.
+    title:
+        Fixed, human-readable summary of the kind.
+    detail:
+        What happened to this request.
+    field:
+        JSON pointer (RFC 6901) to the offending value, for input errors.
+    rule:
+        The rule that was broken, for input errors.
+    location:
+        ``"body"`` or ``"query"``: where ``field`` points.
+    retry_after:
+        Seconds after which a retry may succeed (sent as ``Retry-After``).
+    """
+
+    status: int
+    kind: str
+    title: str
+    detail: str
+    field: str | None = None
+    rule: str | None = None
+    location: str | None = None
+    retry_after: int | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON document (members that are ``None`` are left out)."""
+        doc: dict[str, Any] = {"type": _PREFIX + self.kind, "title": self.title, "status": self.status, "detail": self.detail}
+        for key in ("field", "rule"):
+            if getattr(self, key) is not None:
+                doc[key] = getattr(self, key)
+        if self.location is not None:
+            doc["in"] = self.location
+        return doc
+
+    def response(self) -> JSONResponse:
+        """The HTTP response carrying this problem."""
+        headers = {"Retry-After": str(self.retry_after)} if self.retry_after is not None else None
+        return JSONResponse(self.to_dict(), status_code=self.status, media_type=MEDIA_TYPE, headers=headers)
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> Problem:
+        """Inverse of :func:`dataclasses.asdict` (problems travel from workers as dicts)."""
+        return cls(**data)
+
+    def as_plain(self) -> dict[str, Any]:
+        """Picklable, dataclass-shaped dict (see :meth:`from_dict`)."""
+        return asdict(self)
+
+
+class ProblemError(Exception):
+    """Raise to answer with ``problem``."""
+
+    def __init__(self, problem: Problem) -> None:
+        super().__init__(problem.detail)
+        self.problem = problem
+
+
+class Unavailable(RuntimeError):
+    """A part of :mod:`analyzer` a job needs does not exist (yet) in this build."""
+
+
+def input_problem(kind: str, title: str, exc: InvalidInput) -> Problem:
+    return Problem(422, kind, title, f"{exc.field}: {exc.rule}", field=exc.field, rule=exc.rule, location="body")
+
+
+def problem_from_exception(exc: BaseException) -> Problem:
+    """Map any exception to its problem (see the table in the module docstring).
+
+    Examples
+    --------
+    >>> problem_from_exception(InvalidInput("/system/A", "A must be square")).status
+    422
+    """
+    if isinstance(exc, ProblemError):
+        return exc.problem
+    if isinstance(exc, AssumptionViolation):
+        return input_problem("assumption-violation", "Outside the hypotheses of the theorem", exc)
+    if isinstance(exc, LimitExceeded):
+        return input_problem("limit-exceeded", "Request exceeds a size limit", exc)
+    if isinstance(exc, InvalidInput):
+        return input_problem("invalid-input", "Invalid request", exc)
+    if isinstance(exc, BudgetExceeded):
+        return Problem(504, "budget-exceeded", "Time budget exceeded", f"the computation did not finish within its budget: {exc}")
+    if isinstance(exc, PoolTimeout):
+        return Problem(504, "budget-exceeded", "Time budget exceeded", str(exc))
+    if isinstance(exc, PoolBusy):
+        return Problem(503, "busy", "Service busy", str(exc), retry_after=1)
+    if isinstance(exc, WorkerCrashed):
+        return Problem(503, "worker-crashed", "Worker process died", str(exc), retry_after=1)
+    if isinstance(exc, NumericalFailure):
+        return Problem(422, "numerical-failure", "Numerical step could not be certified", str(exc))
+    if isinstance(exc, AnalyzerError):
+        return Problem(422, "analysis-error", "The analysis could not be completed", str(exc))
+    if isinstance(exc, (Unavailable, NotImplementedError)):
+        return Problem(501, "not-implemented", "Not available in this build", str(exc) or "not implemented yet")
+    return Problem(500, "internal", "Internal error", "an unexpected error occurred (this is a bug; it has been logged)")
+
+
+def _pointer(parts: tuple[Any, ...]) -> str:
+    return "/" + "/".join(str(p).replace("~", "~0").replace("/", "~1") for p in parts) if parts else "/"
+
+
+async def problem_handler(request: Request, exc: Exception) -> JSONResponse:
+    """The app's one exception handler: every error becomes problem+json."""
+    if isinstance(exc, RequestValidationError):
+        err = exc.errors()[0] if exc.errors() else {"loc": (), "msg": "invalid request"}
+        loc = tuple(err.get("loc", ()))
+        where, rest = (str(loc[0]), loc[1:]) if loc else ("body", ())
+        problem = Problem(
+            422, "invalid-input", "Invalid request", f"{_pointer(rest)}: {err.get('msg')}",
+            field=_pointer(rest), rule=str(err.get("msg")), location=where,
+        )
+    elif isinstance(exc, StarletteHTTPException):
+        problem = Problem(exc.status_code, f"http-{exc.status_code}", str(exc.detail), str(exc.detail))
+        response = problem.response()
+        response.headers.update(exc.headers or {})  # e.g. Allow on 405
+        return response
+    else:
+        problem = problem_from_exception(exc)
+        if problem.status >= 500 and problem.kind == "internal":
+            log.error("internal error on %s %s", request.method, request.url.path, exc_info=exc)
+    return problem.response()

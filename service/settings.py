@@ -1,0 +1,87 @@
+"""Deployment settings of the HTTP service (pydantic-settings, env prefix ``KFIO_``).
+
+Nothing is read at import time: :func:`get_settings` builds the object on
+first use and caches it, and :func:`service.app.create_app` takes a
+:class:`Settings` explicitly so tests pass their own.
+
+Examples
+--------
+>>> Settings(time_budget_s=5).time_budget_s
+5.0
+"""
+
+from __future__ import annotations
+
+import os
+from functools import lru_cache
+
+from pydantic import Field
+from pydantic_settings import BaseSettings, SettingsConfigDict
+
+from analyzer.limits import Limits
+
+
+def _default_workers() -> int:
+    return max(1, min(4, os.cpu_count() or 1))
+
+
+class Settings(BaseSettings):
+    """Every knob of a deployment; each is also an environment variable ``KFIO_<NAME>``.
+
+    Attributes
+    ----------
+    workers:
+        Number of analysis worker *processes* (the event loop never computes).
+    time_budget_s:
+        Default and maximum wall-clock budget of one request; a request may
+        ask for less with ``options.time_budget_s``.
+    kill_grace_s:
+        How long past its budget a worker may run (to raise ``BudgetExceeded``
+        itself) before it is killed and replaced.
+    max_queue:
+        Requests allowed to wait for a free worker; beyond it the answer is
+        503 at once.
+    max_body_bytes:
+        Largest accepted request body (413 beyond it).
+    cache_entries, cache_bytes:
+        Bounds of the in-memory LRU cache of answers.
+    max_states, max_markov_order, max_digits, max_outputs, max_sensors:
+        Request size limits (:class:`analyzer.limits.Limits`).
+    """
+
+    model_config = SettingsConfigDict(env_prefix="KFIO_", frozen=True, extra="ignore")
+
+    host: str = "127.0.0.1"
+    port: int = Field(8000, ge=0, le=65535)
+    workers: int = Field(default_factory=_default_workers, ge=1, le=64)
+    time_budget_s: float = Field(30.0, gt=0, le=3600)
+    kill_grace_s: float = Field(0.25, ge=0, le=60)
+    max_queue: int = Field(64, ge=0)
+    max_body_bytes: int = Field(1 << 20, ge=1)
+    cache_entries: int = Field(512, ge=0)
+    cache_bytes: int = Field(64 << 20, ge=0)
+    max_states: int = Field(Limits.max_states, ge=1)
+    max_markov_order: int = Field(Limits.max_markov_order, ge=0)
+    max_digits: int = Field(Limits.max_digits, ge=1)
+    max_outputs: int = Field(Limits.max_outputs, ge=1)
+    max_sensors: int = Field(Limits.max_sensors, ge=1)
+
+    def limits(self) -> Limits:
+        """The request size limits of this deployment."""
+        return Limits(
+            max_states=self.max_states,
+            max_markov_order=self.max_markov_order,
+            max_digits=self.max_digits,
+            max_outputs=self.max_outputs,
+            max_sensors=self.max_sensors,
+        )
+
+
+@lru_cache(maxsize=1)
+def get_settings() -> Settings:
+    """The settings of this process, read from the environment once.
+
+    Tests build their own :class:`Settings` and pass it to
+    :func:`service.app.create_app`, or call ``get_settings.cache_clear()``.
+    """
+    return Settings()
