@@ -1,0 +1,314 @@
+"""A bounded pool of worker processes with a hard deadline per task.
+
+Why not :class:`concurrent.futures.ProcessPoolExecutor`: it cannot stop one
+stuck task.  Here every worker is a :class:`multiprocessing.Process` with its
+own pipe, so a task past its deadline is ended by killing exactly its worker,
+and a fresh worker takes the slot.  The event loop never computes and never
+blocks on a worker: it waits for the pipe with ``loop.add_reader``, so
+``/healthz`` stays fast while every worker is busy.
+
+Workers are forked from a *forkserver* that has imported :mod:`service.jobs`
+(and with it :mod:`analyzer`, NumPy and SymPy) once, so a replacement worker
+is ready in milliseconds, and no worker inherits the server's threads.
+
+The worker protocol is one pickled message each way: the parent sends
+``(args, budget_s)`` and the worker answers ``runner(*args, budget_s)``.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import importlib
+import logging
+import multiprocessing
+import os
+import time
+from dataclasses import dataclass, field
+from multiprocessing.connection import Connection
+from typing import Any, Callable
+
+log = logging.getLogger("kfio.service")
+
+#: Thread pools of numerical libraries in workers: one thread each, so that
+#: ``workers`` processes use ``workers`` cores (set before the forkserver starts).
+_THREAD_ENV = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMEXPR_NUM_THREADS")
+
+
+class PoolError(RuntimeError):
+    """Base of the pool's own failures (mapped to 503/504 by :mod:`service.problems`)."""
+
+
+class PoolBusy(PoolError):
+    """No worker became free in time, or too many requests are already waiting."""
+
+
+class PoolTimeout(PoolError, TimeoutError):
+    """The task ran past its deadline; its worker was killed and replaced."""
+
+
+class WorkerCrashed(PoolError):
+    """The worker died while running the task (it was replaced)."""
+
+
+def _worker_main(conn: Connection, runner_path: str) -> None:
+    """Body of a worker process: answer tasks until told to stop or killed."""
+    module, _, name = runner_path.partition(":")
+    runner: Callable[..., Any] = getattr(importlib.import_module(module), name)
+    while True:
+        try:
+            msg = conn.recv()
+        except (EOFError, OSError):
+            return
+        if msg is None:
+            return
+        args, budget_s = msg
+        conn.send(runner(*args, budget_s))
+
+
+@dataclass(eq=False)
+class _Worker:
+    process: Any  # multiprocessing.Process of the pool's context
+    conn: Connection
+    started: float = field(default_factory=time.monotonic)
+
+    def kill(self) -> None:
+        try:
+            self.conn.close()
+        except OSError:  # pragma: no cover - already closed
+            pass
+        if self.process.is_alive():
+            self.process.kill()
+        self.process.join(timeout=5)
+
+
+class WorkerPool:
+    """``size`` worker processes running ``runner`` with per-task deadlines.
+
+    Parameters
+    ----------
+    size:
+        Number of worker processes.
+    runner:
+        ``"module:function"`` called in the worker as ``function(*args, budget_s)``;
+        it should catch its own exceptions and return a picklable value.
+    preload:
+        Modules the forkserver imports once, before forking workers.
+    max_waiting:
+        Tasks allowed to wait for a free worker; more are refused with
+        :class:`PoolBusy` at once.
+    kill_grace_s:
+        Time past ``budget_s`` before the worker is killed (lets a cooperative
+        budget check raise first).
+
+    Examples
+    --------
+    ::
+
+        pool = WorkerPool(2, "service.jobs:run_job")
+        await pool.start()
+        value = await pool.run(("analyze", body, settings), budget_s=30)
+        await pool.close()
+    """
+
+    def __init__(
+        self,
+        size: int,
+        runner: str,
+        preload: tuple[str, ...] = (),
+        max_waiting: int = 64,
+        kill_grace_s: float = 0.25,
+        start_method: str = "forkserver",
+    ) -> None:
+        self.size = size
+        self.runner = runner
+        self.max_waiting = max_waiting
+        self.kill_grace_s = kill_grace_s
+        self._ctx = multiprocessing.get_context(start_method)
+        if start_method == "forkserver" and preload:
+            self._ctx.set_forkserver_preload(list(preload))
+        self._idle: asyncio.Queue[_Worker] | None = None
+        self._all: set[_Worker] = set()
+        self._waiting = 0
+        self._busy = 0
+        self._closed = False
+        self._ready = asyncio.Event()
+        self._start_error: BaseException | None = None
+        self.replaced = 0
+        self.completed = 0
+
+    # -- life cycle -------------------------------------------------------
+
+    def _spawn(self) -> _Worker:
+        parent_end, child_end = self._ctx.Pipe(duplex=True)
+        proc = self._ctx.Process(target=_worker_main, args=(child_end, self.runner), daemon=True, name="kfio-worker")
+        proc.start()
+        child_end.close()  # so that the worker's death reads as EOF here
+        return _Worker(proc, parent_end)
+
+    async def start(self) -> None:
+        """Start every worker (in a thread: the first fork starts the forkserver).
+
+        Tasks submitted meanwhile wait (within their budget) for the pool to be
+        up; if starting fails they are refused with :class:`PoolBusy` at once.
+        """
+        self._idle = asyncio.Queue()
+        for var in _THREAD_ENV:
+            os.environ.setdefault(var, "1")
+        try:
+            for _ in range(self.size):
+                worker = await asyncio.to_thread(self._spawn)
+                if self._closed:
+                    worker.kill()
+                    return
+                self._all.add(worker)
+                self._idle.put_nowait(worker)
+        except Exception as exc:
+            log.error("the worker pool could not start", exc_info=exc)
+            self._start_error = exc
+            raise
+        finally:
+            self._ready.set()
+
+    async def close(self) -> None:
+        """Kill every worker (they hold no state worth a graceful stop)."""
+        self._closed = True
+        workers, self._all = list(self._all), set()
+        await asyncio.to_thread(lambda: [w.kill() for w in workers])
+
+    @property
+    def ready(self) -> bool:
+        """True once all workers were started and at least one is alive."""
+        return (
+            self._ready.is_set()
+            and self._start_error is None
+            and not self._closed
+            and any(w.process.is_alive() for w in self._all)
+        )
+
+    def stats(self) -> dict[str, int]:
+        """Counters for ``/readyz``."""
+        return {
+            "size": self.size,
+            "alive": sum(1 for w in self._all if w.process.is_alive()),
+            "busy": self._busy,
+            "waiting": self._waiting,
+            "completed": self.completed,
+            "replaced": self.replaced,
+        }
+
+    async def _replace(self, worker: _Worker) -> None:
+        self._all.discard(worker)
+        self.replaced += 1
+        await asyncio.to_thread(worker.kill)
+        if self._closed:
+            return
+        fresh = await asyncio.to_thread(self._spawn)
+        if self._closed:
+            fresh.kill()
+            return
+        self._all.add(fresh)
+        assert self._idle is not None
+        self._idle.put_nowait(fresh)
+
+    def _replace_soon(self, worker: _Worker) -> None:
+        task = asyncio.get_running_loop().create_task(self._replace(worker))
+        task.add_done_callback(_log_task_error)
+
+    # -- running tasks ----------------------------------------------------
+
+    async def _checkout(self, deadline: float) -> _Worker:
+        if not self._ready.is_set():
+            try:
+                await asyncio.wait_for(self._ready.wait(), max(0.0, deadline - time.monotonic()))
+            except TimeoutError:
+                raise PoolBusy("the worker pool did not start within the time budget") from None
+        if self._idle is None or self._closed or self._start_error is not None:
+            raise PoolBusy("the worker pool is not running")
+        if self._idle.empty() and self._waiting >= self.max_waiting:
+            raise PoolBusy(f"{self._waiting} requests are already waiting for a worker")
+        self._waiting += 1
+        try:
+            while True:
+                remaining = deadline - time.monotonic()
+                if remaining <= 0:
+                    raise PoolBusy("no worker became free within the time budget")
+                try:
+                    worker = await asyncio.wait_for(self._idle.get(), remaining)
+                except TimeoutError:
+                    raise PoolBusy("no worker became free within the time budget") from None
+                if worker.process.is_alive():
+                    return worker
+                self._replace_soon(worker)  # died while idle (e.g. OOM killer)
+        finally:
+            self._waiting -= 1
+
+    async def run(self, args: tuple[Any, ...], budget_s: float) -> Any:
+        """Run ``runner(*args, remaining_budget)`` in a worker.
+
+        The budget covers waiting for a worker *and* running: the worker is
+        told what is left when it starts, and is killed ``kill_grace_s``
+        after that.
+
+        Raises
+        ------
+        PoolBusy
+            No worker became free within the budget, or the waiting queue is full.
+        PoolTimeout
+            The task outlived its budget; its worker was killed and replaced.
+        WorkerCrashed
+            The worker died during the task; it was replaced.
+        """
+        start = time.monotonic()
+        deadline = start + budget_s
+        worker = await self._checkout(deadline)
+        self._busy += 1
+        ok = False
+        try:
+            remaining = max(0.0, deadline - time.monotonic())
+            try:
+                worker.conn.send((args, remaining))
+            except (OSError, EOFError, ValueError):
+                raise WorkerCrashed("the worker died before it could take the task") from None
+            try:
+                await _readable(worker.conn, remaining + self.kill_grace_s)
+            except TimeoutError:
+                raise PoolTimeout(f"the computation did not finish within {budget_s:g} s; it was stopped") from None
+            try:
+                value = worker.conn.recv()
+            except (EOFError, OSError):
+                code = worker.process.exitcode
+                raise WorkerCrashed(f"the worker process died during the task (exit code {code})") from None
+            ok = True
+            self.completed += 1
+            return value
+        finally:
+            self._busy -= 1
+            if ok:
+                assert self._idle is not None
+                self._idle.put_nowait(worker)
+            else:  # timed out, crashed, or the request was cancelled mid-task
+                self._replace_soon(worker)
+
+
+async def _readable(conn: Connection, timeout: float) -> None:
+    """Wait until ``conn`` has data (or EOF) without blocking the event loop."""
+    if conn.poll(0):
+        return
+    loop = asyncio.get_running_loop()
+    fut: asyncio.Future[None] = loop.create_future()
+    fd = conn.fileno()
+
+    def on_readable() -> None:
+        if not fut.done():
+            fut.set_result(None)
+
+    loop.add_reader(fd, on_readable)
+    try:
+        await asyncio.wait_for(fut, timeout)
+    finally:
+        loop.remove_reader(fd)
+
+
+def _log_task_error(task: asyncio.Task[None]) -> None:
+    if not task.cancelled() and task.exception() is not None:
+        log.error("replacing a worker failed", exc_info=task.exception())
