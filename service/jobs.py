@@ -1,0 +1,138 @@
+"""The work behind every endpoint, as plain functions (one code path, two shells).
+
+Each job takes the raw request bytes, parses them with
+:func:`analyzer.load_request` (numbers stay exact) and calls the same
+:mod:`analyzer` function the CLI calls.  The HTTP service runs jobs in worker
+processes through :func:`run_job`; the CLI may call :data:`JOBS` directly.
+
+Analyzer functions are looked up when a job runs, not at import, so the
+service starts while a part of :mod:`analyzer` is still being written; such a
+job answers "501 not implemented" instead of failing.
+
+Examples
+--------
+>>> body = b'{"system": {"A": [[2]], "C": [[1]]}, "channel": {"model": "bernoulli", "arrival_probability": 0.5}}'
+>>> status, *_ = run_job("no-such-job", body, Settings(), {}, 1.0)
+>>> status
+'problem'
+"""
+
+from __future__ import annotations
+
+import importlib
+import inspect
+import json
+import logging
+from typing import Any, Callable, Mapping
+
+from analyzer import Budget, Request, load_request
+
+from .problems import Unavailable, problem_from_exception
+from .settings import Settings
+
+log = logging.getLogger("kfio.service")
+
+JSON = "application/json"
+PNG = "image/png"
+
+#: ``(content, media_type)``: what a job hands back to the shell.
+JobOutput = tuple[bytes, str]
+JobFn = Callable[[bytes, Settings, Budget, Mapping[str, Any]], JobOutput]
+
+
+def resolve(module: str, name: str) -> Callable[..., Any]:
+    """``module.name``, or :class:`Unavailable` if this build does not have it."""
+    try:
+        mod = importlib.import_module(module)
+    except ModuleNotFoundError as exc:
+        if exc.name is not None and module.startswith(exc.name):
+            raise Unavailable(f"{module} is not part of this build of kfio") from None
+        raise
+    fn = getattr(mod, name, None)
+    if fn is None:
+        raise Unavailable(f"{module}.{name} is not part of this build of kfio")
+    return fn
+
+
+def call_with_budget(fn: Callable[..., Any], request: Request, budget: Budget) -> Any:
+    """``fn(request, budget=budget)``, or ``fn(request)`` if ``fn`` takes no budget."""
+    try:
+        takes_budget = "budget" in inspect.signature(fn).parameters
+    except (TypeError, ValueError):  # pragma: no cover - builtins
+        takes_budget = False
+    return fn(request, budget=budget) if takes_budget else fn(request)
+
+
+def report_json(report: Any) -> JobOutput:
+    """The report as the CLI prints it with ``--json`` (same function, same bytes)."""
+    from .io import dump_json
+
+    return dump_json(report.to_dict()).encode("utf-8"), JSON
+
+
+def parse(body: bytes, settings: Settings) -> Request:
+    """The request, validated with this deployment's limits."""
+    return load_request(body, settings.limits())
+
+
+def analyze_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[str, Any]) -> JobOutput:
+    """``kfio analyze``: the exact verdict (seed 001, Theorem 1)."""
+    return report_json(call_with_budget(resolve("analyzer", "analyze"), parse(body, settings), budget))
+
+
+def bounds_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[str, Any]) -> JobOutput:
+    """``kfio bounds``: bounds on the critical probability and on ``E[P]``."""
+    return report_json(call_with_budget(resolve("analyzer.bounds", "compute_bounds"), parse(body, settings), budget))
+
+
+def simulate_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[str, Any]) -> JobOutput:
+    """``kfio simulate``: Monte Carlo error bands."""
+    return report_json(call_with_budget(resolve("analyzer.simulate", "simulate"), parse(body, settings), budget))
+
+
+def _plot_job(name: str) -> JobFn:
+    def job(body: bytes, settings: Settings, budget: Budget, params: Mapping[str, Any]) -> JobOutput:
+        from . import plots
+
+        return getattr(plots, name)(parse(body, settings), budget, params), PNG
+
+    job.__name__ = f"{name}_job"
+    job.__doc__ = f"PNG from :func:`service.plots.{name}`."
+    return job
+
+
+JOBS: dict[str, JobFn] = {
+    "analyze": analyze_job,
+    "bounds": bounds_job,
+    "simulate": simulate_job,
+    "plot-phase-transition": _plot_job("phase_transition"),
+    "plot-region": _plot_job("region"),
+    "plot-simulation": _plot_job("simulation"),
+}
+
+
+def run_job(name: str, body: bytes, settings: Settings, params: Mapping[str, Any], budget_s: float) -> tuple[Any, ...]:
+    """Run one job and never raise (this is what a worker process executes).
+
+    Returns
+    -------
+    tuple
+        ``("ok", content, media_type)``, or ``("problem", fields)`` where
+        ``fields`` rebuilds a :class:`service.problems.Problem`.
+    """
+    try:
+        fn = JOBS.get(name)
+        if fn is None:
+            raise Unavailable(f"unknown job {name!r}")
+        content, media_type = fn(body, settings, Budget(seconds=budget_s), params)
+        return ("ok", content, media_type)
+    except Exception as exc:  # noqa: BLE001 - every failure becomes a problem document
+        problem = problem_from_exception(exc)
+        if problem.status >= 500 and problem.kind == "internal":
+            log.error("job %s failed on request %s", name, _excerpt(body), exc_info=exc)
+        return ("problem", problem.as_plain())
+
+
+def _excerpt(body: bytes) -> str:
+    text = body[:300].decode("utf-8", "replace")
+    return json.dumps(text + ("..." if len(body) > 300 else ""))
