@@ -1,0 +1,11 @@
+"""HTTP routes, one module per resource (analyze, bounds, simulate, plots, health)."""
+
+from fastapi import APIRouter
+
+from . import analyze, bounds, health, plots, simulate
+
+api_router = APIRouter()
+for _module in (health, analyze, bounds, simulate, plots):
+    api_router.include_router(_module.router)
+
+__all__ = ["api_router"]

@@ -1,0 +1,29 @@
+"""Dependencies shared by the routes, as ``Annotated`` aliases."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+from fastapi import Depends, Request
+
+from ..dispatch import Dispatcher, read_body
+from ..problems import Problem, ProblemError
+
+
+def get_dispatcher(request: Request) -> Dispatcher:
+    """The app's dispatcher (created by the lifespan; 503 before it runs)."""
+    dispatcher = getattr(request.app.state, "dispatcher", None)
+    if dispatcher is None:
+        raise ProblemError(Problem(503, "not-ready", "Service not ready", "the service is starting", retry_after=1))
+    return dispatcher
+
+
+DispatcherDep = Annotated[Dispatcher, Depends(get_dispatcher)]
+
+
+async def get_body(request: Request, dispatcher: DispatcherDep) -> bytes:
+    """The raw request body, at most ``settings.max_body_bytes`` (413 beyond)."""
+    return await read_body(request, dispatcher.settings.max_body_bytes)
+
+
+BodyDep = Annotated[bytes, Depends(get_body)]

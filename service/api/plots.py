@@ -1,0 +1,83 @@
+"""``POST /v1/plots/...``: PNG figures, drawn in a worker (matplotlib, Agg backend).
+
+The body is the same request JSON as for the analysis endpoints; plot
+settings are query parameters, so the body stays exactly the CLI's.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Any
+
+from fastapi import APIRouter, Query
+from fastapi.responses import Response
+
+from ..problems import Problem, ProblemError
+from .deps import BodyDep, DispatcherDep
+from .schemas import PHASE_TRANSITION_EXAMPLES, REGION_EXAMPLES, REQUEST_EXAMPLES, json_body, problem_responses
+
+router = APIRouter(prefix="/v1/plots", tags=["plots"])
+
+_PNG: dict[int | str, dict[str, Any]] = {
+    200: {"description": "A PNG image", "content": {"image/png": {"schema": {"type": "string", "format": "binary"}}}}
+}
+_ERRORS = problem_responses(413, 422, 501, 503, 504)
+
+
+@router.post(
+    "/phase-transition",
+    summary="Traces of S_bar and V_bar against lambda, critical values marked (seed 004, Figs. 1-3)",
+    description=(
+        "One packet over a Bernoulli channel.  Draws trace(S_bar) (lower bound on the limit of E[P]) and "
+        "trace(V_bar) (upper bound) on a grid of arrival probabilities, with the lower bound "
+        "1 - 1/rho(A)^2 and the LMI upper bound on lambda_c marked, and the request's own lambda."
+    ),
+    response_class=Response,
+    responses={**_PNG, **_ERRORS},
+    openapi_extra=json_body(PHASE_TRANSITION_EXAMPLES),
+)
+async def phase_transition(
+    body: BodyDep,
+    dispatcher: DispatcherDep,
+    points: Annotated[int, Query(ge=2, le=400, description="grid points on the lambda axis")] = 100,
+    lambda_min: Annotated[float | None, Query(ge=0, le=1, description="left end of the lambda axis")] = None,
+    lambda_max: Annotated[float | None, Query(ge=0, le=1, description="right end of the lambda axis")] = None,
+) -> Response:
+    if lambda_min is not None and lambda_max is not None and lambda_min >= lambda_max:
+        raise ProblemError(
+            Problem(422, "invalid-input", "Invalid request", "/lambda_max: must exceed lambda_min",
+                    field="/lambda_max", rule="lambda_max must exceed lambda_min", location="query")
+        )
+    params = {"points": points, "lambda_min": lambda_min, "lambda_max": lambda_max}
+    return await dispatcher.answer("plot-phase-transition", body, params)
+
+
+@router.post(
+    "/region",
+    summary="Stability region for two sensors (seed 000, Figs. 4-5)",
+    description=(
+        "Two sensors over Bernoulli channels.  Colours the (lambda_1, lambda_2) square: unstable by the lower "
+        "bound, stable by the LMI upper bound, undecided between them, with kfio's exact verdict overlaid "
+        "where the analyzer decides it, and the request's own point marked."
+    ),
+    response_class=Response,
+    responses={**_PNG, **_ERRORS},
+    openapi_extra=json_body(REGION_EXAMPLES),
+)
+async def region(
+    body: BodyDep,
+    dispatcher: DispatcherDep,
+    points: Annotated[int, Query(ge=2, le=101, description="grid points per axis")] = 21,
+) -> Response:
+    return await dispatcher.answer("plot-region", body, {"points": points})
+
+
+@router.post(
+    "/simulation",
+    summary="Simulated error bands against time",
+    description="Runs the same simulation as `POST /v1/simulate` and draws its bands against time.",
+    response_class=Response,
+    responses={**_PNG, **_ERRORS},
+    openapi_extra=json_body(REQUEST_EXAMPLES),
+)
+async def simulation(body: BodyDep, dispatcher: DispatcherDep) -> Response:
+    return await dispatcher.answer("plot-simulation", body, {})

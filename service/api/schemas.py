@@ -1,0 +1,310 @@
+"""Hand-written JSON Schemas of the HTTP contract, with examples from the seeds.
+
+The routes read the raw body themselves (numbers must stay exact, so pydantic
+never sees them); these schemas document what :func:`analyzer.parse_request`
+accepts.  The validator stays the single source of truth: a body that passes
+the schema can still be refused with a 422 naming the field (``A`` not
+square, ``Q`` not semidefinite, ...).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+_NUMBER_PATTERN = r"^\s*[+-]?(\d+(\.\d*)?|\.\d+)([eE][+-]?\d+)?\s*(/\s*[+-]?(\d+(\.\d*)?|\.\d+)([eE][+-]?\d+)?\s*)?$"
+
+
+def _ref(name: str) -> dict[str, str]:
+    return {"$ref": f"#/components/schemas/{name}"}
+
+
+def _matrix(description: str) -> dict[str, Any]:
+    return {
+        "type": "array",
+        "minItems": 1,
+        "maxItems": 40,
+        "items": {"type": "array", "minItems": 1, "maxItems": 40, "items": _ref("ExactNumber")},
+        "description": description,
+    }
+
+
+def _channel(model: str, properties: dict[str, Any], required: list[str], description: str) -> dict[str, Any]:
+    return {
+        "type": "object",
+        "description": description,
+        "properties": {"model": {"const": model}, **properties},
+        "required": ["model", *required],
+        "additionalProperties": False,
+    }
+
+
+# -- examples (MATH.md section 4, from the seeds) ---------------------------
+
+_SEED004_SCALAR = {
+    "system": {"A": [[-1.25]], "C": [[1]], "Q": [[1]], "R": [[2.5]]},
+    "channel": {"model": "bernoulli", "arrival_probability": 0.5},
+}
+_SEED004_3X3 = {
+    "system": {
+        "A": [[1.25, 1, 0], [0, 0.9, 7], [0, 0, 0.6]],
+        "C": [[1, 0, 2]],
+        "Q": [[20, 0, 0], [0, 20, 0], [0, 0, 20]],
+        "R": [[2.5]],
+    },
+    "channel": {"model": "bernoulli", "arrival_probability": 0.5},
+}
+_SEED002_2X2 = {
+    "system": {"A": [[1.25, 0], [1, 1.1]], "C": [[1, 1]], "Q": [[20, 0], [0, 20]], "R": [[2.5]]},
+    "channel": {"model": "bernoulli", "arrival_probability": 0.5},
+}
+_SEED001_DEGENERATE_GE = {
+    "system": {"A": [[1.1, 0], [0, -1.1]], "C": [[1, 1]], "Q": [[1, 0], [0, 1]], "R": [[1]]},
+    "channel": {"model": "gilbert_elliott", "failure_rate": "1/10", "recovery_rate": "3/5"},
+}
+_SEED001_MARKOV = {
+    "system": {"A": [[1.25, 0], [1, 1.1]], "C": [[1, 1]], "Q": [[20, 0], [0, 20]], "R": [[2.5]]},
+    "channel": {
+        "model": "markov",
+        "order": 2,
+        "arrival_probability": {"00": 0.4, "01": 0.7, "10": 0.5, "11": 0.9},
+    },
+    "options": {"time_budget_s": 10},
+}
+_SEED000_TWO_SENSORS = {
+    "system": {
+        "A": [[2.5, 0], [0, 1.5]],
+        "C": [[1, 0], [0, 1]],
+        "Q": [[1, 0], [0, 1]],
+        "R": [[1, 0], [0, 1]],
+        "sensors": [{"name": "s1", "rows": [0]}, {"name": "s2", "rows": [1]}],
+    },
+    "channel": {
+        "model": "per_sensor",
+        "channels": {
+            "s1": {"model": "bernoulli", "arrival_probability": 0.9},
+            "s2": {"model": "bernoulli", "arrival_probability": 0.6},
+        },
+    },
+}
+
+REQUEST_EXAMPLES: dict[str, dict[str, Any]] = {
+    "seed004-scalar": {
+        "summary": "Seed 004, scalar system: lambda_c = 0.36 (stable at 0.5)",
+        "value": _SEED004_SCALAR,
+    },
+    "seed004-3x3": {
+        "summary": "Seed 004, 3x3 system with one unstable eigenvalue: lambda_c = 0.36",
+        "value": _SEED004_3X3,
+    },
+    "seed002-2x2": {
+        "summary": "Seeds 002/004, 2x2 system whose bounds differ (0.36 and about 0.48)",
+        "value": _SEED002_2X2,
+    },
+    "seed001-degenerate-gilbert-elliott": {
+        "summary": "Seed 001, degenerate pair alpha diag(1, -1) over a Gilbert-Elliott channel (exact fractions as strings)",
+        "value": _SEED001_DEGENERATE_GE,
+    },
+    "seed001-markov-order-2": {
+        "summary": "Seed 001, Markov channel of order 2 with a 10 s budget",
+        "value": _SEED001_MARKOV,
+    },
+    "seed000-two-sensors": {
+        "summary": "Seed 000, two packets: exact region lambda_1 > 0.84, lambda_2 > 5/9",
+        "value": _SEED000_TWO_SENSORS,
+    },
+}
+
+#: Example bodies for the plot endpoints (a subset that suits each plot).
+PHASE_TRANSITION_EXAMPLES = {k: REQUEST_EXAMPLES[k] for k in ("seed004-3x3", "seed002-2x2", "seed004-scalar")}
+REGION_EXAMPLES = {k: REQUEST_EXAMPLES[k] for k in ("seed000-two-sensors",)}
+
+
+# -- component schemas ------------------------------------------------------
+
+COMPONENTS: dict[str, dict[str, Any]] = {
+    "ExactNumber": {
+        "description": (
+            "An exact number: a JSON number (read as its decimal text, so 1.1 is 11/10, never a binary double), "
+            "or a string holding an integer, a decimal such as '1.1e-3' or a fraction such as '11/10'. "
+            "At most 200 digits."
+        ),
+        "anyOf": [{"type": "number"}, {"type": "string", "pattern": _NUMBER_PATTERN, "maxLength": 816}],
+        "examples": [1.25, "11/10", "2.5e-1"],
+    },
+    "Probability": {
+        "description": "An exact number in [0, 1].",
+        "anyOf": [{"type": "number", "minimum": 0, "maximum": 1}, {"type": "string", "pattern": _NUMBER_PATTERN, "maxLength": 816}],
+        "examples": [0.5, "9/25"],
+    },
+    "Matrix": _matrix("A non-empty rectangular matrix, as an array of rows."),
+    "Sensor": {
+        "type": "object",
+        "description": "A packet: the rows of C (and the block of R) it carries. Sensors partition the rows of C.",
+        "properties": {
+            "name": {"type": "string", "minLength": 1, "maxLength": 64},
+            "rows": {"type": "array", "minItems": 1, "items": {"type": "integer", "minimum": 0}},
+        },
+        "required": ["name", "rows"],
+        "additionalProperties": False,
+        "examples": [{"name": "s1", "rows": [0]}],
+    },
+    "System": {
+        "type": "object",
+        "description": "x[t+1] = A x + w, w ~ N(0, Q); y = C x + v, v ~ N(0, R) (MATH.md section 1).",
+        "properties": {
+            "A": {**_ref("Matrix"), "description": "n x n state matrix"},
+            "C": {**_ref("Matrix"), "description": "p x n output matrix"},
+            "Q": {**_ref("Matrix"), "description": "n x n process noise covariance, symmetric positive semidefinite"},
+            "R": {**_ref("Matrix"), "description": "p x p measurement noise covariance, symmetric positive definite"},
+            "sensors": {"type": "array", "minItems": 1, "maxItems": 8, "items": _ref("Sensor")},
+        },
+        "required": ["A", "C"],
+        "additionalProperties": False,
+        "examples": [_SEED002_2X2["system"]],
+    },
+    "BernoulliChannel": _channel(
+        "bernoulli",
+        {"arrival_probability": _ref("Probability")},
+        ["arrival_probability"],
+        "i.i.d. arrivals with P(arrival) = arrival_probability (seed 004).",
+    ),
+    "GilbertElliottChannel": _channel(
+        "gilbert_elliott",
+        {"failure_rate": _ref("Probability"), "recovery_rate": _ref("Probability")},
+        ["failure_rate", "recovery_rate"],
+        "failure_rate = P(lost | previous arrived), recovery_rate = P(arrived | previous lost).",
+    ),
+    "MarkovChannel": _channel(
+        "markov",
+        {
+            "order": {"type": "integer", "minimum": 0, "maximum": 10},
+            "arrival_probability": {
+                "type": "object",
+                "description": "P(arrival | last `order` outcomes), keyed by the history as 0/1 text, oldest first.",
+                "propertyNames": {"pattern": "^[01]{0,10}$"},
+                "additionalProperties": _ref("Probability"),
+            },
+        },
+        ["order", "arrival_probability"],
+        "Finite-state Markov channel of order nu (seed 001, Definition 2); all 2^order histories are required.",
+    ),
+    "PerSensorChannel": _channel(
+        "per_sensor",
+        {
+            "channels": {
+                "type": "object",
+                "description": "One independent channel per sensor name (requires system.sensors).",
+                "additionalProperties": _ref("PacketChannel"),
+            }
+        },
+        ["channels"],
+        "Independent packet channels, one per sensor (seeds 000/003).",
+    ),
+    "PacketChannel": {
+        "oneOf": [_ref("BernoulliChannel"), _ref("GilbertElliottChannel"), _ref("MarkovChannel")],
+    },
+    "Channel": {
+        "oneOf": [_ref("BernoulliChannel"), _ref("GilbertElliottChannel"), _ref("MarkovChannel"), _ref("PerSensorChannel")],
+        "examples": [{"model": "bernoulli", "arrival_probability": 0.5}],
+    },
+    "Options": {
+        "type": "object",
+        "description": "Per-command options (each command validates its own group) and the time budget.",
+        "properties": {
+            "time_budget_s": {
+                **_ref("ExactNumber"),
+                "description": "Seconds this request may take, in (0, 3600]; the deployment's budget caps it.",
+            },
+            "analyze": {"type": "object", "description": "Options of the analyze command."},
+            "bounds": {"type": "object", "description": "Options of the bounds command."},
+            "simulate": {"type": "object", "description": "Options of the simulate command."},
+        },
+        "additionalProperties": False,
+        "examples": [{"time_budget_s": 10}],
+    },
+    "AnalysisRequest": {
+        "type": "object",
+        "description": "The same JSON the kfio CLI reads from a file.",
+        "properties": {"system": _ref("System"), "channel": _ref("Channel"), "options": _ref("Options")},
+        "required": ["system", "channel"],
+        "additionalProperties": False,
+        "examples": [_SEED002_2X2],
+    },
+    "Problem": {
+        "type": "object",
+        "description": "RFC 9457 problem details.",
+        "properties": {
+            "type": {"type": "string", "description": "urn:kfio:problem:<kind>"},
+            "title": {"type": "string"},
+            "status": {"type": "integer"},
+            "detail": {"type": "string"},
+            "field": {"type": "string", "description": "JSON pointer (RFC 6901) to the offending value"},
+            "rule": {"type": "string", "description": "The rule that was broken"},
+            "in": {"type": "string", "enum": ["body", "query"], "description": "Where `field` points"},
+        },
+        "required": ["type", "title", "status", "detail"],
+        "examples": [
+            {
+                "type": "urn:kfio:problem:invalid-input",
+                "title": "Invalid request",
+                "status": 422,
+                "detail": "/system/C: C must have 2 columns (A is 2x2); got 1",
+                "field": "/system/C",
+                "rule": "C must have 2 columns (A is 2x2); got 1",
+                "in": "body",
+            }
+        ],
+    },
+    "Health": {
+        "type": "object",
+        "properties": {"status": {"type": "string", "enum": ["ok"]}},
+        "required": ["status"],
+        "examples": [{"status": "ok"}],
+    },
+    "Readiness": {
+        "type": "object",
+        "properties": {
+            "status": {"type": "string", "enum": ["ready"]},
+            "pool": {"type": "object", "additionalProperties": {"type": "integer"}},
+            "cache": {"type": "object", "additionalProperties": {"type": "integer"}},
+        },
+        "required": ["status", "pool", "cache"],
+        "examples": [
+            {
+                "status": "ready",
+                "pool": {"size": 2, "alive": 2, "busy": 0, "waiting": 0, "completed": 17, "replaced": 0},
+                "cache": {"entries": 12, "bytes": 40960, "hits": 5, "misses": 12},
+            }
+        ],
+    },
+}
+
+
+def problem_responses(*statuses: int) -> dict[int | str, dict[str, Any]]:
+    """OpenAPI ``responses`` entries for problem documents."""
+    texts = {
+        413: "Request body larger than the deployment's limit (1 MiB by default)",
+        422: "Invalid request: the problem names the field (JSON pointer) and the rule",
+        501: "This part of the analyzer is not available in this build",
+        503: "No worker became free in time, or a worker died; retry later",
+        504: "The computation did not finish within its time budget",
+    }
+    return {
+        s: {"description": texts[s], "content": {"application/problem+json": {"schema": _ref("Problem")}}}
+        for s in statuses
+    }
+
+
+def json_body(examples: dict[str, dict[str, Any]]) -> dict[str, Any]:
+    """``openapi_extra`` for a route that reads an :ref:`AnalysisRequest` itself."""
+    return {
+        "requestBody": {
+            "required": True,
+            "content": {"application/json": {"schema": _ref("AnalysisRequest"), "examples": examples}},
+        }
+    }
+
+
+def json_response(schema_name: str, description: str) -> dict[int | str, dict[str, Any]]:
+    """A 200 JSON response with a component schema."""
+    return {200: {"description": description, "content": {"application/json": {"schema": _ref(schema_name)}}}}

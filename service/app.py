@@ -1,0 +1,77 @@
+"""The FastAPI application: ``create_app(settings)`` builds it, nothing at import.
+
+Run it with ``kfio serve`` (see :mod:`service.commands.serve`) or, for
+development, ``uvicorn --factory service.app:create_app``.
+"""
+
+from __future__ import annotations
+
+import asyncio
+from collections.abc import AsyncIterator
+from contextlib import asynccontextmanager
+from typing import Any
+
+from fastapi import FastAPI
+from fastapi.exceptions import RequestValidationError
+from fastapi.openapi.utils import get_openapi
+from starlette.exceptions import HTTPException as StarletteHTTPException
+
+from analyzer.errors import AnalyzerError
+
+from .api import api_router
+from .api.schemas import COMPONENTS
+from .dispatch import Dispatcher
+from .problems import ProblemError, problem_handler
+from .settings import Settings, get_settings
+
+API_VERSION = "1.0.0"
+
+DESCRIPTION = """\
+Stability analysis of Kalman filters whose measurements travel over lossy packet channels.
+
+* Every `POST` takes the request JSON of the `kfio` CLI (the same file) and returns its `--json` report,
+  or a PNG for `/v1/plots/...`.  Numbers are exact: `1.1` means 11/10; strings such as `"11/10"` work too.
+* Errors are `application/problem+json` (RFC 9457).  Invalid input is 422 with `field`
+  (a JSON pointer into the request) and `rule`.  Bodies over 1 MiB are refused with 413.
+* Each request has a time budget (30 s by default, set per deployment with `KFIO_TIME_BUDGET_S`;
+  a request may ask for less with `options.time_budget_s`).  Past it the answer is 504; when no
+  worker becomes free in time, 503 with `Retry-After`.
+* Identical requests (same canonical JSON) are answered from an in-memory cache (`X-Cache: hit`).
+"""
+
+
+def create_app(settings: Settings | None = None) -> FastAPI:
+    """Build the app for ``settings`` (default: :func:`service.settings.get_settings`).
+
+    The worker pool starts in the background when the app starts (``/readyz``
+    says when it is up) and is killed when the app stops.
+    """
+    settings = settings if settings is not None else get_settings()
+
+    @asynccontextmanager
+    async def lifespan(app: FastAPI) -> AsyncIterator[None]:
+        dispatcher = Dispatcher(settings)
+        app.state.dispatcher = dispatcher
+        starting = asyncio.create_task(dispatcher.pool.start())
+        try:
+            yield
+        finally:
+            await dispatcher.pool.close()
+            # it sees the pool closed and stops its last worker; a start error was logged
+            await asyncio.gather(starting, return_exceptions=True)
+            app.state.dispatcher = None
+
+    app = FastAPI(title="kfio", version=API_VERSION, description=DESCRIPTION, lifespan=lifespan)
+    app.include_router(api_router)
+    for exc in (ProblemError, AnalyzerError, RequestValidationError, StarletteHTTPException, Exception):
+        app.add_exception_handler(exc, problem_handler)
+
+    def openapi() -> dict[str, Any]:
+        if app.openapi_schema is None:
+            schema = get_openapi(title=app.title, version=app.version, description=app.description, routes=app.routes)
+            schema.setdefault("components", {}).setdefault("schemas", {}).update(COMPONENTS)
+            app.openapi_schema = schema
+        return app.openapi_schema
+
+    app.openapi = openapi  # type: ignore[method-assign]
+    return app
