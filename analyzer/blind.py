@@ -1,0 +1,426 @@
+"""Maximal blind sets of a phase block, by closures (seed 001, Lemma 3).
+
+A set ``F`` of slots ``(n, g)`` (phase ``n`` in ``[0, N0)``, row group ``g``)
+is *blind* when the stacked rows ``r_n[g] = C_hat[g] diag(omega^n)`` lack full
+column rank ``L`` (MATH.md, section 2).  Equivalently some ``v != 0`` has
+``r_n[g] v = 0`` on all of ``F``: maximal blind sets are maximal *zero sets*
+``Z(v)``, i.e. closed sets (flats) ``cl(F) = {slots killing ker F}``.  A flat
+of rank ``k < L`` is the closure of at most ``k`` slots, so the search walks
+flats, never the ``2^(N0 G)`` subsets:
+
+* **prefix-preserving closure extension** (Uno, Asai, Uchida, Arimura, LCM,
+  2004): a flat ``Q`` with core slot ``c`` has the children ``cl(Q + e)``,
+  ``e > c``, that add nothing below ``e``; every flat is reached once.  A node
+  keeps an orthonormal basis ``K`` of its kernel and tests all extensions at
+  once (``W = r K``, one batched product), and a child whose kernel is a line
+  is maximal, so it is scored without being expanded;
+* **shift orbits**: ``r_{n+1} = r_n diag(omega)``, so ``F + 1`` is blind iff
+  ``F`` is.  Let a *window* be ``W`` consecutive phases (all groups), ``W``
+  the fewest phases of full rank.  Only flats in *canonical rotation* are
+  kept: no window misses fewer slots than the window at phase 0.  A prefix
+  that already rules this out is cut (the missed slots of window 0 that are
+  decided bound it from below, the misses of ``Q`` bound every window from
+  above);
+* **window bound** (the idea of the Brouwer-Zimmermann minimum-distance
+  algorithm): every slot lies in ``W`` windows, so a set missing ``w`` slots
+  has a window missing at most ``floor(W w / N0)``.  With an incumbent, a set
+  can only beat it by missing at most ``w_max`` slots, so canonical window 0
+  misses at most ``j = floor(W w_max / N0)``: the search only grows flats from
+  nearly full window-0 prefixes.  For seed-type blocks (``N0 = 60``,
+  ``L = 8``, largest blind set 36) that is ``j = 3``;
+* **branch and bound** for a monotone score (``rho(M_F)`` is monotone in
+  ``F``): a subtree lies inside its *hull* (the flat plus the later slots
+  whose closure with the parent is still blind and keeps the prefix), so a
+  hull that cannot beat the incumbent cuts the subtree.
+
+Ranks are numerical; :class:`Margins` records the closest calls so that the
+caller can report them and confirm the decisions that matter exactly.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from .budget import Budget
+from .phases import PhaseBlock, Slot
+
+#: Batched monotone score: boolean masks ``(C, S)`` -> values ``(C,)``.
+Score = Callable[[np.ndarray], np.ndarray]
+
+#: Relative margin under which a bound counts as beating the incumbent; it
+#: keeps float round-off in the score from cutting a truly better subtree.
+_BOUND_SLACK = 1e-12
+
+
+@dataclass(frozen=True)
+class Objective:
+    """What branch and bound maximizes.
+
+    Attributes
+    ----------
+    score:
+        Monotone under inclusion (a superset scores at least as high).
+    max_weight:
+        Given the incumbent's score, the largest number of slots a set may
+        miss and still score higher (drives the window bound).
+    """
+
+    score: Score
+    max_weight: Callable[[float], int]
+
+
+@dataclass
+class Margins:
+    """The closest numerical rank calls of a search.
+
+    Attributes
+    ----------
+    tol:
+        Threshold: singular values and residuals ``<= tol`` count as zero.
+    largest_zero:
+        Largest value that was treated as zero.
+    smallest_nonzero:
+        Smallest value that was treated as non-zero.
+    """
+
+    tol: float
+    largest_zero: float = 0.0
+    smallest_nonzero: float = float("inf")
+
+    def record(self, values: np.ndarray) -> np.ndarray:
+        """Classify ``values`` as zero (``True``) or not, remembering the margins."""
+        zero = values <= self.tol
+        if zero.any():
+            self.largest_zero = max(self.largest_zero, float(values[zero].max()))
+        if not zero.all():
+            self.smallest_nonzero = min(self.smallest_nonzero, float(values[~zero].min()))
+        return zero
+
+    @property
+    def clear(self) -> bool:
+        """Whether every decision was at least ``1e3`` times away from ``tol``."""
+        return self.largest_zero <= 1e-3 * self.tol and self.smallest_nonzero >= 1e3 * self.tol
+
+
+@dataclass(frozen=True)
+class SlotSpace:
+    """The ground set ``[0, N0) x groups`` of a :class:`PhaseBlock` as row blocks.
+
+    Slot ``(n, g)`` has index ``i = n * G + g``; ``rows[i]`` holds its rows of
+    ``r_n`` zero-padded to the largest group (zero rows change no rank).
+    """
+
+    n_phases: int
+    n_groups: int
+    rows: np.ndarray
+    tol: float
+
+    @classmethod
+    def from_block(cls, block: PhaseBlock, rtol: float = 1e-9) -> SlotSpace:
+        """Rows of every base slot; ``tol = rtol * max(1, largest slot norm)``."""
+        G, N0, L = len(block.row_groups), block.base_period, block.n_columns
+        width = max(len(rows) for rows in block.row_groups)
+        rows = np.zeros((N0 * G, width, L), dtype=complex)
+        for n in range(N0):
+            for g in range(G):
+                r = block.rows(n, g)
+                rows[n * G + g, : r.shape[0]] = r
+        scale = max(1.0, max(float(np.linalg.norm(r, 2)) for r in rows))
+        return cls(n_phases=N0, n_groups=G, rows=rows, tol=rtol * scale)
+
+    @property
+    def size(self) -> int:
+        """``S = N0 * G``, the number of base slots."""
+        return self.rows.shape[0]
+
+    @property
+    def n_columns(self) -> int:
+        """``L``."""
+        return self.rows.shape[2]
+
+    def slots(self, mask: np.ndarray) -> list[Slot]:
+        """The ``(n, g)`` slots of a boolean mask."""
+        return [divmod(int(i), self.n_groups) for i in np.flatnonzero(mask)]
+
+    def mask(self, slots: list[Slot]) -> np.ndarray:
+        """Boolean mask of base slots (phases taken modulo ``N0``)."""
+        out = np.zeros(self.size, dtype=bool)
+        for n, g in slots:
+            out[(n % self.n_phases) * self.n_groups + g] = True
+        return out
+
+    def rank(self, mask: np.ndarray, margins: Margins) -> int:
+        """Numerical rank of the stacked rows of ``mask``."""
+        M = self.rows[mask].reshape(-1, self.n_columns)
+        if M.shape[0] == 0:
+            return 0
+        return int((~margins.record(np.linalg.svd(M, compute_uv=False))).sum())
+
+    def spanning_subset(self, mask: np.ndarray, margins: Margins) -> np.ndarray:
+        """Greedy slots of ``mask`` whose rows span the rows of all of ``mask``."""
+        keep = np.zeros(self.size, dtype=bool)
+        rank = 0
+        for i in np.flatnonzero(mask):
+            keep[i] = True
+            r = self.rank(keep, margins)
+            keep[i] = r > rank
+            rank = r
+        return keep
+
+    def window(self, margins: Margins) -> int:
+        """``W``: the fewest consecutive phases whose slots have full rank (``N0`` if none)."""
+        for W in range(1, self.n_phases):
+            if self.rank(np.arange(self.size) < W * self.n_groups, margins) == self.n_columns:
+                return W
+        return self.n_phases
+
+    def rotate(self, mask: np.ndarray, k: int) -> np.ndarray:
+        """The mask of ``F + k`` (phases shifted by ``k`` modulo ``N0``)."""
+        return np.roll(mask, k * self.n_groups, axis=-1)
+
+    def orbit_key(self, mask: np.ndarray) -> tuple[int, ...]:
+        """Canonical key of a shift orbit: its smallest sorted index tuple."""
+        return min(tuple(int(i) for i in np.flatnonzero(self.rotate(mask, k))) for k in range(self.n_phases))
+
+
+@dataclass
+class Flat:
+    """A node of the closure search.
+
+    The kernel is ``basis @ ker(cut)`` (an orthonormal ``L x d`` matrix), kept
+    as the parent's kernel and the cut rows until the node is expanded, so
+    children that are never expanded cost no factorization.
+    """
+
+    mask: np.ndarray
+    core: int
+    basis: np.ndarray
+    cut: np.ndarray
+    cut_rank: int
+
+    def kernel(self) -> np.ndarray:
+        """Orthonormal basis of the common kernel of the rows of :attr:`mask`."""
+        if self.cut_rank == 0:
+            return self.basis
+        _, _, vh = np.linalg.svd(self.cut)
+        return self.basis @ vh[self.cut_rank :].conj().T
+
+
+@dataclass(frozen=True)
+class Expansion:
+    """Everything one batched step learns about a flat ``Q`` (children are rows).
+
+    Attributes
+    ----------
+    maximal:
+        No slot outside ``Q`` keeps it blind: ``Q`` is a maximal blind set.
+    kernel:
+        Orthonormal basis ``K`` of the kernel of ``Q``.
+    cores, masks, hulls, dims:
+        Per prefix-preserving child: its core slot, its mask, a superset of
+        every flat in its subtree, and its kernel dimension (1 = maximal).
+    cuts, cut_ranks:
+        Per child, the rows ``W_e = r_e K`` that cut its kernel out of ``K``.
+    """
+
+    maximal: bool
+    kernel: np.ndarray
+    cores: np.ndarray
+    masks: np.ndarray
+    hulls: np.ndarray
+    dims: np.ndarray
+    cuts: np.ndarray
+    cut_ranks: np.ndarray
+
+
+def root(space: SlotSpace, margins: Margins) -> Flat:
+    """``cl(empty)``: the slots whose rows vanish; the kernel is everything."""
+    zero = margins.record(np.linalg.norm(space.rows.reshape(space.size, -1), axis=1))
+    L = space.n_columns
+    return Flat(mask=zero, core=-1, basis=np.eye(L, dtype=complex), cut=np.zeros((0, L)), cut_rank=0)
+
+
+def _kernel_projectors(W: np.ndarray, ranks: np.ndarray) -> np.ndarray:
+    """``P_e``: orthogonal projector onto ``ker(W_e)`` in ``C^d``, for each ``W_e`` (``p x d``)."""
+    d = W.shape[2]
+    if W.shape[1] == 1:
+        u = W[:, 0, :] / np.maximum(np.linalg.norm(W[:, 0, :], axis=1), 1e-300)[:, None]
+        return np.eye(d)[None] - u.conj()[:, :, None] * u[:, None, :]
+    _, _, Vh = np.linalg.svd(W)
+    V = Vh.conj().swapaxes(1, 2) * (np.arange(d)[None, :] >= ranks[:, None])[:, None, :]
+    return V @ V.conj().swapaxes(1, 2)
+
+
+def expand(space: SlotSpace, flat: Flat, margins: Margins) -> Expansion:
+    """Test every one-slot extension of ``flat`` at once.
+
+    With ``W_e = r_e K`` (``K`` the kernel basis, ``d`` columns), ``Q + e`` is
+    blind iff ``rank W_e < d``; its kernel is ``K ker(W_e)`` and its closure
+    is the set of slots ``t`` with ``W_t P_e = 0``.
+    """
+    Q, K = flat.mask, flat.kernel()
+    d, index = K.shape[1], np.arange(space.size)
+    W = space.rows @ K
+    if W.shape[1] == 1:
+        sv = np.linalg.norm(W[:, 0, :], axis=1)[:, None]
+    else:
+        sv = np.linalg.svd(W, compute_uv=False)
+    rank = (~margins.record(sv)).sum(axis=1)
+    blind_ext = ~Q & (rank < d)
+    later = np.flatnonzero(blind_ext & (index > flat.core))
+    if later.size == 0:
+        none = np.zeros(0, dtype=int)
+        return Expansion(
+            not blind_ext.any(),
+            K,
+            none,
+            np.zeros((0, space.size), bool),
+            np.zeros((0, space.size), bool),
+            none,
+            W[none],
+            none,
+        )
+    P = _kernel_projectors(W[later], rank[later])
+    resid = np.linalg.norm(W[None, :, :, :] @ P[:, None, :, :], axis=(2, 3))
+    closures = margins.record(resid) | Q[None, :]
+    new = closures & ~Q[None, :]
+    candidates = np.zeros(space.size, dtype=bool)
+    candidates[later[~new[:, : flat.core + 1].any(axis=1)]] = True
+    ppc = ~(new & (index[None, :] < later[:, None])).any(axis=1)
+    cores = later[ppc]
+    hulls = closures[ppc] | (candidates[None, :] & (index[None, :] > cores[:, None]))
+    return Expansion(
+        maximal=not blind_ext.any(),
+        kernel=K,
+        cores=cores,
+        masks=closures[ppc],
+        hulls=hulls,
+        dims=d - rank[cores],
+        cuts=W[cores],
+        cut_ranks=rank[cores],
+    )
+
+
+def canonical_possible(space: SlotSpace, W: int, masks: np.ndarray, cores: np.ndarray, j_max: int) -> np.ndarray:
+    """Whether some flat in each subtree can be in canonical rotation and miss ``<= j_max`` of window 0.
+
+    Descendants of a flat agree with it up to its core, so the slots of
+    window 0 up to the core that it misses are missed for good (a lower
+    bound ``c0``), while the slots it holds are held by every descendant, so
+    its misses per window bound theirs from above.
+    """
+    C, G, WG = masks.shape[0], space.n_groups, W * space.n_groups
+    decided = np.minimum(cores, WG - 1)
+    held = np.cumsum(masks[:, :WG], axis=1)[np.arange(C), decided]
+    c0 = decided + 1 - held
+    misses = G - masks.reshape(C, space.n_phases, G).sum(axis=2)
+    wrapped = np.concatenate([np.zeros((C, 1), dtype=int), misses, misses[:, : W - 1]], axis=1).cumsum(axis=1)
+    per_window = wrapped[:, W : W + space.n_phases] - wrapped[:, : space.n_phases]
+    return (c0 <= j_max) & (per_window.min(axis=1) >= c0)
+
+
+@dataclass(frozen=True)
+class SearchResult:
+    """Outcome of a closure search.
+
+    Attributes
+    ----------
+    maximal:
+        Maximal blind sets found: every shift orbit once when enumerating,
+        only the best one under branch and bound.
+    best_value:
+        Score of ``maximal[0]`` under branch and bound (``nan`` otherwise).
+    nodes:
+        Flats expanded.
+    window:
+        ``W``, the window length used for canonical rotation.
+    """
+
+    maximal: tuple[np.ndarray, ...]
+    best_value: float
+    nodes: int
+    window: int
+
+
+@dataclass
+class _Incumbent:
+    """Best maximal blind set so far (branch and bound) or every orbit found (enumeration)."""
+
+    space: SlotSpace
+    objective: Objective | None
+    mask: np.ndarray | None = None
+    value: float = -np.inf
+    found: dict[tuple[int, ...], np.ndarray] = field(default_factory=dict)
+
+    def beats(self, bound: float) -> bool:
+        """Whether nothing scoring at most ``bound`` can beat the incumbent."""
+        return bound < self.value - _BOUND_SLACK * max(1.0, abs(self.value))
+
+    def j_max(self, W: int) -> int:
+        """Most misses canonical window 0 of a set that beats the incumbent may have."""
+        if self.objective is None or self.mask is None:
+            return W * self.space.n_groups
+        return W * self.objective.max_weight(self.value) // self.space.n_phases
+
+    def offer(self, masks: np.ndarray) -> None:
+        """Record maximal blind sets (rows of ``masks``)."""
+        if masks.shape[0] == 0:
+            return
+        if self.objective is None:
+            for m in masks:
+                key = self.space.orbit_key(m)
+                self.found.setdefault(key, np.isin(np.arange(self.space.size), key))
+            return
+        values = self.objective.score(masks)
+        i = int(np.argmax(values))
+        if values[i] > self.value:
+            self.mask, self.value = masks[i], float(values[i])
+
+
+def search(space: SlotSpace, budget: Budget, margins: Margins, objective: Objective | None = None) -> SearchResult:
+    """Depth-first closure search over flats in canonical rotation.
+
+    Parameters
+    ----------
+    objective:
+        ``None`` enumerates every maximal blind set (one per shift orbit);
+        otherwise branch and bound returns one maximal blind set of largest
+        score.
+
+    Raises
+    ------
+    BudgetExceeded
+        When ``budget`` runs out (one tick per expanded flat).
+    """
+    best = _Incumbent(space, objective)
+    W = space.window(margins)
+    stack: list[tuple[Flat, float]] = [(root(space, margins), np.inf)]
+    nodes = 0
+    while stack:
+        flat, bound = stack.pop()
+        if best.beats(bound):
+            continue
+        budget.tick("sigma: closure search")
+        nodes += 1
+        exp = expand(space, flat, margins)
+        if exp.maximal:
+            best.offer(flat.mask[None, :])
+        keep = canonical_possible(space, W, exp.masks, exp.cores, best.j_max(W))
+        best.offer(exp.masks[keep & (exp.dims == 1)])
+        inner = np.flatnonzero(keep & (exp.dims > 1))
+        bounds = (
+            objective.score(exp.hulls[inner]) if objective is not None and inner.size else np.full(inner.size, np.inf)
+        )
+        # Ascending push order: the most promising child is expanded first.
+        for i in np.argsort(bounds, kind="stable"):
+            c = inner[i]
+            child = Flat(exp.masks[c], int(exp.cores[c]), exp.kernel, exp.cuts[c], int(exp.cut_ranks[c]))
+            stack.append((child, float(bounds[i])))
+    if objective is None:
+        found = tuple(best.found[k] for k in sorted(best.found))
+        return SearchResult(maximal=found, best_value=float("nan"), nodes=nodes, window=W)
+    assert best.mask is not None  # some maximal blind set has a canonical rotation
+    return SearchResult(maximal=(best.mask,), best_value=best.value, nodes=nodes, window=W)

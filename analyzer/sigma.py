@@ -1,0 +1,453 @@
+"""``sigma_k``: the decay rate of the probability of staying blind (seed 001, Lemma 3).
+
+For one reduced FMO block in phase form (:class:`~analyzer.phases.PhaseBlock`)
+and one channel per row group,
+
+.. math::
+
+    \\sigma = \\limsup_{t\\to\\infty} P(\\text{blind after } t \\text{ steps})^{1/t}
+           = \\max_{F \\text{ maximal blind}} \\rho(M_F),
+
+seed 001, eq. (33), in the per-step form of MATH.md section 2: ``M_F`` acts
+on states (phase ``n`` in ``[0, N)``, joint history ``h``); from ``(n, h)``
+each group ``g`` emits ``g_t`` with probability ``P(g_t | h_g)``, emitting 1 at
+slot ``(n, g)`` only if ``(n, g)`` is in ``F``.  Its ``N``-step product is the
+one-period matrix ``P_F`` of :func:`period_transfer_matrix` and
+``rho(P_F) = rho(M_F)^N = sigma_F^N`` (the ``p_i`` of seed 001, eq. (31)).
+
+Groups are independent, so ``P_F`` is the Kronecker product of one matrix per
+group (mixed-product property) and ``rho(P_F) = prod_g rho(P_{F,g})``.  For a
+Bernoulli group ``rho(P_{F,g}) = (1 - lambda_g)^{z_g}`` with ``z_g`` the phases
+where ``g`` is not in ``F`` (seed 001, Corollary 2).  Blind sets themselves
+come from :mod:`analyzer.blind`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from fractions import Fraction
+from typing import Sequence
+
+import numpy as np
+
+from .blind import Margins, Objective, SlotSpace, search
+from .budget import Budget
+from .errors import AssumptionViolation, InvalidInput, NumericalFailure
+from .model import MarkovChannel
+from .phases import PhaseBlock
+
+#: Closure-search steps allowed when the caller passes no budget.
+DEFAULT_MAX_STEPS = 500_000
+
+
+@dataclass(frozen=True)
+class SigmaResult:
+    """``sigma_k`` of one FMO block and the blind set that attains it.
+
+    Attributes
+    ----------
+    period:
+        ``N``: the smallest multiple of ``block.base_period`` that is
+        ``>= max(nu, 1)``, ``nu`` the largest channel order.
+    sigma:
+        ``limsup_t P(blind after t steps)^(1/t)`` (seed 001, eq. (33)).
+    rho_period:
+        ``sigma ** N``: spectral radius of the one-period transfer matrix of
+        :attr:`worst_blind_set`.
+    degenerate:
+        The phase-0 rows of all groups stacked lack full column rank ``L``
+        (seed 001, Definition 5).
+    fully_blind:
+        All slots together are rank-deficient (an unobservable mode); then
+        ``sigma = 1``.
+    worst_blind_set:
+        A maximal blind set of slots ``(n, g)``, ``n`` in ``[0, N)``,
+        attaining ``sigma``.
+    maximal_blind_sets:
+        One representative per shift orbit of every maximal blind set when
+        they were enumerated; ``()`` if only the worst one was searched.
+    bernoulli_exponents:
+        Only if every channel is Bernoulli: ``z_g / N`` per group for the
+        worst set, ``z_g`` the phases ``n`` with ``(n, g)`` not in it; then
+        ``sigma = prod_g (1 - lambda_g)^(z_g / N)``.
+    certified:
+        Every rank decision that matters (rank drop of each reported maximal
+        blind set, full rank of each one-slot extension of the worst set, the
+        degeneracy test) was confirmed by ``block.exact_rank``.
+    notes:
+        Method and certification remarks.
+    """
+
+    period: int
+    sigma: float
+    rho_period: float
+    degenerate: bool
+    fully_blind: bool
+    worst_blind_set: frozenset
+    maximal_blind_sets: tuple
+    bernoulli_exponents: tuple | None
+    certified: bool
+    notes: tuple[str, ...]
+
+
+def sigma_period(base_period: int, channels: Sequence[MarkovChannel]) -> int:
+    """``N``: the smallest multiple of ``base_period`` that is ``>= max(nu, 1)``.
+
+    Examples
+    --------
+    >>> from fractions import Fraction as F
+    >>> ch = MarkovChannel("markov", 3, tuple(F(1, 2) for _ in range(8)))
+    >>> sigma_period(2, [ch])
+    4
+    """
+    nu = max([1] + [ch.order for ch in channels])
+    return base_period * -(-nu // base_period)
+
+
+def _check_inputs(block: PhaseBlock, channels: Sequence[MarkovChannel]) -> None:
+    if block.n_columns == 0:
+        raise InvalidInput("/system", "a phase block needs at least one column")
+    if len(channels) != len(block.row_groups):
+        raise InvalidInput(
+            "/channel", f"expected one channel per packet ({len(block.row_groups)}), got {len(channels)}"
+        )
+    for ch in channels:
+        if any(not 0 < p < 1 for p in ch.table):
+            raise AssumptionViolation(
+                "/channel", "every arrival probability must lie strictly between 0 and 1 (seed 001, Assumption 1)"
+            )
+
+
+def _step_matrices(channel: MarkovChannel) -> tuple[np.ndarray, np.ndarray]:
+    """Float one-step matrices ``(T_all, T_loss)`` on histories: every emission, and loss only."""
+    k = channel.n_histories
+    full, loss = np.zeros((k, k)), np.zeros((k, k))
+    for h in range(k):
+        p1 = float(channel.table[h])
+        full[h, channel.next_history(h, 1)] += p1
+        full[h, channel.next_history(h, 0)] += 1.0 - p1
+        loss[h, channel.next_history(h, 0)] += 1.0 - p1
+    return full, loss
+
+
+def _group_log_rho(channel: MarkovChannel, allowed: np.ndarray) -> np.ndarray:
+    """``log rho`` of the product over phases of the group's step matrices.
+
+    ``allowed`` is ``(C, n)``: per candidate, the phases where arrivals are
+    allowed.  The product is rescaled every few steps (it decays like
+    ``(1 - q)^n``) and the scale is carried in the logarithm.
+    """
+    if channel.order == 0:
+        return (~allowed).sum(axis=1) * math.log(1.0 - float(channel.table[0]))
+    full, loss = _step_matrices(channel)
+    C, k = allowed.shape[0], channel.n_histories
+    prod = np.broadcast_to(np.eye(k), (C, k, k)).copy()
+    log_scale = np.zeros(C)
+    for n in range(allowed.shape[1]):
+        prod = prod @ np.where(allowed[:, n, None, None], full, loss)
+        if n % 8 == 7:
+            top = prod.max(axis=(1, 2))
+            prod /= top[:, None, None]
+            log_scale += np.log(top)
+    return np.log(np.abs(np.linalg.eigvals(prod)).max(axis=1)) + log_scale
+
+
+def log_rho_period(masks: np.ndarray, channels: Sequence[MarkovChannel], base_period: int, period: int) -> np.ndarray:
+    """``log rho(P_F)`` for base-slot masks ``(C, N0 * G)`` (index ``n * G + g``).
+
+    A blind set lifted from ``[0, N0)`` is ``N0``-periodic, so
+    ``P_F = (P_F^{(N0)})^(N / N0)`` and only ``N0`` steps are multiplied.
+    """
+    per_group = masks.reshape(masks.shape[0], base_period, len(channels))
+    total = sum(_group_log_rho(ch, per_group[:, :, g]) for g, ch in enumerate(channels))
+    return np.asarray(total) * (period // base_period)
+
+
+def _objective(channels: Sequence[MarkovChannel], base_period: int, period: int) -> Objective:
+    """Branch-and-bound score and its size bound.
+
+    One Bernoulli packet: the score is ``|F|`` (Corollary 2), and beating the
+    incumbent means missing at most ``S - |F_best| - 1`` slots.  Otherwise
+    the score is ``log rho(P_F)``; since ``rho <= ||P_F||_inf`` and each
+    loss-only step has row sums at most ``m0 = max_h P(g = 0 | h)``, a set
+    missing ``w`` base slots has ``log rho(P_F) <= (N / N0) w max_g log m0_g``.
+    """
+    size = base_period * len(channels)
+    if len(channels) == 1 and channels[0].order == 0:
+        return Objective(
+            score=lambda masks: masks.sum(axis=1).astype(float), max_weight=lambda best: size - int(best) - 1
+        )
+    per_miss = (period // base_period) * max(math.log(float(max(1 - p for p in ch.table))) for ch in channels)
+
+    def max_weight(best: float) -> int:
+        # Slack so that round-off in ``best`` never excludes a set that ties.
+        return min(size, math.ceil(best / per_miss * (1 + 1e-9) + 1e-9) - 1)
+
+    return Objective(score=lambda masks: log_rho_period(masks, channels, base_period, period), max_weight=max_weight)
+
+
+def period_transfer_matrix(
+    period: int, blind_set: frozenset, channels: Sequence[MarkovChannel]
+) -> list[list[Fraction]]:
+    """Exact one-period transfer matrix ``P_F`` over the joint channel history.
+
+    ``[P_F]_{h, h'}`` is the probability that, starting at phase 0 with joint
+    history ``h``, the next ``period`` steps emit arrivals only at slots of
+    ``blind_set`` and end in joint history ``h'``.  The joint history is
+    ``h = (h_0, ..., h_{G-1})`` with group 0 most significant (Kronecker
+    order), each ``h_g`` in the bit convention of :class:`MarkovChannel`.
+    ``rho(P_F) = sigma_F^N`` (seed 001, eqs. (30)-(31) in per-step form).
+
+    Parameters
+    ----------
+    period:
+        ``N``.
+    blind_set:
+        Slots ``(n, g)``; phases are taken modulo ``period``.
+    channels:
+        One channel per row group.
+
+    Examples
+    --------
+    Gilbert-Elliott (``q = 1/4``, ``p = 1/2``) on seed 001's Example 1 with
+    the blind set ``{phase 0}``: ``rho = (1 - q)^2 + p q``.
+
+    >>> ch = MarkovChannel("gilbert_elliott", 1, (Fraction(1, 4), Fraction(1, 2)))
+    >>> period_transfer_matrix(2, frozenset({(0, 0)}), [ch])
+    [[Fraction(11, 16), Fraction(0, 1)], [Fraction(5, 8), Fraction(0, 1)]]
+    """
+    result = [[Fraction(1)]]
+    for g, ch in enumerate(channels):
+        phases = {n % period for n, grp in blind_set if grp == g}
+        result = _kron(result, _group_period_matrix(ch, period, phases))
+    return result
+
+
+def _group_period_matrix(channel: MarkovChannel, period: int, phases: set[int]) -> list[list[Fraction]]:
+    """Exact product over ``period`` steps; each step has two non-zeros per row, so it costs ``O(k^2)``."""
+    k = channel.n_histories
+    prod = [[Fraction(int(r == c)) for c in range(k)] for r in range(k)]
+    for n in range(period):
+        emissions = (0, 1) if n in phases else (0,)
+        nxt = [[Fraction(0)] * k for _ in range(k)]
+        for h in range(k):
+            p1 = channel.arrival(h)
+            for g in emissions:
+                w, h2 = (p1 if g else 1 - p1), channel.next_history(h, g)
+                for r in range(k):
+                    if prod[r][h]:
+                        nxt[r][h2] += prod[r][h] * w
+        prod = nxt
+    return prod
+
+
+def _kron(a: list[list[Fraction]], b: list[list[Fraction]]) -> list[list[Fraction]]:
+    return [[x * y for x in ra for y in rb] for ra in a for rb in b]
+
+
+@dataclass(frozen=True)
+class _Found:
+    """Maximal blind sets on base slots, the worst one, and how they were found."""
+
+    worst: np.ndarray
+    maximal: tuple[np.ndarray, ...]
+    enumerated: bool
+    method: str
+
+
+def _find_worst(
+    space: SlotSpace,
+    channels: Sequence[MarkovChannel],
+    period: int,
+    degenerate: bool,
+    fully_blind: bool,
+    budget: Budget,
+    margins: Margins,
+) -> _Found:
+    """Pick the route: special cases, branch and bound (one group), or enumeration."""
+    if fully_blind:
+        everything = np.ones(space.size, dtype=bool)
+        return _Found(everything, (everything,), True, "every slot together is rank-deficient: sigma = 1")
+    if space.n_groups == 1 and not degenerate:
+        empty = np.zeros(space.size, dtype=bool)
+        return _Found(empty, (empty,), True, "non-degenerate block: only the empty set is blind (seed 001, Lemma 2)")
+    objective = _objective(channels, space.n_phases, period)
+    if space.n_groups == 1:
+        res = search(space, budget, margins, objective)
+        what = "largest blind set (Corollary 2)" if channels[0].order == 0 else "blind set of largest rho(M_F)"
+        method = f"branch and bound over {res.nodes} flats (window {res.window}) for the {what}"
+        return _Found(res.maximal[0], (), False, method)
+    res = search(space, budget, margins)
+    worst = res.maximal[int(np.argmax(objective.score(np.array(res.maximal))))]
+    method = f"enumerated {len(res.maximal)} shift orbits of maximal blind sets over {res.nodes} flats"
+    return _Found(worst, res.maximal, True, method)
+
+
+def _lift(space: SlotSpace, mask: np.ndarray, period: int) -> frozenset:
+    """Slots over ``[0, N)`` of a base mask (blindness depends on ``n mod N0`` only)."""
+    return frozenset((n + k * space.n_phases, g) for n, g in space.slots(mask) for k in range(period // space.n_phases))
+
+
+def _exact_checks(space: SlotSpace, found: _Found, margins: Margins, phase0: np.ndarray, degenerate: bool) -> list:
+    """``(slots, expect_blind, what)`` for every rank decision that matters.
+
+    A rank drop must be confirmed on the whole set; full rank may be
+    confirmed on a subset (rank is monotone), so each extension of the worst
+    set is checked with a spanning subset of it plus the new slot.  Slot
+    ranks are shift invariant, so the extensions of the empty set need only
+    phase 0.
+    """
+    checks = [(space.slots(phase0), degenerate, "phase-0 rows (degeneracy)")]
+    checks += [(space.slots(m), True, "maximal blind set") for m in found.maximal or (found.worst,)]
+    basis = space.spanning_subset(found.worst, margins)
+    outside = ~found.worst if found.worst.any() else phase0
+    for i in np.flatnonzero(outside):
+        checks.append((space.slots(basis) + [divmod(int(i), space.n_groups)], False, "extension of the worst set"))
+    return checks
+
+
+def _certify(block: PhaseBlock, checks: list, budget: Budget) -> tuple[bool, str]:
+    """Confirm ``checks`` with ``block.exact_rank``.
+
+    Raises
+    ------
+    NumericalFailure
+        When exact arithmetic contradicts a numerical rank decision.
+    """
+    oracle = block.exact_rank
+    if oracle is None:
+        return False, "ranks are numerical (SVD): no exact rank oracle for this block"
+    L = block.n_columns
+    for slots, expect_blind, what in checks:
+        budget.tick("sigma: exact rank checks")
+        rank = oracle(slots)
+        if rank is None:
+            return False, f"ranks are numerical (SVD): the exact oracle gave no answer for a {what}"
+        if (rank < L) != expect_blind:
+            raise NumericalFailure(f"exact rank {rank} of a {what} contradicts the numerical rank decision")
+    return True, f"certified: {len(checks)} rank decisions confirmed in exact arithmetic"
+
+
+def _bernoulli_exponents(space: SlotSpace, mask: np.ndarray, channels: Sequence[MarkovChannel]) -> tuple | None:
+    """``z_g / N = (phases of [0, N0) where g is not in F) / N0`` if all channels are Bernoulli."""
+    if any(ch.order != 0 for ch in channels):
+        return None
+    per_group = mask.reshape(space.n_phases, space.n_groups)
+    return tuple(Fraction(int((~per_group[:, g]).sum()), space.n_phases) for g in range(space.n_groups))
+
+
+def _sigma_values(
+    space: SlotSpace, found: _Found, channels: Sequence[MarkovChannel], period: int, exponents: tuple | None
+) -> tuple[float, float]:
+    """``(sigma, rho_period)``, in closed form where seed 001 gives one (Lemma 2, Corollary 2)."""
+    if found.worst.all():
+        return 1.0, 1.0
+    if exponents is not None:
+        sigma = math.prod(float(1 - ch.table[0]) ** float(z) for ch, z in zip(channels, exponents))
+        return sigma, sigma**period
+    if not found.worst.any():
+        sigma = math.prod(float(ch.recovery_after_losses) for ch in channels)
+        return sigma, sigma**period
+    log_rho = float(log_rho_period(found.worst[None, :], channels, space.n_phases, period)[0])
+    return math.exp(log_rho / period), math.exp(log_rho)
+
+
+def compute_sigma(block: PhaseBlock, channels: Sequence[MarkovChannel], budget: Budget | None = None) -> SigmaResult:
+    """``sigma_k`` of a reduced FMO block (seed 001, Lemmas 2-3, Corollary 2).
+
+    .. math::
+
+        \\sigma = \\max_{F\\ \\text{maximal blind}} \\rho(M_F), \\qquad
+        \\rho(M_F)^N = \\rho(P_F) = \\prod_g \\rho(P_{F,g}).
+
+    Routes: a fully blind block has ``sigma = 1``; a non-degenerate block with
+    one packet has only the empty blind set, ``sigma = P(g = 0 | nu zeros)``
+    (Lemma 2); otherwise maximal blind sets are closures
+    (:mod:`analyzer.blind`).  With one packet a branch and bound finds the
+    worst one (for Bernoulli the largest, Corollary 2); with several packets
+    every shift orbit is enumerated, since exact stability regions need all
+    of them.
+
+    Parameters
+    ----------
+    block:
+        The reduced FMO block in phase form.
+    channels:
+        ``channels[g]`` is the channel of row group ``g``; groups are
+        independent.
+    budget:
+        Work budget; ``None`` allows :data:`DEFAULT_MAX_STEPS` steps.
+
+    Returns
+    -------
+    SigmaResult
+
+    Raises
+    ------
+    InvalidInput
+        Wrong number of channels, or a block without columns.
+    AssumptionViolation
+        An arrival probability of 0 or 1 (seed 001, Assumption 1).
+    BudgetExceeded
+        The closure search or the exact checks need more than ``budget``.
+    NumericalFailure
+        Exact arithmetic contradicts a numerical rank decision.
+
+    Examples
+    --------
+    Seed 001, Example 3: ``A = alpha diag(1, -1)``, ``C = [1 1]``, i.i.d.
+    arrivals with ``lambda = 3/4``: ``sigma = (1 - lambda)^(1/2)``.
+
+    >>> blk = PhaseBlock(2, (0, 1), np.array([[1.0, 1.0]]), ((0,),))
+    >>> ch = MarkovChannel("bernoulli", 0, (Fraction(3, 4),))
+    >>> res = compute_sigma(blk, [ch])
+    >>> res.sigma, res.bernoulli_exponents, sorted(res.worst_blind_set)
+    (0.5, (Fraction(1, 2),), [(0, 0)])
+    >>> abs(res.sigma**2 - 0.25) < 1e-15  # substitute back: sigma^2 = 1 - lambda
+    True
+    """
+    _check_inputs(block, channels)
+    budget = budget if budget is not None else Budget(max_steps=DEFAULT_MAX_STEPS)
+    period = sigma_period(block.base_period, channels)
+    space = SlotSpace.from_block(block)
+    margins = Margins(space.tol)
+    L = space.n_columns
+    fully_blind = space.rank(np.ones(space.size, dtype=bool), margins) < L
+    phase0 = space.mask([(0, g) for g in range(space.n_groups)])
+    degenerate = space.rank(phase0, margins) < L
+    found = _find_worst(space, channels, period, degenerate, fully_blind, budget, margins)
+    exponents = _bernoulli_exponents(space, found.worst, channels)
+    sigma, rho = _sigma_values(space, found, channels, period, exponents)
+    certified, cert_note = _certify(block, _exact_checks(space, found, margins, phase0, degenerate), budget)
+    notes = [found.method, cert_note, _margin_note(margins)]
+    return SigmaResult(
+        period=period,
+        sigma=sigma,
+        rho_period=rho,
+        degenerate=degenerate,
+        fully_blind=fully_blind,
+        worst_blind_set=_lift(space, found.worst, period),
+        maximal_blind_sets=tuple(_lift(space, m, period) for m in found.maximal) if found.enumerated else (),
+        bernoulli_exponents=exponents,
+        certified=certified,
+        notes=tuple(notes),
+    )
+
+
+def _margin_note(margins: Margins) -> str:
+    text = (
+        f"numerical rank threshold {margins.tol:.1e}: values treated as zero <= {margins.largest_zero:.1e}, "
+        f"as non-zero >= {margins.smallest_nonzero:.1e}"
+    )
+    return text if margins.clear else text + " (close call: trust only the exact confirmation)"
+
+
+__all__ = [
+    "DEFAULT_MAX_STEPS",
+    "SigmaResult",
+    "compute_sigma",
+    "log_rho_period",
+    "period_transfer_matrix",
+    "sigma_period",
+]
