@@ -44,7 +44,7 @@ from .budget import Budget
 from .errors import InvalidInput, LimitExceeded
 from .model import Request
 from .sim_channel import JointChannel
-from .sim_kernel import RiccatiStep
+from .sim_kernel import PRECISION_RATIO, RiccatiStep
 from .sim_setup import (
     DEFAULT_SIMULATION_LIMITS,
     OPTIONS_FIELD,
@@ -77,6 +77,11 @@ class FiniteHorizonReport:
         The initial covariance.
     mean_covariance:
         ``(T + 1, n, n)``; NaN from the first step at which float64 overflowed.
+    imprecise_probability:
+        ``(T + 1,)``: probability of the sequences that went through a
+        measurement update beyond :data:`analyzer.sim_kernel.PRECISION_RATIO`
+        (see :func:`enumerate_expectation`); 0 in all but strongly unstable
+        cases.
     """
 
     steps: int
@@ -84,6 +89,7 @@ class FiniteHorizonReport:
     initial_channel: str
     P0: np.ndarray
     mean_covariance: np.ndarray
+    imprecise_probability: np.ndarray
 
     @property
     def mean_trace(self) -> np.ndarray:
@@ -117,6 +123,7 @@ class FiniteHorizonReport:
             "final_mean_covariance": matrix_or_none(last_ok),
             "diverged": self.diverged_at is not None,
             "diverged_at": self.diverged_at,
+            "imprecise_probability": finite_or_none(self.imprecise_probability[-1]),
             "growth_per_step": None if growth is None else finite_or_none(growth),
         }
 
@@ -131,6 +138,11 @@ class FiniteHorizonReport:
         growth = self.growth_per_step()
         if growth is not None:
             lines.append(f"growth per step over the second half: x{growth:.4g}")
+        if self.imprecise_probability[-1] > 0:
+            lines.append(
+                f"sequences of total probability {self.imprecise_probability[-1]:.3g} went through an update "
+                "beyond float64's faithful precision (innovation ratio > 1e12)"
+            )
         return "\n".join(lines)
 
 
@@ -159,21 +171,49 @@ def _pattern_steps(sim: SimSystem, chan: JointChannel) -> list[tuple[tuple[bool,
 def _expand(
     steps: list[tuple[tuple[bool, ...], RiccatiStep]],
     chan: JointChannel,
-    P: np.ndarray,
-    w: np.ndarray,
-    hist: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    batch: _Batch,
+) -> _Batch:
     """All one-step extensions of a batch: ``Phi_g`` for each pattern ``g``."""
-    Ps, ws, hs = [], [], []
+    parts = []
     for g, phi in steps:
-        wg = w * chan.pattern_probability(hist, g)
+        wg = batch.w * chan.pattern_probability(batch.hist, g)
         keep = wg.sum(axis=1) > 0
         if not keep.any():
             continue
-        Ps.append(phi(P[keep]))
-        ws.append(wg[keep])
-        hs.append(chan.advance(hist[keep], np.broadcast_to(np.array(g), hist[keep].shape)))
-    return np.concatenate(Ps), np.concatenate(ws), np.concatenate(hs)
+        Pg, ratio = phi.apply(batch.P[keep])
+        hist = batch.hist[keep]
+        parts.append(
+            _Batch(
+                Pg,
+                wg[keep],
+                chan.advance(hist, np.broadcast_to(np.array(g), hist.shape)),
+                batch.imprecise[keep] | (ratio > PRECISION_RATIO),
+            )
+        )
+    return _Batch(*(np.concatenate([getattr(b, f) for b in parts]) for f in ("P", "w", "hist", "imprecise")))
+
+
+@dataclass(frozen=True, eq=False)
+class _Batch:
+    """Sequences of one length: covariances, weights per initial history, histories, precision flags."""
+
+    P: np.ndarray  # (K, n, n)
+    w: np.ndarray  # (K, H): P(Gamma_t = S, h_0)
+    hist: np.ndarray  # (K, H, m): channel history reached from h_0
+    imprecise: np.ndarray  # (K,): went through an update beyond PRECISION_RATIO
+
+    def __len__(self) -> int:
+        return len(self.P)
+
+    def collapse(self) -> _Batch:
+        """Sum the initial-history columns (valid once histories no longer depend on ``h_0``)."""
+        return _Batch(self.P, self.w.sum(axis=1, keepdims=True), self.hist[:, :1], self.imprecise)
+
+    def chunks(self, size: int) -> list[_Batch]:
+        return [
+            _Batch(self.P[i : i + size], self.w[i : i + size], self.hist[i : i + size], self.imprecise[i : i + size])
+            for i in range(0, len(self), size)
+        ]
 
 
 def enumerate_expectation(
@@ -182,12 +222,23 @@ def enumerate_expectation(
     steps: int,
     initial_channel: str = "stationary",
     budget: Budget | None = None,
-) -> np.ndarray:
-    """``E[P_t]`` for ``t = 0..steps`` as a ``(steps + 1, n, n)`` array.
+) -> tuple[np.ndarray, np.ndarray]:
+    """``E[P_t]`` for ``t = 0..steps``, and the probability of imprecise sequences.
 
     The low-level route (no option parsing, no limits): ``sim`` and ``P0``
     as arrays.  With a Bernoulli channel, ``enumerate_expectation(sim, X,
-    N)[N]`` is seed 002's ``g_N(X)``.
+    N)[0][N]`` is seed 002's ``g_N(X)``.
+
+    Returns
+    -------
+    (numpy.ndarray, numpy.ndarray)
+        ``(steps + 1, n, n)`` means (NaN from the first level that overflowed)
+        and ``(steps + 1,)`` the probability that ``Gamma_t`` went through a
+        measurement update beyond :data:`analyzer.sim_kernel.PRECISION_RATIO`.
+        Such a sequence's covariance is not faithful in float64, but it stays
+        bounded by its open-loop sibling (``0 <= Phi_S(P) <= Phi_0(P)``), whose
+        weight is comparable, so the mean keeps its accuracy unless that
+        probability is large.
     """
     chan = JointChannel.from_packets(sim.packets)
     hist0, w0 = chan.initial_distribution(initial_channel)
@@ -196,25 +247,27 @@ def enumerate_expectation(
     chunk = max(1, _CHUNK_FLOATS // (n * n * (1 << chan.m)))
     phis = _pattern_steps(sim, chan)
     sums = np.zeros((steps + 1, n, n))
-    stack = [(0, np.asarray(P0, dtype=float)[None].copy(), w0[None, :], hist0[None, :, :])]
+    imprecise = np.zeros(steps + 1)
+    first = _Batch(np.asarray(P0, dtype=float)[None].copy(), w0[None, :], hist0[None, :, :], np.zeros(1, dtype=bool))
+    stack = [(0, first)]
     with np.errstate(all="ignore"):
         while stack:
-            t, P, w, hist = stack.pop()
-            sums[t] += np.einsum("k,kij->ij", w.sum(axis=1), P)
+            t, batch = stack.pop()
+            weights = batch.w.sum(axis=1)
+            sums[t] += np.einsum("k,kij->ij", weights, batch.P)
+            imprecise[t] += weights[batch.imprecise].sum()
             if t == steps:
                 continue
             if budget is not None:
-                budget.tick("exact enumeration of E[P_t]", len(P) << chan.m)
-            P, w, hist = _expand(phis, chan, P, w, hist)
-            if t + 1 >= collapse_at and w.shape[1] > 1:
-                w, hist = w.sum(axis=1, keepdims=True), hist[:, :1]
-            for start in range(0, len(P), chunk):
-                sl = slice(start, start + chunk)
-                stack.append((t + 1, P[sl], w[sl], hist[sl]))
+                budget.tick("exact enumeration of E[P_t]", len(batch) << chan.m)
+            children = _expand(phis, chan, batch)
+            if t + 1 >= collapse_at and children.w.shape[1] > 1:
+                children = children.collapse()
+            stack.extend((t + 1, c) for c in children.chunks(chunk))
     bad = ~np.isfinite(sums).all(axis=(1, 2))
     if bad.any():
         sums[int(np.flatnonzero(bad)[0]) :] = np.nan
-    return sums
+    return sums, imprecise
 
 
 def _check_enumeration_size(sim: SimSystem, steps: int, initial: str, limits: SimulationLimits) -> None:
@@ -283,12 +336,14 @@ def expected_covariance(
     if budget is None and request.time_budget_s is not None:
         budget = Budget(seconds=request.time_budget_s)
     chan = JointChannel.from_packets(sim.packets)
-    means = enumerate_expectation(sim, opts.P0, steps, opts.initial_channel, budget)
+    means, imprecise = enumerate_expectation(sim, opts.P0, steps, opts.initial_channel, budget)
     means.setflags(write=False)
+    imprecise.setflags(write=False)
     return FiniteHorizonReport(
         steps=steps,
         sequences=1 << (chan.m * steps),
         initial_channel=opts.initial_channel,
         P0=opts.P0,
         mean_covariance=means,
+        imprecise_probability=imprecise,
     )

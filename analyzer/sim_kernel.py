@@ -27,12 +27,22 @@ the alternative (gather the trajectories of each arrival pattern, update with
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
 #: A trajectory whose ``trace(P)`` exceeds this is declared diverged: one
 #: more step could overflow float64 (products of entries reach ``1e300``).
 DIVERGENCE_TRACE = 1e150
+
+#: Largest innovation ratio ``(C P C' + R)_ii / R_ii`` of an arrived row we trust.
+#: ``P - V'V`` cancels: in the measured direction the prior variance ``s`` drops
+#: to about ``R``, with an absolute rounding error of about ``eps * s``, so the
+#: posterior keeps a relative accuracy of ``eps * ratio`` (1e-4 at this bound).
+#: Beyond it float64 no longer represents the posterior faithfully (the prior's
+#: condition number exceeds what a covariance matrix can carry) and the
+#: trajectory is declared diverged rather than continued with garbage.
+PRECISION_RATIO = 1e12
 
 #: Up to this many rows the Cholesky factorisation is unrolled over the batch.
 _SMALL_P = 4
@@ -41,12 +51,18 @@ _KRON_N = 4
 
 
 def _whiten(S: np.ndarray, B: np.ndarray) -> np.ndarray:
-    """``L^{-1} B`` for ``S = L L'`` (batched Cholesky, ``S`` is ``(M, p, p)``)."""
+    """``L^{-1} B`` for ``S = L L'`` (batched Cholesky, ``S`` is ``(M, p, p)``).
+
+    Rows whose ``S`` is not positive definite come back as NaN.
+    """
     p = S.shape[-1]
     if p == 1:
         return B / np.sqrt(S)
     if p > _SMALL_P:
-        return np.linalg.solve(np.linalg.cholesky(S), B)
+        try:
+            return np.linalg.solve(np.linalg.cholesky(S), B)
+        except np.linalg.LinAlgError:
+            return np.full_like(B, np.nan)
     # Unrolled over p: a handful of whole-batch operations beat a LAPACK call per matrix.
     L = np.zeros_like(S)
     V = np.empty_like(B)
@@ -56,6 +72,26 @@ def _whiten(S: np.ndarray, B: np.ndarray) -> np.ndarray:
         for i in range(j + 1, p):
             L[:, i, j] = (S[:, i, j] - np.einsum("mk,mk->m", L[:, i, :j], L[:, j, :j])) / L[:, j, j]
         V[:, j, :] = (B[:, j, :] - np.einsum("mk,mkn->mn", L[:, j, :j], V[:, :j, :])) / L[:, j, j, None]
+    return V
+
+
+def _lift(S: np.ndarray, floor: np.ndarray) -> np.ndarray:
+    """``floor + (S - floor)_+``: the nearest matrix to ``S`` that is ``>= floor``.
+
+    In exact arithmetic ``S = C P C' + R >= R``; when rounding has made ``P``
+    indefinite (a prior beyond :data:`PRECISION_RATIO`), this restores it.
+    """
+    w, U = np.linalg.eigh(S - floor)
+    return floor + np.matmul(U * np.maximum(w, 0.0)[:, None, :], np.swapaxes(U, -1, -2))
+
+
+def _whiten_safe(S: np.ndarray, B: np.ndarray, floor: Callable[[np.ndarray], np.ndarray]) -> np.ndarray:
+    """:func:`_whiten`, retrying rows whose ``S`` lost definiteness with ``_lift(S, floor(rows))``."""
+    V = _whiten(S, B)
+    bad = ~np.isfinite(V).all(axis=(1, 2)) & np.isfinite(S).all(axis=(1, 2)) & np.isfinite(B).all(axis=(1, 2))
+    if bad.any():
+        rows = np.flatnonzero(bad)
+        V[rows] = _whiten(_lift(S[rows], floor(rows)), B[rows])
     return V
 
 
@@ -106,27 +142,54 @@ class RiccatiStep:
         return out
 
     def __call__(self, P: np.ndarray, rowmask: np.ndarray | None = None) -> np.ndarray:
-        """``Phi_S(P)`` for a batch ``(M, n, n)``.
+        """``Phi_S(P)`` for a batch ``(M, n, n)`` (see :meth:`apply`)."""
+        return self.apply(P, rowmask)[0]
 
-        ``rowmask`` is ``(M, p)`` of 0/1 (which rows arrived), or ``(M, 1)``
-        when all rows of a trajectory arrive or are lost together (one
-        packet); ``None`` means every row arrived.
+    def apply(self, P: np.ndarray, rowmask: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """``Phi_S(P)`` and the innovation ratio of each trajectory.
+
+        Parameters
+        ----------
+        P:
+            Batch ``(M, n, n)`` of symmetric positive semidefinite matrices.
+        rowmask:
+            ``(M, p)`` of 0/1 (which rows arrived), or ``(M, 1)`` when all rows
+            of a trajectory arrive or are lost together (one packet); ``None``
+            means every row arrived.
+
+        Returns
+        -------
+        (numpy.ndarray, numpy.ndarray)
+            The new batch, and ``max_i (C P C' + R)_ii / R_ii`` over the rows
+            that arrived (0 where none did): see :data:`PRECISION_RATIO`.
         """
         p = self.C.shape[0]
         if p == 0:
-            return self.open_loop(P)
+            return self.open_loop(P), np.zeros(len(P))
         CP = np.einsum("pi,mij->mpj", self.C, P)
         S = np.einsum("mpj,qj->mpq", CP, self.C)
         S += self.R
+        ratio = np.einsum("mii->mi", S) / np.diag(self.R)
+        if rowmask is not None:
+            ratio *= rowmask
         if rowmask is not None and rowmask.shape[1] > 1:
             # Decouple lost rows: their block of S becomes the identity, so that
             # L is block diagonal and zeroing their rows of V removes them exactly.
             S *= rowmask[:, :, None] * rowmask[:, None, :]
             S.reshape(len(S), p * p)[:, :: p + 1] += 1.0 - rowmask
-        V = _whiten(S, CP)
+        V = _whiten_safe(S, CP, lambda rows: self._noise_floor(rows, rowmask))
         if rowmask is not None:
             V *= rowmask[:, :, None]
-        return self.open_loop(P - np.matmul(np.swapaxes(V, -1, -2), V))
+        return self.open_loop(P - np.matmul(np.swapaxes(V, -1, -2), V)), ratio.max(axis=1)
+
+    def _noise_floor(self, rows: np.ndarray, rowmask: np.ndarray | None) -> np.ndarray:
+        """The matrix ``S`` dominates for the given batch rows: ``R``, masked like ``S``."""
+        R = np.broadcast_to(self.R, (len(rows),) + self.R.shape).copy()
+        if rowmask is not None and rowmask.shape[1] > 1:
+            mk = rowmask[rows]
+            R *= mk[:, :, None] * mk[:, None, :]
+            R.reshape(len(rows), -1)[:, :: self.R.shape[0] + 1] += 1.0 - mk
+        return R
 
 
 @dataclass(frozen=True, eq=False)
@@ -141,16 +204,16 @@ class GroupedRiccatiStep:
     C: np.ndarray
     R: np.ndarray
 
-    def __call__(self, P: np.ndarray, rowmask: np.ndarray) -> np.ndarray:
-        out = np.empty_like(P)
+    def apply(self, P: np.ndarray, rowmask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        out, ratio = np.empty_like(P), np.zeros(len(P))
         patterns, inverse = np.unique(rowmask.astype(bool), axis=0, return_inverse=True)
         inverse = inverse.reshape(-1)
         for k, pat in enumerate(patterns):
             idx = np.flatnonzero(inverse == k)
             rows = np.flatnonzero(pat)
             step = RiccatiStep.build(self.A, self.Q, self.C[rows], self.R[np.ix_(rows, rows)])
-            out[idx] = step(P[idx])
-        return out
+            out[idx], ratio[idx] = step.apply(P[idx])
+        return out, ratio
 
 
 def traces(P: np.ndarray) -> np.ndarray:

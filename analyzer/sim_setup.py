@@ -188,7 +188,7 @@ def _int_option(raw: Mapping[str, Any], key: str, default: int | None, lo: int, 
 
 def _parse_p0(raw: Any, n: int) -> Matrix:
     where = f"{OPTIONS_FIELD}/P0"
-    m = parse_matrix(raw, where, "P0", DEFAULT_LIMITS, n, n)
+    m = parse_matrix(raw, where, "P0", DEFAULT_LIMITS, DEFAULT_LIMITS.max_states, DEFAULT_LIMITS.max_states)
     _check_symmetric(m, where, "P0", n)
     if not is_psd(m, strict=False):
         raise InvalidInput(where, "P0 must be positive semidefinite")

@@ -16,8 +16,12 @@ initial_channel`` (default: the stationary distribution, see
 PCG64(seed))``: the same request and seed give the same report.
 
 Overflow.  A trajectory whose trace exceeds
-:data:`analyzer.sim_kernel.DIVERGENCE_TRACE` (or turns non-finite) is marked
-diverged and counts as ``+inf`` from then on.  The mean is reported as
+:data:`analyzer.sim_kernel.DIVERGENCE_TRACE` (or turns non-finite), or whose
+measurement update has an innovation ratio above
+:data:`analyzer.sim_kernel.PRECISION_RATIO` (float64 can no longer carry its
+posterior), is marked diverged and counts as ``+inf`` from then on.  In a
+stable regime neither happens in practice: the chance that a trajectory
+reaches a ratio ``X`` decays like a power of ``X`` above 1.  The mean is reported as
 ``null`` from the first step at which any trajectory diverged
 (``mean_diverged_at``); a percentile is ``null`` once more than its tail of
 trajectories diverged.
@@ -33,7 +37,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 
@@ -41,7 +45,7 @@ from .budget import Budget
 from .finite_horizon import FiniteHorizonReport, expected_covariance
 from .model import Request
 from .sim_channel import JointChannel
-from .sim_kernel import RiccatiStep, healthy, traces
+from .sim_kernel import PRECISION_RATIO, GroupedRiccatiStep, RiccatiStep, healthy, traces
 from .sim_setup import (
     DEFAULT_SIMULATION_LIMITS,
     PERCENTILES,
@@ -238,18 +242,15 @@ def _record(tr: np.ndarray, alive: np.ndarray) -> tuple[float, float, np.ndarray
     return float(tr.mean()), float(tr.std(ddof=1)), qs
 
 
-Update = Callable[[np.ndarray, np.ndarray], np.ndarray]
-
-
 def run_monte_carlo(
     sim: SimSystem,
     opts: SimulateOptions,
     budget: Budget | None = None,
-    update: Update | None = None,
+    update: RiccatiStep | GroupedRiccatiStep | None = None,
 ) -> MonteCarloRun:
     """Propagate ``opts.trajectories`` covariances for ``opts.steps`` steps.
 
-    ``update(P, rowmask)`` is the batched Riccati step; default the masked
+    ``update`` is the batched Riccati step; default the masked
     :class:`analyzer.sim_kernel.RiccatiStep` (the benchmark also passes
     :class:`analyzer.sim_kernel.GroupedRiccatiStep`).
     """
@@ -271,10 +272,10 @@ def run_monte_carlo(
                 budget.tick("Monte Carlo simulation", M)
             g = rng.random((M, chan.m)) < chan.arrival_probability(hist)
             arrivals += g.sum(axis=0)
-            P = step(P, g.astype(float) if chan.m == 1 else sim.row_mask(g))
+            P, ratio = step.apply(P, g.astype(float) if chan.m == 1 else sim.row_mask(g))
             hist = chan.advance(hist, g)
             tr = traces(P)
-            ok = healthy(P, tr)
+            ok = healthy(P, tr) & (ratio <= PRECISION_RATIO)
             if not ok[alive].all():
                 alive &= ok
                 P[~alive] = 0.0  # frozen: keeps NaN and overflow out of later arithmetic
