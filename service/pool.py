@@ -11,7 +11,10 @@ Workers are forked from a *forkserver* that has imported :mod:`service.jobs`
 (and with it :mod:`analyzer`, NumPy and SymPy) once, so a replacement worker
 is ready in milliseconds, and no worker inherits the server's threads.
 
-The worker protocol is one pickled message each way: the parent sends
+The worker protocol is pickled messages over the pipe.  A new worker says
+``"ready"`` once its imports are done, and only then joins the idle queue (a
+worker still importing does not read, and a large request written to it
+would block the event loop).  Then, per task, the parent sends
 ``(args, budget_s)`` and the worker answers ``runner(*args, budget_s)``.
 """
 
@@ -22,6 +25,7 @@ import importlib
 import logging
 import multiprocessing
 import os
+import threading
 import time
 from dataclasses import dataclass, field
 from multiprocessing.connection import Connection
@@ -50,10 +54,28 @@ class WorkerCrashed(PoolError):
     """The worker died while running the task (it was replaced)."""
 
 
+def _exit_when_orphaned(interval: float = 1.0) -> None:
+    """Exit once the parent (the forkserver) is gone, even in the middle of a task.
+
+    If the server is killed outright it cannot kill its workers; its
+    forkserver then exits, and this keeps a busy worker from running on.
+    """
+    parent = os.getppid()
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(interval)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="kfio-orphan-watch", daemon=True).start()
+
+
 def _worker_main(conn: Connection, runner_path: str) -> None:
     """Body of a worker process: answer tasks until told to stop or killed."""
+    _exit_when_orphaned()
     module, _, name = runner_path.partition(":")
     runner: Callable[..., Any] = getattr(importlib.import_module(module), name)
+    conn.send("ready")
     while True:
         try:
             msg = conn.recv()
@@ -99,6 +121,11 @@ class WorkerPool:
     kill_grace_s:
         Time past ``budget_s`` before the worker is killed (lets a cooperative
         budget check raise first).
+    start_method:
+        :mod:`multiprocessing` start method (``"forkserver"``: workers inherit
+        no threads of the server).
+    start_timeout_s:
+        How long a new worker may take to import its modules and say ready.
 
     Examples
     --------
@@ -118,11 +145,13 @@ class WorkerPool:
         max_waiting: int = 64,
         kill_grace_s: float = 0.25,
         start_method: str = "forkserver",
+        start_timeout_s: float = 60.0,
     ) -> None:
         self.size = size
         self.runner = runner
         self.max_waiting = max_waiting
         self.kill_grace_s = kill_grace_s
+        self.start_timeout_s = start_timeout_s
         self._ctx = multiprocessing.get_context(start_method)
         if start_method == "forkserver" and preload:
             self._ctx.set_forkserver_preload(list(preload))
@@ -145,6 +174,20 @@ class WorkerPool:
         child_end.close()  # so that the worker's death reads as EOF here
         return _Worker(proc, parent_end)
 
+    async def _new_worker(self) -> _Worker:
+        """A started worker that has said ``"ready"`` (its imports are done)."""
+        worker = await asyncio.to_thread(self._spawn)
+        try:
+            await _readable(worker.conn, self.start_timeout_s)
+            hello = worker.conn.recv()
+        except (TimeoutError, EOFError, OSError):
+            await asyncio.to_thread(worker.kill)
+            raise WorkerCrashed(f"a new worker did not become ready (exit code {worker.process.exitcode})") from None
+        if hello != "ready":  # pragma: no cover - protocol error
+            await asyncio.to_thread(worker.kill)
+            raise WorkerCrashed(f"a new worker said {hello!r} instead of 'ready'")
+        return worker
+
     async def start(self) -> None:
         """Start every worker (in a thread: the first fork starts the forkserver).
 
@@ -155,11 +198,11 @@ class WorkerPool:
         for var in _THREAD_ENV:
             os.environ.setdefault(var, "1")
         try:
-            for _ in range(self.size):
-                worker = await asyncio.to_thread(self._spawn)
+            workers = await asyncio.gather(*(self._new_worker() for _ in range(self.size)))
+            for worker in workers:
                 if self._closed:
-                    worker.kill()
-                    return
+                    await asyncio.to_thread(worker.kill)
+                    continue
                 self._all.add(worker)
                 self._idle.put_nowait(worker)
         except Exception as exc:
@@ -202,9 +245,9 @@ class WorkerPool:
         await asyncio.to_thread(worker.kill)
         if self._closed:
             return
-        fresh = await asyncio.to_thread(self._spawn)
+        fresh = await self._new_worker()
         if self._closed:
-            fresh.kill()
+            await asyncio.to_thread(fresh.kill)
             return
         self._all.add(fresh)
         assert self._idle is not None
@@ -276,6 +319,7 @@ class WorkerPool:
             try:
                 value = worker.conn.recv()
             except (EOFError, OSError):
+                await asyncio.to_thread(worker.process.join, 1.0)  # reap it, for the exit code
                 code = worker.process.exitcode
                 raise WorkerCrashed(f"the worker process died during the task (exit code {code})") from None
             ok = True
