@@ -5,9 +5,10 @@ Each job takes the raw request bytes, parses them with
 :mod:`analyzer` function the CLI calls.  The HTTP service runs jobs in worker
 processes through :func:`run_job`; the CLI may call :data:`JOBS` directly.
 
-Analyzer functions are looked up when a job runs, not at import, so the
-service starts while a part of :mod:`analyzer` is still being written; such a
-job answers "501 not implemented" instead of failing.
+Analyzer functions are looked up when a job runs (after the request is
+validated), not at import, so the service starts while a part of
+:mod:`analyzer` is still being written; such a job answers "501 not
+implemented" instead of failing.
 
 Examples
 --------
@@ -77,17 +78,20 @@ def parse(body: bytes, settings: Settings) -> Request:
 
 def analyze_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[str, Any]) -> JobOutput:
     """``kfio analyze``: the exact verdict (seed 001, Theorem 1)."""
-    return report_json(call_with_budget(resolve("analyzer", "analyze"), parse(body, settings), budget))
+    request = parse(body, settings)
+    return report_json(call_with_budget(resolve("analyzer", "analyze"), request, budget))
 
 
 def bounds_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[str, Any]) -> JobOutput:
     """``kfio bounds``: bounds on the critical probability and on ``E[P]``."""
-    return report_json(call_with_budget(resolve("analyzer.bounds", "compute_bounds"), parse(body, settings), budget))
+    request = parse(body, settings)
+    return report_json(call_with_budget(resolve("analyzer.bounds", "compute_bounds"), request, budget))
 
 
 def simulate_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[str, Any]) -> JobOutput:
     """``kfio simulate``: Monte Carlo error bands."""
-    return report_json(call_with_budget(resolve("analyzer.simulate", "simulate"), parse(body, settings), budget))
+    request = parse(body, settings)
+    return report_json(call_with_budget(resolve("analyzer.simulate", "simulate"), request, budget))
 
 
 def _plot_job(name: str) -> JobFn:

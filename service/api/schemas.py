@@ -87,6 +87,61 @@ _SEED000_TWO_SENSORS = {
     },
 }
 
+#: ``kfio analyze --json`` on ``_SEED004_SCALAR`` (lambda_c = 9/25, as seed 004 finds).
+_SEED004_SCALAR_REPORT = {
+    "verdict": "stable",
+    "theorem": "seed 001 (Rohr, Marelli, Fu), Theorem 1",
+    "blocks": [
+        {
+            "eigenvalues": ["-5/4"],
+            "eigenvalues_numeric": [[-1.25, 0.0]],
+            "modulus": 1.25,
+            "modulus_exact": "5/4",
+            "jordan_sizes": [1],
+            "period": 1,
+            "degenerate": False,
+            "sigma": 0.5,
+            "sigma_exact": "1/2",
+            "rate": 0.78125,
+            "verdict": "stable",
+            "certified": True,
+            "blind_set": [],
+            "basis": "theorem",
+            "notes": ["non-degenerate block: only the empty set is blind (seed 001, Lemma 2)"],
+        }
+    ],
+    "critical_arrival_probability": 0.36,
+    "critical_arrival_probability_exact": "9/25",
+    "channel": {"model": "bernoulli", "order": 0, "arrival_probability": "1/2"},
+    "system": {"n": 1, "p": 1, "controllable_A_Q": True},
+    "assumptions": [],
+    "warnings": [],
+}
+
+#: ``kfio simulate --json`` on ``_SEED004_SCALAR`` with steps 4, 1000 trajectories, seed 1 (rounded).
+_SEED004_SCALAR_SIMULATION = {
+    "steps": 4,
+    "trajectories": 1000,
+    "seed": 1,
+    "initial_channel": "stationary",
+    "P0": "Q",
+    "mean_trace": [1.0, 2.3415, 3.7183, 5.097, 6.2907],
+    "ci95_low": [1.0, 2.3277, 3.6619, 4.9718, 6.0689],
+    "ci95_high": [1.0, 2.3554, 3.7748, 5.2223, 6.5125],
+    "percentiles": {
+        "50": [1.0, 2.5625, 2.9772, 5.3604, 4.0435],
+        "90": [1.0, 2.5625, 5.0039, 8.8186, 13.0761],
+        "99": [1.0, 2.5625, 5.0039, 8.8186, 14.7791],
+    },
+    "diverged": False,
+    "mean_diverged_at": None,
+    "percentile_diverged_at": {"50": None, "90": None, "99": None},
+    "diverged_trajectories": 0,
+    "final_mean_covariance": [[6.2907]],
+    "checks": {"arrival_rate": {"packet": {"observed": 0.5025, "stationary": 0.5}}, "exact_agreement": None},
+    "exact": None,
+}
+
 REQUEST_EXAMPLES: dict[str, dict[str, Any]] = {
     "seed004-scalar": {
         "summary": "Seed 004, scalar system: lambda_c = 0.36 (stable at 0.5)",
@@ -229,6 +284,50 @@ COMPONENTS: dict[str, dict[str, Any]] = {
         "required": ["system", "channel"],
         "additionalProperties": False,
         "examples": [_SEED002_2X2],
+    },
+    "StabilityReport": {
+        "type": "object",
+        "description": (
+            "The report of `kfio analyze --json`: the verdict of seed 001, Theorem 1, with its evidence per "
+            "FMO block.  Exact values are strings (\"9/25\"), their float approximations numbers."
+        ),
+        "properties": {
+            "verdict": {"type": "string", "enum": ["stable", "unstable", "boundary"]},
+            "theorem": {"type": "string"},
+            "blocks": {"type": "array", "items": {"type": "object"}},
+            "critical_arrival_probability": {"type": ["number", "null"]},
+            "critical_arrival_probability_exact": {"type": ["string", "null"]},
+            "channel": {"type": "object"},
+            "system": {"type": "object"},
+            "assumptions": {"type": "array", "items": {"type": "string"}},
+            "warnings": {"type": "array", "items": {"type": "string"}},
+        },
+        "required": ["verdict", "blocks"],
+        "examples": [_SEED004_SCALAR_REPORT],
+    },
+    "SimulationReport": {
+        "type": "object",
+        "description": (
+            "The report of `kfio simulate --json`: statistics of trace(P_t) over Monte Carlo trajectories, "
+            "t = 0..steps (null where a trajectory diverged)."
+        ),
+        "properties": {
+            "steps": {"type": "integer"},
+            "trajectories": {"type": "integer"},
+            "seed": {"type": "integer"},
+            "mean_trace": {"type": "array", "items": {"type": ["number", "null"]}},
+            "ci95_low": {"type": "array", "items": {"type": ["number", "null"]}},
+            "ci95_high": {"type": "array", "items": {"type": ["number", "null"]}},
+            "percentiles": {
+                "type": "object",
+                "additionalProperties": {"type": "array", "items": {"type": ["number", "null"]}},
+            },
+            "diverged": {"type": "boolean"},
+            "checks": {"type": "object"},
+            "exact": {"type": ["object", "null"]},
+        },
+        "required": ["steps", "trajectories", "seed", "mean_trace", "percentiles", "diverged"],
+        "examples": [_SEED004_SCALAR_SIMULATION],
     },
     "Problem": {
         "type": "object",
