@@ -28,13 +28,16 @@ def _matrix(description: str) -> dict[str, Any]:
     }
 
 
-def _channel(model: str, properties: dict[str, Any], required: list[str], description: str) -> dict[str, Any]:
+def _channel(
+    model: str, properties: dict[str, Any], required: list[str], description: str, example: dict[str, Any]
+) -> dict[str, Any]:
     return {
         "type": "object",
         "description": description,
         "properties": {"model": {"const": model}, **properties},
         "required": ["model", *required],
         "additionalProperties": False,
+        "examples": [example],
     }
 
 
@@ -191,7 +194,10 @@ COMPONENTS: dict[str, dict[str, Any]] = {
         "anyOf": [{"type": "number", "minimum": 0, "maximum": 1}, {"type": "string", "pattern": _NUMBER_PATTERN, "maxLength": 816}],
         "examples": [0.5, "9/25"],
     },
-    "Matrix": _matrix("A non-empty rectangular matrix, as an array of rows."),
+    "Matrix": {
+        **_matrix("A non-empty rectangular matrix, as an array of rows."),
+        "examples": [_SEED002_2X2["system"]["A"], [["5/4", 0], [1, "11/10"]]],
+    },
     "Sensor": {
         "type": "object",
         "description": "A packet: the rows of C (and the block of R) it carries. Sensors partition the rows of C.",
@@ -222,12 +228,14 @@ COMPONENTS: dict[str, dict[str, Any]] = {
         {"arrival_probability": _ref("Probability")},
         ["arrival_probability"],
         "i.i.d. arrivals with P(arrival) = arrival_probability (seed 004).",
+        _SEED004_SCALAR["channel"],
     ),
     "GilbertElliottChannel": _channel(
         "gilbert_elliott",
         {"failure_rate": _ref("Probability"), "recovery_rate": _ref("Probability")},
         ["failure_rate", "recovery_rate"],
         "failure_rate = P(lost | previous arrived), recovery_rate = P(arrived | previous lost).",
+        _SEED001_DEGENERATE_GE["channel"],
     ),
     "MarkovChannel": _channel(
         "markov",
@@ -242,6 +250,7 @@ COMPONENTS: dict[str, dict[str, Any]] = {
         },
         ["order", "arrival_probability"],
         "Finite-state Markov channel of order nu (seed 001, Definition 2); all 2^order histories are required.",
+        _SEED001_MARKOV["channel"],
     ),
     "PerSensorChannel": _channel(
         "per_sensor",
@@ -254,9 +263,12 @@ COMPONENTS: dict[str, dict[str, Any]] = {
         },
         ["channels"],
         "Independent packet channels, one per sensor (seeds 000/003).",
+        _SEED000_TWO_SENSORS["channel"],
     ),
     "PacketChannel": {
+        "description": "The channel of one packet.",
         "oneOf": [_ref("BernoulliChannel"), _ref("GilbertElliottChannel"), _ref("MarkovChannel")],
+        "examples": [_SEED001_DEGENERATE_GE["channel"]],
     },
     "Channel": {
         "oneOf": [_ref("BernoulliChannel"), _ref("GilbertElliottChannel"), _ref("MarkovChannel"), _ref("PerSensorChannel")],
