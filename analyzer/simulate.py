@@ -204,14 +204,16 @@ class SimulationReport:
             )
         if self.mean_diverged_at is not None:
             lines.append(
-                f"the mean diverged at t = {self.mean_diverged_at}: {int(self.stats.diverged[-1])} of "
-                f"{o.trajectories} trajectories overflowed (trace > 1e150) by t = {o.steps}"
+                f"the mean diverged at t = {self.mean_diverged_at}: by t = {o.steps}, {int(self.stats.diverged[-1])} of "
+                f"{o.trajectories} trajectories left float64's range (trace above 1e150, or an update that "
+                "cancels more than 12 digits)"
             )
         agree = self.exact_agreement()
-        if agree is not None:
+        if agree is not None and self.exact is not None:
+            max_z = agree["max_abs_z"]
             lines.append(
-                f"exact E[P_t] (t <= {self.exact.steps if self.exact else 0}): inside the 95% band at "
-                f"{agree['within_ci95']} of {agree['steps_compared']} steps (max |z| = {_fmt(agree['max_abs_z'] if agree['max_abs_z'] is not None else math.nan)})"
+                f"exact E[P_t] (t <= {self.exact.steps}): inside the 95% band at {agree['within_ci95']} of "
+                f"{agree['steps_compared']} steps (max |z| = {'n/a' if max_z is None else f'{max_z:.3g}'})"
             )
         return "\n".join(lines)
 
