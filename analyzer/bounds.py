@@ -24,13 +24,13 @@ import numpy as np
 
 from .bounds_certificate import ExactPlant
 from .bounds_options import BoundsOptions, parse_bounds_options
+from .bounds_phat import p_hat_sequence
 from .bounds_report import BoundsReport, CovarianceBounds, CriticalInterval, PHatBounds, RegionMap
 from .bounds_search import CertifiedSearch
 from .budget import Budget
 from .lmi import v_bar_sdp
 from .model import Request, to_float
 from .riccati import ArrivalModel, arrival_model, lyapunov_residual, s_bar, solve_v_bar, spectral_radius, subset_rows
-from .riccati_batch import p_hat_sequence
 
 __all__ = ["BoundsReport", "compute_bounds", "critical_lower_bound", "hypotheses"]
 

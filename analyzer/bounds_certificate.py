@@ -33,9 +33,10 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from .bounds_vech import unvech, vech
 from .model import Matrix, to_domain
 from .request import is_psd
-from .riccati import ArrivalModel, closed_loop_operator, unvech, vech
+from .riccati import ArrivalModel, closed_loop_operator
 
 #: Rounding allowance of the float check, in units of ``n * eps * scale``.
 FLOAT_CHECK_FACTOR = 1e3

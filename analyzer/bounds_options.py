@@ -15,10 +15,10 @@ from decimal import Decimal
 from fractions import Fraction
 from typing import Any, Mapping
 
+from .bounds_phat import max_horizon
 from .errors import InvalidInput, LimitExceeded
 from .exact import parse_number
 from .model import MarkovChannel, PerSensorChannel, Request
-from .riccati_batch import max_horizon
 
 DEFAULT_TOLERANCE = 1e-6
 MIN_TOLERANCE, MAX_TOLERANCE = 1e-9, 1e-1

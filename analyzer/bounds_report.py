@@ -15,11 +15,11 @@ import numpy as np
 
 from .bounds_certificate import StabilityCertificate
 from .bounds_options import Packet
+from .bounds_phat import PHat
 from .bounds_search import UpperBound
 from .exact import fraction_text
 from .lmi import SDPSolution
 from .riccati import VBarIteration
-from .riccati_batch import PHat
 
 #: Relative agreement required between the V_bar iteration and the SDP.
 SDP_AGREEMENT = 1e-6

@@ -4,8 +4,8 @@ The modified algebraic Riccati equation (MARE) of seed 004 (eq. 17) and its
 partial-loss generalization of seed 000 (eq. 12, for any number ``m`` of
 independent Bernoulli packets), the Lyapunov lower bound ``S_bar`` and the
 MARE fixed point ``V_bar`` (seed 004, Theorems 3, 4 and 6(a); seed 000,
-Theorem 4).  Seed 002's tighter bounds ``P_hat_N`` live in
-:mod:`analyzer.riccati_batch`.
+Theorem 4).  Seed 002's tighter bounds ``P_hat_N``: :func:`p_hat`, computed by
+:mod:`analyzer.bounds_phat`.
 
 Everything here is float NumPy.  Certificates that are checked exactly live
 in :mod:`analyzer.bounds_certificate`.
@@ -21,12 +21,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from fractions import Fraction
-from functools import lru_cache
 from typing import Sequence, TypeVar
 
 import numpy as np
 import scipy.linalg
 
+from .bounds_vech import congruence_matrix, unvech, vech
 from .budget import Budget
 
 Num = TypeVar("Num", float, Fraction)
@@ -176,46 +176,6 @@ def gains(X: np.ndarray, model: ArrivalModel) -> tuple[np.ndarray, ...]:
     """
     AX = model.A @ X
     return tuple(-np.linalg.solve(C @ X @ C.T + R, C @ AX.T).T for C, R in zip(model.C_S, model.R_S))
-
-
-# --- half-vectorization: symmetric matrices as vectors of their upper triangle ------------------
-
-
-@lru_cache(maxsize=64)
-def vech_layout(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``(iu, ju, dup)`` for ``vech``: ``vec(X) = dup @ X[iu, ju]`` for symmetric ``X``."""
-    iu, ju = np.triu_indices(n)
-    dup = np.zeros((n * n, len(iu)))
-    dup[iu * n + ju, np.arange(len(iu))] = 1.0
-    dup[ju * n + iu, np.arange(len(iu))] = 1.0
-    for a in (iu, ju, dup):
-        a.setflags(write=False)
-    return iu, ju, dup
-
-
-def congruence_matrix(M: np.ndarray) -> np.ndarray:
-    """The matrix ``T`` with ``vech(M X M') = T vech(X)`` for symmetric ``X``.
-
-    Working on ``vech`` keeps every iterate symmetric by construction: on full
-    ``vec`` a float asymmetry is amplified like ``rho(A)^2`` per step and
-    wrecks long iterations (observed on seed 004's 3x3 example).
-    """
-    n = M.shape[0]
-    iu, ju, dup = vech_layout(n)
-    return (np.kron(M, M) @ dup)[iu * n + ju]
-
-
-def vech(X: np.ndarray) -> np.ndarray:
-    iu, ju, _ = vech_layout(X.shape[0])
-    return X[iu, ju]
-
-
-def unvech(h: np.ndarray, n: int) -> np.ndarray:
-    iu, ju, _ = vech_layout(n)
-    X = np.empty((n, n))
-    X[iu, ju] = h
-    X[ju, iu] = h
-    return X
 
 
 def closed_loop_operator(model: ArrivalModel, K: Sequence[np.ndarray]) -> np.ndarray:
@@ -418,3 +378,28 @@ def v_bar(A: np.ndarray, C: np.ndarray, Q: np.ndarray, R: np.ndarray, lam: float
     39.512342
     """
     return solve_v_bar(one_packet_model(A, C, Q, R, lam)).matrix
+
+
+def p_hat(A: np.ndarray, C: np.ndarray, Q: np.ndarray, R: np.ndarray, lam: float, N: int) -> np.ndarray:
+    """Seed 002's ``P_hat_N``, the fixed point of ``g_N`` (eq. 15); ``p_hat(..., 1)`` is ``V_bar``.
+
+    ``V_bar = P_hat_1 >= P_hat_N >= lim E[P_t]`` (seed 002, Theorem 1).  The
+    algorithm (``g_N`` level by level on batches, warm starts along divisors)
+    lives in :func:`analyzer.bounds_phat.p_hat_sequence`.
+
+    Raises
+    ------
+    NumericalFailure
+        If ``P_hat_N`` does not exist at this ``lam`` (the iteration diverges)
+        or the iteration stalls.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> A, C, Q, R = np.array([[-1.25]]), np.array([[1.0]]), np.array([[1.0]]), np.array([[2.5]])
+    >>> bool(p_hat(A, C, Q, R, 0.4, 8)[0, 0] < p_hat(A, C, Q, R, 0.4, 1)[0, 0])
+    True
+    """
+    from .bounds_phat import p_hat as _p_hat  # here, not at the top: bounds_phat builds on this module
+
+    return _p_hat(A, C, Q, R, lam, N)

@@ -23,9 +23,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .bounds_vech import congruence_matrix, unvech, vech, vech_layout
 from .budget import Budget
 from .errors import NumericalFailure
-from .riccati import DIVERGENCE_RATIO, congruence_matrix, unvech, v_bar, vech, vech_layout
+from .riccati import DIVERGENCE_RATIO, v_bar
 
 #: The batch at the bottom of the tree holds at most ``2**CHUNK_LEVELS`` matrices.
 CHUNK_LEVELS = 13
