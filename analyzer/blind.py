@@ -215,6 +215,8 @@ class Expansion:
 
     Attributes
     ----------
+    mask:
+        ``Q`` itself, with any slot that kills its kernel included.
     maximal:
         No slot outside ``Q`` keeps it blind: ``Q`` is a maximal blind set.
     kernel:
@@ -226,6 +228,7 @@ class Expansion:
         Per child, the rows ``W_e = r_e K`` that cut its kernel out of ``K``.
     """
 
+    mask: np.ndarray
     maximal: bool
     kernel: np.ndarray
     cores: np.ndarray
@@ -243,15 +246,22 @@ def root(space: SlotSpace, margins: Margins) -> Flat:
     return Flat(mask=zero, core=-1, basis=np.eye(L, dtype=complex), cut=np.zeros((0, L)), cut_rank=0)
 
 
-def _kernel_projectors(W: np.ndarray, ranks: np.ndarray) -> np.ndarray:
-    """``P_e``: orthogonal projector onto ``ker(W_e)`` in ``C^d``, for each ``W_e`` (``p x d``)."""
-    d = W.shape[2]
+def _closure_residuals(W: np.ndarray, later: np.ndarray, ranks: np.ndarray) -> np.ndarray:
+    """``||W_t N_e||`` for every slot ``t`` (columns) and each ``e`` in ``later`` (rows).
+
+    ``N_e`` is an orthonormal basis of ``ker(W_e)``, so the residual vanishes
+    iff ``t`` lies in ``cl(Q + e)``.  One-row slots need no factorization:
+    ``||W_t N_e|| = ||W_t - (W_t u_e^*) u_e||`` with ``u_e = W_e / |W_e|``.
+    """
     if W.shape[1] == 1:
-        u = W[:, 0, :] / np.maximum(np.linalg.norm(W[:, 0, :], axis=1), 1e-300)[:, None]
-        return np.eye(d)[None] - u.conj()[:, :, None] * u[:, None, :]
-    _, _, Vh = np.linalg.svd(W)
-    V = Vh.conj().swapaxes(1, 2) * (np.arange(d)[None, :] >= ranks[:, None])[:, None, :]
-    return V @ V.conj().swapaxes(1, 2)
+        rows = W[:, 0, :]
+        u = rows[later] / np.linalg.norm(rows[later], axis=1)[:, None]
+        coef = rows @ u.conj().T
+        return np.linalg.norm(rows[None, :, :] - coef.T[:, :, None] * u[:, None, :], axis=2)
+    d = W.shape[2]
+    _, _, Vh = np.linalg.svd(W[later])
+    N = Vh.conj().swapaxes(1, 2) * (np.arange(d)[None, :] >= ranks[later][:, None])[:, None, :]
+    return np.linalg.norm(np.einsum("tpd,cde->ctpe", W, N), axis=(2, 3))
 
 
 def expand(space: SlotSpace, flat: Flat, margins: Margins) -> Expansion:
@@ -269,11 +279,15 @@ def expand(space: SlotSpace, flat: Flat, margins: Margins) -> Expansion:
     else:
         sv = np.linalg.svd(W, compute_uv=False)
     rank = (~margins.record(sv)).sum(axis=1)
+    # A slot killing the kernel belongs to the flat; re-deciding it here keeps
+    # every later step consistent with this node's own rank calls.
+    Q = Q | (rank == 0)
     blind_ext = ~Q & (rank < d)
     later = np.flatnonzero(blind_ext & (index > flat.core))
     if later.size == 0:
         none = np.zeros(0, dtype=int)
         return Expansion(
+            Q,
             not blind_ext.any(),
             K,
             none,
@@ -283,9 +297,7 @@ def expand(space: SlotSpace, flat: Flat, margins: Margins) -> Expansion:
             W[none],
             none,
         )
-    P = _kernel_projectors(W[later], rank[later])
-    resid = np.linalg.norm(W[None, :, :, :] @ P[:, None, :, :], axis=(2, 3))
-    closures = margins.record(resid) | Q[None, :]
+    closures = margins.record(_closure_residuals(W, later, rank)) | Q[None, :]
     new = closures & ~Q[None, :]
     candidates = np.zeros(space.size, dtype=bool)
     candidates[later[~new[:, : flat.core + 1].any(axis=1)]] = True
@@ -293,6 +305,7 @@ def expand(space: SlotSpace, flat: Flat, margins: Margins) -> Expansion:
     cores = later[ppc]
     hulls = closures[ppc] | (candidates[None, :] & (index[None, :] > cores[:, None]))
     return Expansion(
+        mask=Q,
         maximal=not blind_ext.any(),
         kernel=K,
         cores=cores,
@@ -407,7 +420,7 @@ def search(space: SlotSpace, budget: Budget, margins: Margins, objective: Object
         nodes += 1
         exp = expand(space, flat, margins)
         if exp.maximal:
-            best.offer(flat.mask[None, :])
+            best.offer(exp.mask[None, :])
         keep = canonical_possible(space, W, exp.masks, exp.cores, best.j_max(W))
         best.offer(exp.masks[keep & (exp.dims == 1)])
         inner = np.flatnonzero(keep & (exp.dims > 1))

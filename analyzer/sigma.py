@@ -40,6 +40,9 @@ from .phases import PhaseBlock
 #: Closure-search steps allowed when the caller passes no budget.
 DEFAULT_MAX_STEPS = 500_000
 
+#: Most float entries a batch of transfer products may hold at once.
+_BATCH_ENTRIES = 1 << 21
+
 
 @dataclass(frozen=True)
 class SigmaResult:
@@ -131,37 +134,71 @@ def _step_matrices(channel: MarkovChannel) -> tuple[np.ndarray, np.ndarray]:
     return full, loss
 
 
-def _group_log_rho(channel: MarkovChannel, allowed: np.ndarray) -> np.ndarray:
-    """``log rho`` of the product over phases of the group's step matrices.
+def _pattern_products(full: np.ndarray, loss: np.ndarray, m: int) -> np.ndarray:
+    """Products over ``m`` phases for every pattern; bit ``i`` set: arrivals allowed at phase ``i``."""
+    table = np.stack([loss, full])
+    for _ in range(1, m):
+        table = np.concatenate([table @ loss, table @ full])
+    return table
 
-    ``allowed`` is ``(C, n)``: per candidate, the phases where arrivals are
-    allowed.  The product is rescaled every few steps (it decays like
-    ``(1 - q)^n``) and the scale is carried in the logarithm.
+
+class _GroupRho:
+    """``log rho`` of one group's product of step matrices over ``N0`` phases, for many sets at once.
+
+    The chain is time-homogeneous, so the product over ``b`` consecutive
+    phases depends only on which of them allow arrivals: the ``2^b``
+    products are tabulated once and a period costs ``ceil(N0 / b)`` batched
+    products.  Bernoulli groups use the closed form ``(1 - lambda)^z``.
     """
-    if channel.order == 0:
-        return (~allowed).sum(axis=1) * math.log(1.0 - float(channel.table[0]))
-    full, loss = _step_matrices(channel)
-    C, k = allowed.shape[0], channel.n_histories
-    prod = np.broadcast_to(np.eye(k), (C, k, k)).copy()
-    log_scale = np.zeros(C)
-    for n in range(allowed.shape[1]):
-        prod = prod @ np.where(allowed[:, n, None, None], full, loss)
-        if n % 8 == 7:
+
+    def __init__(self, channel: MarkovChannel, n_phases: int) -> None:
+        self.n_phases = n_phases
+        self.k = channel.n_histories
+        self.log_loss = math.log(1.0 - float(channel.table[0]))
+        full, loss = _step_matrices(channel)
+        self.chunk = max(1, min(8, n_phases, int(math.log2(max(2, _BATCH_ENTRIES // self.k**2)))))
+        lengths = {self.chunk, n_phases % self.chunk} - {0}
+        self.tables = {m: _pattern_products(full, loss, m) for m in lengths} if channel.order else {}
+
+    def __call__(self, allowed: np.ndarray) -> np.ndarray:
+        """``log rho`` per row of ``allowed`` (``(C, N0)``: phases where arrivals are allowed)."""
+        if not self.tables:
+            return (~allowed).sum(axis=1) * self.log_loss
+        batch = max(1, _BATCH_ENTRIES // self.k**2)
+        return np.concatenate([self._log_rho(allowed[i : i + batch]) for i in range(0, allowed.shape[0], batch)])
+
+    def _log_rho(self, allowed: np.ndarray) -> np.ndarray:
+        C = allowed.shape[0]
+        prod = np.broadcast_to(np.eye(self.k), (C, self.k, self.k)).copy()
+        log_scale = np.zeros(C)
+        for start in range(0, self.n_phases, self.chunk):
+            m = min(self.chunk, self.n_phases - start)
+            code = allowed[:, start : start + m].astype(np.int64) @ (1 << np.arange(m))
+            prod = prod @ self.tables[m][code]
+            # The product decays like (1 - q)^n: rescale and carry the scale.
             top = prod.max(axis=(1, 2))
             prod /= top[:, None, None]
             log_scale += np.log(top)
-    return np.log(np.abs(np.linalg.eigvals(prod)).max(axis=1)) + log_scale
+        return np.log(np.abs(np.linalg.eigvals(prod)).max(axis=1)) + log_scale
 
 
-def log_rho_period(masks: np.ndarray, channels: Sequence[MarkovChannel], base_period: int, period: int) -> np.ndarray:
-    """``log rho(P_F)`` for base-slot masks ``(C, N0 * G)`` (index ``n * G + g``).
+class _LogRho:
+    """``log rho(P_F)`` for base-slot masks ``(C, N0 G)`` (index ``n G + g``).
 
-    A blind set lifted from ``[0, N0)`` is ``N0``-periodic, so
-    ``P_F = (P_F^{(N0)})^(N / N0)`` and only ``N0`` steps are multiplied.
+    ``rho(P_F) = prod_g rho(P_{F,g})`` (Kronecker structure), and a blind set
+    lifted from ``[0, N0)`` is ``N0``-periodic, so ``P_F = (P_F^{(N0)})^(N / N0)``:
+    only ``N0`` steps are multiplied.
     """
-    per_group = masks.reshape(masks.shape[0], base_period, len(channels))
-    total = sum(_group_log_rho(ch, per_group[:, :, g]) for g, ch in enumerate(channels))
-    return np.asarray(total) * (period // base_period)
+
+    def __init__(self, channels: Sequence[MarkovChannel], base_period: int, period: int) -> None:
+        self.groups = [_GroupRho(ch, base_period) for ch in channels]
+        self.base_period = base_period
+        self.repeats = period // base_period
+
+    def __call__(self, masks: np.ndarray) -> np.ndarray:
+        per_group = masks.reshape(masks.shape[0], self.base_period, len(self.groups))
+        total = sum(rho(per_group[:, :, g]) for g, rho in enumerate(self.groups))
+        return np.asarray(total, dtype=float) * self.repeats
 
 
 def _objective(channels: Sequence[MarkovChannel], base_period: int, period: int) -> Objective:
@@ -184,7 +221,7 @@ def _objective(channels: Sequence[MarkovChannel], base_period: int, period: int)
         # Slack so that round-off in ``best`` never excludes a set that ties.
         return min(size, math.ceil(best / per_miss * (1 + 1e-9) + 1e-9) - 1)
 
-    return Objective(score=lambda masks: log_rho_period(masks, channels, base_period, period), max_weight=max_weight)
+    return Objective(score=_LogRho(channels, base_period, period), max_weight=max_weight)
 
 
 def period_transfer_matrix(
@@ -349,7 +386,7 @@ def _sigma_values(
     if not found.worst.any():
         sigma = math.prod(float(ch.recovery_after_losses) for ch in channels)
         return sigma, sigma**period
-    log_rho = float(log_rho_period(found.worst[None, :], channels, space.n_phases, period)[0])
+    log_rho = float(_LogRho(channels, space.n_phases, period)(found.worst[None, :])[0])
     return math.exp(log_rho / period), math.exp(log_rho)
 
 
@@ -447,7 +484,6 @@ __all__ = [
     "DEFAULT_MAX_STEPS",
     "SigmaResult",
     "compute_sigma",
-    "log_rho_period",
     "period_transfer_matrix",
     "sigma_period",
 ]
