@@ -24,7 +24,7 @@ import numpy as np
 
 from .bounds_certificate import ExactPlant
 from .bounds_options import BoundsOptions, parse_bounds_options
-from .bounds_phat import p_hat_sequence
+from .bounds_phat import PHat, p_hat_sequence
 from .bounds_report import BoundsReport, CovarianceBounds, CriticalInterval, PHatBounds, RegionMap
 from .bounds_search import CertifiedSearch
 from .budget import Budget
@@ -109,6 +109,10 @@ def _covariance(model: ArrivalModel, budget: Budget) -> CovarianceBounds:
 
 def _p_hat(A, C, Q, R, lam: float, horizon: int, budget: Budget) -> PHatBounds:
     wanted = sorted({1 << k for k in range(horizon.bit_length()) if 1 << k <= horizon} | {horizon})
+    if (1.0 - lam) * spectral_radius(A) ** 2 >= 1.0:
+        # P_hat_N >= lim E[P_t] >= S_bar = infinity (seed 002 Theorem 1, seed 004 Theorem 3): no need to iterate.
+        why = "(1 - lambda) rho(A)^2 >= 1: E[P_t] diverges, and P_hat_N >= lim E[P_t]"
+        return PHatBounds(horizon, tuple(PHat(N, None, 0, None, 0, why) for N in wanted))
     seq = p_hat_sequence(A, C, Q, R, lam, wanted, budget=budget)
     return PHatBounds(horizon, tuple(seq[N] for N in wanted))
 

@@ -164,14 +164,16 @@ def _fixed_point(
     for k in range(1, max_iter + 1):
         if budget is not None:
             budget.tick(f"P_hat_{N}", 1 + (1 << N) // 4096)
-        h_next = op.g_n(h, N)
+        with np.errstate(over="ignore", invalid="ignore"):  # divergence is detected just below
+            h_next = op.g_n(h, N)
         if not np.all(np.isfinite(h_next)) or np.abs(h_next).max() > cap:
             return PHat(N, None, k, None, start, f"the iteration of g_{N} diverges: P_hat_{N} does not exist here")
         step = float(np.abs(h_next - h).max() / max(1e-300, np.abs(h_next).max()))
         h = h_next
         if step <= rtol:
             return PHat(N, unvech(h, n), k, step, start)
-    return PHat(N, None, max_iter, step, start, f"the iteration of g_{N} did not converge in {max_iter} steps")
+    origin = f"from P_hat_{start}" if start else "from 0"
+    return PHat(N, None, max_iter, step, start, f"the iteration of g_{N} {origin} did not converge in {max_iter} steps")
 
 
 def p_hat_sequence(
@@ -184,6 +186,7 @@ def p_hat_sequence(
     *,
     rtol: float = 1e-11,
     max_iter: int = 20_000,
+    max_iter_from_zero: int = 200,
     budget: Budget | None = None,
 ) -> dict[int, PHat]:
     """``P_hat_N`` for every ``N`` in ``horizons`` (plus the divisors used as warm starts).
@@ -194,8 +197,9 @@ def p_hat_sequence(
     ``g_N <= g_d^{N/d}`` (Lemma 2, eq. 12), ``g_N(P_hat_d) <= P_hat_d`` and the
     iterates decrease monotonically to ``P_hat_N``, every one of them an
     upper bound of ``P_hat_N`` (eq. 21).  Where ``P_hat_d`` does not exist
-    it starts at 0 and increases (proof of Theorem 2); ``P_hat_N`` may exist
-    for large ``N`` where ``V_bar`` does not.
+    it starts at 0 and increases (proof of Theorem 2), for at most
+    ``max_iter_from_zero`` steps: ``P_hat_N`` may exist for large ``N`` where
+    ``V_bar`` does not, but near its own threshold that iteration crawls.
     """
     n = np.atleast_2d(A).shape[0]
     out: dict[int, PHat] = {}
@@ -213,7 +217,7 @@ def p_hat_sequence(
         if base.matrix is not None:
             out[N] = _fixed_point(op, N, vech(base.matrix), d, rtol, max_iter, budget)
         else:
-            out[N] = _fixed_point(op, N, np.zeros(n * (n + 1) // 2), 0, rtol, max_iter, budget)
+            out[N] = _fixed_point(op, N, np.zeros(n * (n + 1) // 2), 0, rtol, max_iter_from_zero, budget)
         return out[N]
 
     for N in sorted(set(horizons)):
