@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
-from typing import Optional
 
 from .errors import BudgetExceeded
 
@@ -26,8 +25,8 @@ class Budget:
         Allowance of :meth:`tick` steps (summed over all loops), or ``None``.
     """
 
-    seconds: Optional[float] = None
-    max_steps: Optional[int] = None
+    seconds: float | None = None
+    max_steps: int | None = None
     steps: int = 0
     _start: float = field(default_factory=time.monotonic, repr=False)
 
@@ -40,7 +39,7 @@ class Budget:
             if time.monotonic() - self._start > self.seconds:
                 raise BudgetExceeded(f"{what}: more than {self.seconds:g} s")
 
-    def remaining(self) -> Optional[float]:
+    def remaining(self) -> float | None:
         if self.seconds is None:
             return None
         return max(0.0, self.seconds - (time.monotonic() - self._start))

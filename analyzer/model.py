@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Any, Mapping, Optional, Union
+from typing import Any, Mapping, Union
 
 import numpy as np
 
@@ -44,9 +44,9 @@ class System:
 
     A: Matrix
     C: Matrix
-    Q: Optional[Matrix] = None
-    R: Optional[Matrix] = None
-    sensors: Optional[tuple[Sensor, ...]] = None
+    Q: Matrix | None = None
+    R: Matrix | None = None
+    sensors: tuple[Sensor, ...] | None = None
 
     @property
     def n(self) -> int:
@@ -92,7 +92,7 @@ class MarkovChannel:
         return 1 - self.table[0]
 
     @property
-    def bernoulli_lambda(self) -> Optional[Fraction]:
+    def bernoulli_lambda(self) -> Fraction | None:
         """The arrival probability if the channel is i.i.d. (all entries equal)."""
         return self.table[0] if len(set(self.table)) == 1 else None
 
@@ -155,4 +155,4 @@ class Request:
     system: System
     channel: Channel
     options: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
-    time_budget_s: Optional[float] = None
+    time_budget_s: float | None = None

@@ -17,7 +17,7 @@ group holding every row.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Callable, Iterable, Optional
+from typing import Callable, Iterable
 
 import numpy as np
 
@@ -25,7 +25,7 @@ Slot = tuple[int, int]  # (phase n in [0, N0), row group index)
 
 #: Exact rank oracle: stacked rows for the given slots -> exact rank, or None
 #: when no exact arithmetic is available for this block.
-RankOracle = Callable[[Iterable[Slot]], Optional[int]]
+RankOracle = Callable[[Iterable[Slot]], int | None]
 
 
 @dataclass(frozen=True)
@@ -54,7 +54,7 @@ class PhaseBlock:
     exponents: tuple[int, ...]
     c_hat: np.ndarray
     row_groups: tuple[tuple[int, ...], ...]
-    exact_rank: Optional[RankOracle] = field(default=None, compare=False, repr=False)
+    exact_rank: RankOracle | None = field(default=None, compare=False, repr=False)
 
     @property
     def n_columns(self) -> int:
@@ -66,7 +66,7 @@ class PhaseBlock:
         e = np.asarray(self.exponents, dtype=float)
         return np.exp(2j * np.pi * ((e * n) % self.base_period) / self.base_period)
 
-    def rows(self, n: int, group: Optional[int] = None) -> np.ndarray:
+    def rows(self, n: int, group: int | None = None) -> np.ndarray:
         """``r_n`` (or its rows of one group): ``C_hat[rows] diag(omega^n)``."""
         ch = self.c_hat if group is None else self.c_hat[list(self.row_groups[group]), :]
         return ch * self.omega_powers(n)[None, :]

@@ -10,7 +10,7 @@ probability ranges, Markov tables.
 from __future__ import annotations
 
 from fractions import Fraction
-from typing import Any, Mapping, Optional
+from typing import Any, Mapping
 
 from .errors import InvalidInput, LimitExceeded
 from .exact import load_json, parse_number
@@ -179,7 +179,7 @@ def parse_markov_channel(obj: Any, limits: Limits = DEFAULT_LIMITS, where: str =
         table_obj = obj["arrival_probability"]
         if not isinstance(table_obj, dict):
             raise InvalidInput(f"{where}/arrival_probability", 'expected an object mapping histories such as "01" to probabilities')
-        table: list[Optional[Fraction]] = [None] * (1 << nu)
+        table: list[Fraction | None] = [None] * (1 << nu)
         for key, val in table_obj.items():
             kw = f"{where}/arrival_probability/{key}"
             if len(key) != nu or any(ch not in "01" for ch in key):

@@ -11,7 +11,7 @@ import importlib
 import pkgutil
 import sys
 import traceback
-from typing import Optional, Sequence
+from typing import Sequence
 
 from . import commands, exitcodes
 
@@ -31,7 +31,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 
-def main(argv: Optional[Sequence[str]] = None) -> int:
+def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     try:
         args = parser.parse_args(argv)
