@@ -23,16 +23,17 @@ reach, never soundness.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Sequence
+from typing import Callable, Sequence
 
 import numpy as np
 
 from .bounds_certificate import ExactPlant, StabilityCertificate, certify
 from .budget import Budget
 from .lmi import StabilityLMI, balancing_scaling
-from .riccati import ArrivalModel, pattern_weights, subset_rows
+from .riccati import ArrivalModel, closed_loop_operator, pattern_weights, subset_rows
 
 #: Bisection points are rounded to this grid so that exact values print as short decimals.
 GRID = Fraction(1, 10**12)
@@ -121,19 +122,56 @@ class CertifiedSearch:
         if self.budget is not None:
             self.budget.tick("stability LMI", 1)
         self.solves += 1
-        exact_w = pattern_weights([Fraction(x) for x in lambdas])
-        weights = [float(w) for w in exact_w]
+        weights = [float(w) for w in pattern_weights([Fraction(x) for x in lambdas])]
         T = self._T
         Ti = np.linalg.inv(T)
         sol = self.lmi.solve(T @ self.A @ Ti, [C @ Ti for C in self.C_S], weights)
         K_work = sol.gains()
         if K_work is None:
             return None
-        K = tuple(Ti @ k for k in K_work)  # T(A + K C)T^-1 = A~ + (T K) C~
-        cert = certify(self._model(weights), self.plant, lambdas, exact_w, K, sol.margin, self.exact)
+        return self.check_gains(lambdas, tuple(Ti @ k for k in K_work), sol.margin)  # T(A + K C)T^-1 = A~ + (T K) C~
+
+    def check_gains(
+        self, lambdas: Sequence[Fraction], K: Sequence[np.ndarray], solver_margin: float | None = None
+    ) -> StabilityCertificate | None:
+        """Re-check gains ``K`` (user coordinates) at ``lambdas`` without solving anything."""
+        exact_w = pattern_weights([Fraction(x) for x in lambdas])
+        model = self._model([float(w) for w in exact_w])
+        cert = certify(model, self.plant, lambdas, exact_w, K, solver_margin, self.exact)
         if cert is not None and self.recenter:
             self._recenter(cert.X)
         return cert
+
+    def _slide(
+        self,
+        at: Callable[[Fraction], list[Fraction]],
+        lo: Fraction,
+        hi: Fraction,
+        K: Sequence[np.ndarray],
+        tol: Fraction,
+    ) -> tuple[Fraction, StabilityCertificate] | None:
+        """Lower ``hi`` for free: the smallest point of ``(lo, hi)`` where the same gains ``K`` still certify.
+
+        A float bisection on ``rho(L_K) < 1`` along the coordinate (no LMI
+        solve), then one exact re-check there.  With a single unstable mode
+        the gains that zero it work all the way down to the lower bound
+        (seed 004 Sec. IV), so one solve near the threshold finishes the search.
+        """
+
+        def stable(x: float) -> bool:
+            weights = [float(w) for w in pattern_weights(at(Fraction(x)))]
+            L = closed_loop_operator(self._model(weights), K)
+            return bool(np.max(np.abs(np.linalg.eigvals(L))) < 1.0)
+
+        a, b = float(lo), float(hi)
+        while b - a > float(tol) / 4:
+            c = 0.5 * (a + b)
+            a, b = (a, c) if stable(c) else (c, b)
+        x = Fraction(math.ceil(Fraction(b) / GRID)) * GRID
+        if not lo < x < hi - tol / 2:
+            return None
+        cert = self.check_gains(at(x), K)
+        return None if cert is None else (x, cert)
 
     def _recenter(self, X: np.ndarray) -> None:
         try:
@@ -169,6 +207,11 @@ class CertifiedSearch:
             lo = Fraction(0)
         tol = Fraction(tolerance)
         while hi - lo > tol:
+            slid = self._slide(at, lo, hi, cert.K, tol)
+            if slid is not None:
+                hi, cert = slid
+                if hi - lo <= tol:
+                    break
             mid = ((lo + hi) / 2 / GRID).__round__() * GRID
             if not lo < mid < hi:
                 break
