@@ -317,6 +317,34 @@ def expand(space: SlotSpace, flat: Flat, margins: Margins) -> Expansion:
     )
 
 
+def plane_leaves(space: SlotSpace, exp: Expansion, children: np.ndarray, margins: Margins) -> np.ndarray:
+    """Every maximal blind set above the given children, all of whose kernels are planes.
+
+    Above a flat ``Q`` with a 2-dimensional kernel ``K2`` the maximal blind
+    sets are ``Q`` plus the slots ``s`` with ``v_s n_t = 0``, one per slot
+    ``t`` of rank 1 (``v = r K2``, ``n_t`` spanning ``ker v_t``), or ``Q``
+    itself if there is no such ``t``.  Batched over children, slots and
+    slots, this replaces one expansion per plane (branch and bound only: a
+    maximal set may come out several times).
+    """
+    _, _, vh = np.linalg.svd(exp.cuts[children])
+    K2 = exp.kernel[None, :, :] @ vh[:, -2:, :].conj().swapaxes(1, 2)
+    V = space.rows[None, :, :, :] @ K2[:, None, :, :]
+    if V.shape[2] == 1:
+        v = V[:, :, 0, :]
+        size = np.linalg.norm(v, axis=2)
+        rank1 = ~margins.record(size)
+        null = np.stack([v[:, :, 1], -v[:, :, 0]], axis=2) / np.maximum(size, 1e-300)[:, :, None]
+    else:
+        _, sv, vt = np.linalg.svd(V)
+        rank1 = (~margins.record(sv)).sum(axis=2) == 1
+        null = vt[:, :, 1, :].conj()
+    killed = margins.record(np.linalg.norm(np.einsum("cspk,ctk->ctsp", V, null), axis=3))
+    masks = exp.masks[children]
+    leaves = (killed | masks[:, None, :])[rank1]
+    return np.concatenate([leaves, masks[~rank1.any(axis=1)]])
+
+
 def canonical_possible(space: SlotSpace, W: int, masks: np.ndarray, cores: np.ndarray, j_max: int) -> np.ndarray:
     """Whether some flat in each subtree can be in canonical rotation and miss ``<= j_max`` of window 0.
 
@@ -348,6 +376,8 @@ class SearchResult:
         Score of ``maximal[0]`` under branch and bound (``nan`` otherwise).
     nodes:
         Flats expanded.
+    planes:
+        Flats with a 2-dimensional kernel resolved in batch (:func:`plane_leaves`).
     window:
         ``W``, the window length used for canonical rotation.
     """
@@ -355,6 +385,7 @@ class SearchResult:
     maximal: tuple[np.ndarray, ...]
     best_value: float
     nodes: int
+    planes: int
     window: int
 
 
@@ -370,27 +401,44 @@ class _Incumbent:
 
     def beats(self, bound: float) -> bool:
         """Whether nothing scoring at most ``bound`` can beat the incumbent."""
-        return bound < self.value - _BOUND_SLACK * max(1.0, abs(self.value))
+        return bool(self.beats_all(np.array([bound]))[0])
+
+    def beats_all(self, bounds: np.ndarray) -> np.ndarray:
+        """:meth:`beats` for each of ``bounds``."""
+        return bounds < self.value - _BOUND_SLACK * max(1.0, abs(self.value))
+
+    def max_misses(self) -> int:
+        """Most slots a set may miss and still beat the incumbent (all of them if there is none)."""
+        if self.objective is None or self.mask is None:
+            return self.space.size
+        return self.objective.max_weight(self.value)
 
     def j_max(self, W: int) -> int:
         """Most misses canonical window 0 of a set that beats the incumbent may have."""
-        if self.objective is None or self.mask is None:
-            return W * self.space.n_groups
-        return W * self.objective.max_weight(self.value) // self.space.n_phases
+        return W * self.max_misses() // self.space.n_phases
+
+    def promising(self, masks: np.ndarray) -> np.ndarray:
+        """Rows that miss few enough slots to beat the incumbent (a cheap test before scoring)."""
+        return self.space.size - masks.sum(axis=1) <= self.max_misses()
 
     def offer(self, masks: np.ndarray) -> None:
         """Record maximal blind sets (rows of ``masks``)."""
-        if masks.shape[0] == 0:
-            return
         if self.objective is None:
             for m in masks:
                 key = self.space.orbit_key(m)
                 self.found.setdefault(key, np.isin(np.arange(self.space.size), key))
             return
+        masks = masks[self.promising(masks)]
+        if masks.shape[0] == 0:
+            return
         values = self.objective.score(masks)
         i = int(np.argmax(values))
         if values[i] > self.value:
             self.mask, self.value = masks[i], float(values[i])
+
+
+def _child(exp: Expansion, c: int) -> Flat:
+    return Flat(exp.masks[c], int(exp.cores[c]), exp.kernel, exp.cuts[c], int(exp.cut_ranks[c]))
 
 
 def search(space: SlotSpace, budget: Budget, margins: Margins, objective: Objective | None = None) -> SearchResult:
@@ -406,12 +454,12 @@ def search(space: SlotSpace, budget: Budget, margins: Margins, objective: Object
     Raises
     ------
     BudgetExceeded
-        When ``budget`` runs out (one tick per expanded flat).
+        When ``budget`` runs out (one tick per expanded or resolved flat).
     """
     best = _Incumbent(space, objective)
     W = space.window(margins)
     stack: list[tuple[Flat, float]] = [(root(space, margins), np.inf)]
-    nodes = 0
+    nodes = resolved = 0
     while stack:
         flat, bound = stack.pop()
         if best.beats(bound):
@@ -423,17 +471,22 @@ def search(space: SlotSpace, budget: Budget, margins: Margins, objective: Object
             best.offer(exp.mask[None, :])
         keep = canonical_possible(space, W, exp.masks, exp.cores, best.j_max(W))
         best.offer(exp.masks[keep & (exp.dims == 1)])
-        inner = np.flatnonzero(keep & (exp.dims > 1))
-        bounds = (
-            objective.score(exp.hulls[inner]) if objective is not None and inner.size else np.full(inner.size, np.inf)
-        )
+        inner = keep & (exp.dims > 1) & best.promising(exp.hulls)
+        if objective is None:
+            stack.extend((_child(exp, c), np.inf) for c in np.flatnonzero(inner)[::-1])
+            continue
+        bounds = np.full(exp.cores.size, -np.inf)
+        bounds[inner] = objective.score(exp.hulls[inner]) if inner.any() else []
+        planes = np.flatnonzero(inner & (exp.dims == 2) & ~best.beats_all(bounds))
+        if planes.size:
+            budget.tick("sigma: closure search", planes.size)
+            resolved += planes.size
+            best.offer(plane_leaves(space, exp, planes, margins))
+        deeper = np.flatnonzero(inner & (exp.dims > 2))
         # Ascending push order: the most promising child is expanded first.
-        for i in np.argsort(bounds, kind="stable"):
-            c = inner[i]
-            child = Flat(exp.masks[c], int(exp.cores[c]), exp.kernel, exp.cuts[c], int(exp.cut_ranks[c]))
-            stack.append((child, float(bounds[i])))
+        stack.extend((_child(exp, c), float(bounds[c])) for c in deeper[np.argsort(bounds[deeper], kind="stable")])
     if objective is None:
         found = tuple(best.found[k] for k in sorted(best.found))
-        return SearchResult(maximal=found, best_value=float("nan"), nodes=nodes, window=W)
+        return SearchResult(maximal=found, best_value=float("nan"), nodes=nodes, planes=0, window=W)
     assert best.mask is not None  # some maximal blind set has a canonical rotation
-    return SearchResult(maximal=(best.mask,), best_value=best.value, nodes=nodes, window=W)
+    return SearchResult(maximal=(best.mask,), best_value=best.value, nodes=nodes, planes=resolved, window=W)

@@ -111,6 +111,8 @@ def sigma_period(base_period: int, channels: Sequence[MarkovChannel]) -> int:
 def _check_inputs(block: PhaseBlock, channels: Sequence[MarkovChannel]) -> None:
     if block.n_columns == 0:
         raise InvalidInput("/system", "a phase block needs at least one column")
+    if not np.isfinite(block.c_hat).all():
+        raise InvalidInput("/system", "the reduced observation matrix C_hat has entries that are not finite")
     if len(channels) != len(block.row_groups):
         raise InvalidInput(
             "/channel", f"expected one channel per packet ({len(block.row_groups)}), got {len(channels)}"
@@ -313,7 +315,10 @@ def _find_worst(
     if space.n_groups == 1:
         res = search(space, budget, margins, objective)
         what = "largest blind set (Corollary 2)" if channels[0].order == 0 else "blind set of largest rho(M_F)"
-        method = f"branch and bound over {res.nodes} flats (window {res.window}) for the {what}"
+        method = (
+            f"branch and bound for the {what}: {res.nodes} flats expanded, {res.planes} resolved in batch, "
+            f"window {res.window}"
+        )
         return _Found(res.maximal[0], (), False, method)
     res = search(space, budget, margins)
     worst = res.maximal[int(np.argmax(objective.score(np.array(res.maximal))))]
