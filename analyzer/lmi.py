@@ -14,6 +14,7 @@ lets it update its data in place, it does not seed the iterates).
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 from typing import Sequence
 
@@ -24,6 +25,9 @@ import scipy.linalg
 from .riccati import ArrivalModel
 
 SOLVER = cp.CLARABEL
+#: Clarabel tolerances for the stability LMI.  Looser than its defaults (1e-8): every positive
+#: answer is re-checked exactly anyway, and this saves about a fifth of the iterations.
+LMI_SOLVER_OPTIONS = {"tol_gap_abs": 1e-7, "tol_gap_rel": 1e-7, "tol_feas": 1e-7}
 
 
 def balancing_scaling(A: np.ndarray) -> np.ndarray:
@@ -140,7 +144,9 @@ class StabilityLMI:
             MC.value = s * C
         self._M0.value = np.sqrt(max(0.0, float(weights[0]))) * A
         try:
-            self._problem.solve(solver=SOLVER, warm_start=True)
+            with warnings.catch_warnings():  # "may be inaccurate": the status says so and the answer is re-checked
+                warnings.simplefilter("ignore", UserWarning)
+                self._problem.solve(solver=SOLVER, warm_start=True, **LMI_SOLVER_OPTIONS)
         except cp.SolverError:
             return LMISolution("solver_error", None, None, None)
         status = str(self._problem.status)
@@ -191,7 +197,9 @@ def v_bar_sdp(model: ArrivalModel) -> SDPSolution:
     gamma = cp.bmat(rows)
     problem = cp.Problem(cp.Maximize(cp.trace(V)), [0.5 * (gamma + gamma.T) >> 0, V >> 0])
     try:
-        problem.solve(solver=SOLVER)
+        with warnings.catch_warnings():  # an inaccurate answer shows in the status and in the cross-check
+            warnings.simplefilter("ignore", UserWarning)
+            problem.solve(solver=SOLVER)
     except cp.SolverError:
         return SDPSolution("solver_error", None, None)
     status = str(problem.status)
