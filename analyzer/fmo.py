@@ -352,31 +352,33 @@ class _ExactRows:
         return int(DomainMatrix(rows, (len(rows), len(self.columns)), self.K).rank())
 
 
-def _cyclotomic_form(members: Sequence[Root], factors: Sequence[EigenFactor], beta: AlgebraicReal | None) -> tuple[Fraction, int, list[int]] | None:
-    """``(r, L, k)`` with ``theta_j = r * exp(2 pi i k_j / L)`` exactly, ``r`` rational, if the class has that form.
+def _cyclotomic_form(
+    members: Sequence[Root], factors: Sequence[EigenFactor], beta: Optional[AlgebraicReal]
+) -> Optional[tuple[Fraction, int, list[int]]]:
+    """``(beta, L, k)`` with ``theta_j = sqrt(beta) * exp(2 pi i k_j / L)``, ``beta`` rational, if the class has that form.
 
-    Certified: ``theta_j^m = r^m`` exactly iff ``f_j`` divides ``x^m - r^m``.
+    Certified: ``theta_j / sqrt(beta)`` is a root of unity of order dividing
+    ``2 m`` iff ``f_j`` divides ``x^(2m) - beta^m``; which root it is comes from
+    the 60-digit roots.
     """
-    if beta is None or beta.rational is None:
+    if beta is None or beta.rational is None or beta.rational == 0:
         return None
     b = beta.rational
-    rn, rd = math.isqrt(b.numerator), math.isqrt(b.denominator)
-    if rn * rn != b.numerator or rd * rd != b.denominator or rn == 0:
-        return None
-    r = Fraction(rn, rd)
     orders = []
-    for fi, ri in members:
-        f = factors[fi]
-        with mpmath.workdps(DIGITS + 10):
-            rel = _order_of_ratio(f.roots[ri] / (mpmath.mpf(r.numerator) / r.denominator), 2 * f.degree**2 + 2)
-        if rel is None:
-            return None
-        m, k = rel
-        if not Poly(X**m - QQ(r.numerator**m, r.denominator**m), X, domain=QQ).rem(f.poly).is_zero:
-            return None
-        orders.append((m, k))
+    with mpmath.workdps(DIGITS + 10):
+        r = mpmath.sqrt(mpmath.mpf(b.numerator) / b.denominator)
+        for fi, ri in members:
+            f = factors[fi]
+            rel = _order_of_ratio(f.roots[ri] / r, 2 * f.degree**2 + 2)
+            if rel is None:
+                return None
+            m, k = rel
+            target = Poly(X ** (2 * m) - QQ(b.numerator**m, b.denominator**m), X, domain=QQ)
+            if not target.rem(f.poly).is_zero:
+                return None
+            orders.append((m, k))
     L = reduce(math.lcm, (m for m, _ in orders), 1)
-    return r, L, [k * (L // m) % L for m, k in orders]
+    return b, L, [k * (L // m) % L for m, k in orders]
 
 
 def _member_field_and_values(
@@ -386,25 +388,24 @@ def _member_field_and_values(
 
     Two exact cases cover the systems met in practice:
 
-    * every member is ``r * zeta^k`` with ``r`` rational (real rational
-      eigenvalues, rotations by rational angles): the cyclotomic field
-      ``Q(zeta_L)``;
+    * every member is ``sqrt(beta) * zeta^k`` with ``beta`` rational (real
+      rational eigenvalues, rotations by rational angles, ``1 +- i``): the
+      field ``Q(sqrt(beta), zeta_L)``;
     * the class is a single eigenvalue ``theta``: its own field ``Q(theta)``.
 
     Otherwise ``(None, {})``: ranks stay numerical and are reported as such.
     """
-    from sympy import I, exp, pi
+    from sympy import I, Rational, exp, pi, sqrt
 
     form = _cyclotomic_form(members, factors, beta)
     if form is not None:
-        r, L, ks = form
-        if _euler_phi(L) <= MAX_EXACT_FIELD_DEGREE:
-            if L <= 2:
-                K, zeta = QQ, QQ(-1) if L == 2 else QQ(1)
-            else:
-                K = QQ.algebraic_field(exp(2 * pi * I / L))
-                zeta = K.from_sympy(exp(2 * pi * I / L))
-            rq = K.convert(QQ(r.numerator, r.denominator))
+        b, L, ks = form
+        r_expr = sqrt(Rational(b.numerator, b.denominator))
+        gens = ([] if r_expr.is_Rational else [r_expr]) + ([exp(2 * pi * I / L)] if L > 2 else [])
+        if _euler_phi(L) * (1 if r_expr.is_Rational else 2) <= MAX_EXACT_FIELD_DEGREE:
+            K = QQ.algebraic_field(*gens) if gens else QQ
+            zeta = K.from_sympy(exp(2 * pi * I / L)) if L > 2 else K.convert(QQ(-1) if L == 2 else QQ(1))
+            rq = K.from_sympy(r_expr)
             values = {}
             for root, k in zip(members, ks):
                 v = rq
