@@ -118,7 +118,7 @@ def _float_residual(model: ArrivalModel, K: Sequence[np.ndarray], X: np.ndarray)
             F = A + Ks @ C
             M = M - w * F @ X @ F.T
             scale += w * np.linalg.norm(F, 2) ** 2
-    return 0.5 * (M + M.T), scale * np.linalg.norm(X, 2)
+    return 0.5 * (M + M.T), float(scale * np.linalg.norm(X, 2))
 
 
 def float_check(model: ArrivalModel, K: Sequence[np.ndarray], X: np.ndarray) -> float | None:

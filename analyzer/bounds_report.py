@@ -167,8 +167,7 @@ class PHatBounds:
         return ok
 
     def to_dict(self) -> dict[str, Any]:
-        base = next((e for e in self.entries if e.N == 1 and e.matrix is not None), None)
-        t1 = None if base is None else float(np.trace(base.matrix))
+        t1 = next((_trace(e.matrix) for e in self.entries if e.N == 1), None)
         out = []
         for e in self.entries:
             t = _trace(e.matrix)

@@ -131,7 +131,7 @@ class StabilityLMI:
         self.size = size
 
     def is_dpp(self) -> bool:
-        return self._problem.is_dcp(dpp=True)
+        return bool(self._problem.is_dcp(dpp=True))  # type: ignore[call-arg]  # CVXPY's stub lacks dpp
 
     def solve(self, A: np.ndarray, C_S: Sequence[np.ndarray], weights: Sequence[float]) -> LMISolution:
         """Solve at pattern probabilities ``weights`` (``weights[0] = pi(empty)``).

@@ -19,9 +19,9 @@ matching block of ``R``.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
-from fractions import Fraction
-from typing import Sequence, TypeVar
+from typing import Any, Sequence
 
 import numpy as np
 import scipy.linalg
@@ -29,13 +29,11 @@ import scipy.linalg
 from .bounds_vech import congruence_matrix, unvech, vech
 from .budget import Budget
 
-Num = TypeVar("Num", float, Fraction)
-
 #: ``trace(V) / (1 + trace(Q))`` above which the monotone iteration is declared divergent.
 DIVERGENCE_RATIO = 1e30
 
 
-def pattern_weights(lambdas: Sequence[Num]) -> list[Num]:
+def pattern_weights(lambdas: Sequence[Any]) -> list[Any]:
     """Probabilities ``pi(S)`` of the ``2^m`` arrival patterns, indexed by bit mask.
 
     Bit ``s`` of the mask is set when packet ``s`` arrives.  Works for floats
@@ -46,14 +44,10 @@ def pattern_weights(lambdas: Sequence[Num]) -> list[Num]:
     >>> pattern_weights([0.5, 0.25])
     [0.375, 0.375, 0.125, 0.125]
     """
-    out = []
-    for mask in range(1 << len(lambdas)):
-        w = None
-        for s, lam in enumerate(lambdas):
-            f = lam if mask >> s & 1 else 1 - lam
-            w = f if w is None else w * f
-        out.append(w)
-    return out
+    return [
+        math.prod((lam if mask >> s & 1 else 1 - lam for s, lam in enumerate(lambdas)), start=1)
+        for mask in range(1 << len(lambdas))
+    ]
 
 
 @dataclass(frozen=True)
@@ -250,12 +244,12 @@ def s_bar(A: np.ndarray, Q: np.ndarray, loss_probability: float) -> np.ndarray |
 def lyapunov_residual(S: np.ndarray, A: np.ndarray, Q: np.ndarray, loss_probability: float) -> float:
     """``||S - p A S A' - Q||_F / max(1, ||S||_F)``: the substitute-back check of :func:`s_bar`."""
     r = S - loss_probability * A @ S @ A.T - Q
-    return float(np.linalg.norm(r) / max(1.0, np.linalg.norm(S)))
+    return float(np.linalg.norm(r) / max(1.0, float(np.linalg.norm(S))))
 
 
 def mare_residual(V: np.ndarray, model: ArrivalModel) -> float:
     """``||g(V) - V||_F / max(1, ||V||_F)``."""
-    return float(np.linalg.norm(g_partial(V, model) - V) / max(1.0, np.linalg.norm(V)))
+    return float(np.linalg.norm(g_partial(V, model) - V) / max(1.0, float(np.linalg.norm(V))))
 
 
 # --- V_bar: the MARE fixed point ----------------------------------------------------------------
@@ -349,7 +343,7 @@ def solve_v_bar(
         V_next = g_partial(V, model)
         if not np.all(np.isfinite(V_next)) or np.trace(V_next) > cap:
             return VBarIteration(None, None, k, 0, None, None, "the MARE iteration from 0 diverges")
-        stalled = np.linalg.norm(V_next - V) <= 1e-15 * max(1.0, np.linalg.norm(V_next))
+        stalled = np.linalg.norm(V_next - V) <= 1e-15 * max(1.0, float(np.linalg.norm(V_next)))
         V = V_next
         if k == next_try or stalled or k == max_iter:
             next_try *= 2
@@ -357,7 +351,7 @@ def solve_v_bar(
             if upper is not None:
                 res = mare_residual(upper, model)
                 if res <= rtol or stalled:
-                    gap = float(np.linalg.norm(upper - V) / max(1e-300, np.linalg.norm(upper)))
+                    gap = float(np.linalg.norm(upper - V) / max(1e-300, float(np.linalg.norm(upper))))
                     return VBarIteration(upper, V, k, steps, res, gap)
     return VBarIteration(
         None, V, max_iter, 0, None, None, f"the MARE iteration neither converged nor diverged in {max_iter} steps"
