@@ -12,8 +12,10 @@ flats, never the ``2^(N0 G)`` subsets:
   2004): a flat ``Q`` with core slot ``c`` has the children ``cl(Q + e)``,
   ``e > c``, that add nothing below ``e``; every flat is reached once.  A node
   keeps an orthonormal basis ``K`` of its kernel and tests all extensions at
-  once (``W = r K``, one batched product), and a child whose kernel is a line
-  is maximal, so it is scored without being expanded;
+  once (``W = r K``, one batched product).  A child whose kernel is a line
+  is maximal and is scored without being expanded; under branch and bound
+  the children whose kernel is a plane are resolved together in one batch
+  (:func:`plane_leaves`);
 * **shift orbits**: ``r_{n+1} = r_n diag(omega)``, so ``F + 1`` is blind iff
   ``F`` is.  Let a *window* be ``W`` consecutive phases (all groups), ``W``
   the fewest phases of full rank.  Only flats in *canonical rotation* are

@@ -38,7 +38,7 @@ from .model import MarkovChannel
 from .phases import PhaseBlock
 
 #: Closure-search steps allowed when the caller passes no budget.
-DEFAULT_MAX_STEPS = 500_000
+DEFAULT_MAX_STEPS = 200_000
 
 #: Most float entries a batch of transfer products may hold at once.
 _BATCH_ENTRIES = 1 << 21

@@ -149,6 +149,17 @@ def test_period_longer_than_base_period() -> None:
     )
 
 
+def test_period_longer_than_base_period_two_packets() -> None:
+    # Representatives of maximal blind sets live on [0, N) and repeat with period N0.
+    block = block_of([[1, 1], [1, 2]], (0, 1), 2, groups=((0,), (1,)))
+    channels = [markov(tuple(F(k + 2, 12) for k in range(8))), bernoulli(F(1, 3))]
+    res = compute_sigma(block, channels)
+    assert res.period == 4 and res.maximal_blind_sets
+    for S in res.maximal_blind_sets:
+        assert all(0 <= n < 4 for n, _ in S) and {((n + 2) % 4, g) for n, g in S} == S
+    assert abs(res.sigma - oracle_sigma(block, channels)) <= 1e-6
+
+
 @pytest.mark.parametrize(("N0", "nu", "N"), [(1, 0, 1), (3, 0, 3), (2, 3, 4), (4, 5, 8), (5, 5, 5)])
 def test_sigma_period(N0: int, nu: int, N: int) -> None:
     assert sigma_period(N0, [markov(tuple(F(1, 2) for _ in range(1 << nu)))]) == N
