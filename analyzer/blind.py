@@ -56,6 +56,15 @@ Score = Callable[[np.ndarray], np.ndarray]
 #: keeps float round-off in the score from cutting a truly better subtree.
 _BOUND_SLACK = 1e-12
 
+#: Most complex entries one batched step may hold (about 64 MB).
+_CHUNK_ENTRIES = 1 << 22
+
+
+def _chunks(n: int, per_item: int) -> list[slice]:
+    """Slices of ``range(n)`` whose batches hold at most :data:`_CHUNK_ENTRIES` entries."""
+    step = max(1, _CHUNK_ENTRIES // max(1, per_item))
+    return [slice(i, i + step) for i in range(0, n, step)]
+
 
 @dataclass(frozen=True)
 class Objective:
@@ -255,15 +264,20 @@ def _closure_residuals(W: np.ndarray, later: np.ndarray, ranks: np.ndarray) -> n
     iff ``t`` lies in ``cl(Q + e)``.  One-row slots need no factorization:
     ``||W_t N_e|| = ||W_t - (W_t u_e^*) u_e||`` with ``u_e = W_e / |W_e|``.
     """
-    if W.shape[1] == 1:
-        rows = W[:, 0, :]
-        u = rows[later] / np.linalg.norm(rows[later], axis=1)[:, None]
-        coef = rows @ u.conj().T
-        return np.linalg.norm(rows[None, :, :] - coef.T[:, :, None] * u[:, None, :], axis=2)
-    d = W.shape[2]
-    _, _, Vh = np.linalg.svd(W[later])
-    N = Vh.conj().swapaxes(1, 2) * (np.arange(d)[None, :] >= ranks[later][:, None])[:, None, :]
-    return np.linalg.norm(np.einsum("tpd,cde->ctpe", W, N), axis=(2, 3))
+    S, p, d = W.shape
+    parts = []
+    for part in _chunks(later.size, S * p * d):
+        e = later[part]
+        if p == 1:
+            rows = W[:, 0, :]
+            u = rows[e] / np.linalg.norm(rows[e], axis=1)[:, None]
+            coef = rows @ u.conj().T
+            parts.append(np.linalg.norm(rows[None, :, :] - coef.T[:, :, None] * u[:, None, :], axis=2))
+            continue
+        _, _, Vh = np.linalg.svd(W[e])
+        N = Vh.conj().swapaxes(1, 2) * (np.arange(d)[None, :] >= ranks[e][:, None])[:, None, :]
+        parts.append(np.linalg.norm(np.einsum("tpd,cde->ctpe", W, N), axis=(2, 3)))
+    return np.concatenate(parts)
 
 
 def expand(space: SlotSpace, flat: Flat, margins: Margins) -> Expansion:
@@ -329,6 +343,13 @@ def plane_leaves(space: SlotSpace, exp: Expansion, children: np.ndarray, margins
     slots, this replaces one expansion per plane (branch and bound only: a
     maximal set may come out several times).
     """
+    per_child = space.size**2 * space.rows.shape[1]
+    return np.concatenate(
+        [_plane_leaves(space, exp, children[part], margins) for part in _chunks(children.size, per_child)]
+    )
+
+
+def _plane_leaves(space: SlotSpace, exp: Expansion, children: np.ndarray, margins: Margins) -> np.ndarray:
     _, _, vh = np.linalg.svd(exp.cuts[children])
     K2 = exp.kernel[None, :, :] @ vh[:, -2:, :].conj().swapaxes(1, 2)
     V = space.rows[None, :, :, :] @ K2[:, None, :, :]
