@@ -99,15 +99,13 @@ class CertifiedSearch:
         self.A = np.asarray(A, float)
         rows = subset_rows(row_groups)
         self.C_S = tuple(np.asarray(C, float)[r, :] for r in rows)
-        self.m = len(row_groups)
         self.plant = plant
         self.budget = budget
         self.exact = exact
         self.recenter = recenter
         n = self.A.shape[0]
         self.lmi = StabilityLMI(n, [len(r) for r in rows])
-        self._T0 = np.diag(1.0 / balancing_scaling(self.A))
-        self._T = self._T0
+        self._T = np.diag(1.0 / balancing_scaling(self.A))  # x~ = D^-1 x: balanced first, then recentred
         self.solves = 0
 
     def _model(self, weights: Sequence[float]) -> ArrivalModel:
