@@ -3,9 +3,8 @@
 Figures are built with the object API (:class:`matplotlib.figure.Figure`),
 never ``pyplot``: no global state, no GUI backend.  Each function takes a
 validated request, a :class:`analyzer.Budget` and the plot's query
-parameters, and returns PNG bytes.  They draw what the analyzer computes and
-compute nothing of their own beyond the closed-form lower bound
-``1 - 1/rho(A)^2`` (seed 004, Theorem 3) used to place the axis.
+parameters, and returns PNG bytes.  They compute nothing of their own:
+every value drawn comes from :mod:`analyzer` (the same calls as the CLI).
 """
 
 from __future__ import annotations
@@ -16,7 +15,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from analyzer import Budget, InvalidInput, Request
+from analyzer import Budget, BudgetExceeded, InvalidInput, Request
 from analyzer.model import MarkovChannel, PerSensorChannel, to_float
 
 from .jobs import call_with_budget, resolve
@@ -93,19 +92,36 @@ def simulation(request: Request, budget: Budget, params: Mapping[str, Any]) -> b
 # -- phase transition (seed 004, Figs. 1-3) -----------------------------------
 
 
+def _value(node: Any) -> float | None:
+    return None if node is None or node.get("value") is None else float(node["value"])
+
+
 def _critical_values(request: Request, budget: Budget) -> dict[str, float | None]:
-    """Lower and upper bounds on lambda_c from the bounds report (``None`` when absent)."""
+    """Bounds on lambda_c (:func:`analyzer.bounds.compute_bounds`) and the exact value (:func:`analyzer.analyze`)."""
     report = call_with_budget(resolve("analyzer.bounds", "compute_bounds"), request, budget).to_dict()
     crit = report.get("critical_probability") or {}
-    return {k: (None if crit.get(k) is None else float(crit[k])) for k in ("lower", "upper")}
+    exact = call_with_budget(resolve("analyzer", "analyze"), request, budget).to_dict()
+    value = exact.get("critical_arrival_probability")
+    return {
+        "lower": _value(crit.get("lower")),
+        "upper": _value(crit.get("upper")),
+        "exact": None if value is None else float(value),
+    }
 
 
 def phase_transition(request: Request, budget: Budget, params: Mapping[str, Any]) -> bytes:
     """``trace(S_bar)`` and ``trace(V_bar)`` against lambda, critical values marked.
 
-    ``S_bar`` (exists for lambda above the lower bound) bounds the limit of
-    ``E[P_t]`` from below, ``V_bar`` (exists above the LMI bound) from above
-    (seed 004, Theorems 3-6).
+    ``S_bar`` (:func:`analyzer.riccati.s_bar`, exists for lambda above the
+    lower bound) bounds the limit of ``E[P_t]`` from below and ``V_bar``
+    (:func:`analyzer.riccati.v_bar`, exists above the LMI bound) from above
+    (seed 004, Theorems 3-6).  Marked: the lower bound ``1 - 1/rho(A)^2``,
+    the LMI upper bound and kfio's exact ``lambda_c`` (seed 001).
+
+    ``V_bar`` is evaluated only above the LMI bound: the MARE iteration
+    converges exactly where the LMI is feasible (seed 004, Theorem 5), and
+    just below that point its divergence is slow to detect (seconds per
+    point).
     """
     lam0 = _bernoulli_lambda(request, "phase transition")
     _require_noise(request, "phase transition")
@@ -113,8 +129,7 @@ def phase_transition(request: Request, budget: Budget, params: Mapping[str, Any]
     v_bar = resolve("analyzer.riccati", "v_bar")
     crit = _critical_values(request, budget)
     A, C, Q, R = (to_float(getattr(request.system, k)) for k in ("A", "C", "Q", "R"))
-    rho = float(max(abs(np.linalg.eigvals(A))))
-    lower = crit["lower"] if crit["lower"] is not None else max(0.0, 1 - 1 / rho**2) if rho > 0 else 0.0
+    lower = crit["lower"] or 0.0
     lo = params.get("lambda_min")
     hi = params.get("lambda_max")
     lo = float(lo) if lo is not None else max(0.0, lower - 0.05)
@@ -123,19 +138,25 @@ def phase_transition(request: Request, budget: Budget, params: Mapping[str, Any]
     s_tr = np.full(lams.shape, math.nan)
     v_tr = np.full(lams.shape, math.nan)
     for i, lam in enumerate(lams):
-        budget.tick("phase transition plot", 1)
+        budget.tick("phase transition plot", 2)
         s_tr[i] = _trace_or_nan(s_bar, A, Q, 1.0 - lam)
-        v_tr[i] = _trace_or_nan(v_bar, A, C, Q, R, lam)
+        if crit["upper"] is None or lam >= crit["upper"]:
+            v_tr[i] = _trace_or_nan(v_bar, A, C, Q, R, lam)
     fig = _figure()
     ax = fig.subplots()
-    ax.semilogy(lams, s_tr, label="trace(S_bar): lower bound")
-    ax.semilogy(lams, v_tr, label="trace(V_bar): upper bound")
-    for value, name, style in ((crit["lower"] if crit["lower"] is not None else lower, "lambda lower", ":"),
-                               (crit["upper"], "lambda upper (LMI)", "--")):
+    ax.plot(lams, s_tr, label="trace(S_bar): lower bound on lim E[P_t]")
+    ax.plot(lams, v_tr, label="trace(V_bar): upper bound on lim E[P_t]")
+    if np.isfinite(np.concatenate([s_tr, v_tr])).any():
+        ax.set_yscale("log")
+    marks = (
+        (crit["lower"], "lambda lower bound", ":", "tab:blue"),
+        (crit["upper"], "lambda upper bound (LMI)", "--", "tab:orange"),
+        (crit["exact"], "lambda_c exact (kfio)", "-", "black"),
+        (lam0, "request: lambda", "-.", "tab:green"),
+    )
+    for value, name, style, color in marks:
         if value is not None and lo <= value <= hi:
-            ax.axvline(value, color="gray", ls=style, lw=1, label=f"{name} = {value:.4g}")
-    if lo <= lam0 <= hi:
-        ax.axvline(lam0, color="black", lw=0.8, alpha=0.6, label=f"request: lambda = {lam0:.4g}")
+            ax.axvline(value, color=color, ls=style, lw=1, label=f"{name} = {value:.4g}")
     ax.set_xlim(lo, hi)
     ax.set_xlabel("arrival probability lambda")
     ax.set_ylabel("trace")
@@ -161,99 +182,100 @@ def _trace_or_nan(fn: Any, *args: Any) -> float:
 
 # -- region map for two sensors (seed 000, Figs. 4-5) -------------------------
 
-
-def _two_bernoulli_sensors(request: Request) -> tuple[str, str]:
-    ch = request.channel
-    if not isinstance(ch, PerSensorChannel) or len(ch.channels) != 2:
-        raise InvalidInput("/channel/model", "the region plot needs two sensors with a per_sensor channel")
-    for name, c in ch.channels:
-        if c.model != "bernoulli":
-            raise InvalidInput(f"/channel/channels/{name}/model", "the region plot needs Bernoulli channels")
-    return ch.channels[0][0], ch.channels[1][0]
+_LABEL_CODE = {"unstable": -1.0, "undecided": 0.0, "stable": 1.0}
 
 
 def region(request: Request, budget: Budget, params: Mapping[str, Any]) -> bytes:
     """The ``(lambda_1, lambda_2)`` square for two sensors: stable, unstable, undecided.
 
-    Unstable by the lower bound ``(1 - lambda_1)(1 - lambda_2) rho(A)^2 >= 1``
-    and stable by the LMI (seed 000, Theorems 3-4) as the bounds report says
-    at each grid point; kfio's exact verdict (MATH.md, "exact partial-loss
-    regions") is overlaid as markers where the analyzer gives one.
+    The map is the bounds report's (``options.bounds.grid`` set to the
+    ``points`` parameter): unstable by the lower bound, stable by the LMI of
+    seed 000.  kfio's exact verdict (MATH.md, "exact partial-loss regions",
+    an extension of seed 001) is overlaid on at most ``overlay`` x
+    ``overlay`` interior cells, within half of the remaining budget; the
+    title says if the overlay was cut short.
     """
     import dataclasses
 
-    names = _two_bernoulli_sensors(request)
-    points = int(params.get("points", 21))
-    grid = np.linspace(0.0, 1.0, points + 2)[1:-1]  # Assumption 1: strictly inside (0, 1)
-    bounds_fn = resolve("analyzer.bounds", "compute_bounds")
-    try:
-        analyze_fn = resolve("analyzer", "analyze")
-    except Exception:  # noqa: BLE001 - the overlay is optional
-        analyze_fn = None
-    bound_map = np.zeros((points, points))  # -1 unstable, +1 stable, 0 undecided
-    exact_map = np.full((points, points), math.nan)
-    for i, l1 in enumerate(grid):
-        for j, l2 in enumerate(grid):
-            budget.tick("region plot", 1)
-            chans = tuple(
-                (n, MarkovChannel("bernoulli", 0, (_frac(lam),), {"arrival_probability": _frac(lam)}))
-                for n, lam in zip(names, (l1, l2))
-            )
-            point = dataclasses.replace(request, channel=PerSensorChannel(chans))
-            bound_map[j, i] = _bounds_verdict(call_with_budget(bounds_fn, point, budget).to_dict())
-            if analyze_fn is not None:
-                exact_map[j, i] = _exact_verdict(analyze_fn, point, budget)
-    return _draw_region(grid, bound_map, exact_map, names, request)
+    if not isinstance(request.channel, PerSensorChannel) or len(request.channel.channels) != 2:
+        raise InvalidInput("/channel/model", "the region plot needs two sensors with a per_sensor channel")
+    grid_options = {**request.options.get("bounds", {}), "grid": int(params.get("points", 21))}
+    gridded = dataclasses.replace(request, options={**request.options, "bounds": grid_options})
+    report = call_with_budget(resolve("analyzer.bounds", "compute_bounds"), gridded, budget).to_dict()["region"]
+    values = np.array(report["values"], dtype=float)
+    labels = np.array([[_LABEL_CODE.get(x, 0.0) for x in row] for row in report["labels"]])
+    exact, complete = _exact_overlay(request, values, int(params.get("overlay", 9)), budget)
+    return _draw_region(values, labels, exact, complete, tuple(report["axes"]), request)
 
 
-def _frac(x: float) -> Any:
-    from fractions import Fraction
+def _exact_overlay(request: Request, values: np.ndarray, per_axis: int, budget: Budget) -> tuple[np.ndarray, bool]:
+    """Exact verdicts (-1, 0, +1; NaN where not computed) on a subgrid of interior cells."""
+    import dataclasses
 
-    return Fraction(x).limit_denominator(10**6)
-
-
-def _bounds_verdict(report: Mapping[str, Any]) -> float:
-    verdict = report.get("region_verdict") or report.get("verdict")
-    return {"unstable": -1.0, "stable": 1.0}.get(str(verdict), 0.0)
-
-
-def _exact_verdict(analyze_fn: Any, point: Request, budget: Budget) -> float:
     from analyzer import AnalyzerError
 
-    try:
-        verdict = call_with_budget(analyze_fn, point, budget).verdict
-    except (AnalyzerError, NotImplementedError):
-        return math.nan
-    return {"unstable": -1.0, "stable": 1.0, "boundary": 0.0}.get(verdict, math.nan)
+    exact = np.full((len(values), len(values)), math.nan)
+    inner = [i for i, v in enumerate(values) if 0 < v < 1]  # Assumption 1 of seed 001
+    if per_axis <= 0 or not inner:
+        return exact, True
+    picks = sorted({inner[round(k * (len(inner) - 1) / max(1, per_axis - 1))] for k in range(min(per_axis, len(inner)))})
+    remaining = budget.remaining()
+    sub = Budget(seconds=None if remaining is None else remaining / 2)
+    analyze_fn = resolve("analyzer", "analyze")
+    names = [name for name, _ in request.channel.channels]  # type: ignore[union-attr]
+    for i in picks:
+        for j in picks:
+            chans = tuple((n, _bernoulli(values[k])) for n, k in zip(names, (i, j)))
+            point = dataclasses.replace(request, channel=PerSensorChannel(chans))
+            try:
+                sub.tick("exact overlay", 64)  # checks the clock on every cell
+                verdict = call_with_budget(analyze_fn, point, sub).verdict
+            except BudgetExceeded:
+                return exact, False
+            except AnalyzerError:
+                continue
+            exact[i, j] = {"unstable": -1.0, "stable": 1.0, "boundary": 0.0}.get(verdict, math.nan)
+    return exact, True
 
 
-def _draw_region(grid: np.ndarray, bound_map: np.ndarray, exact_map: np.ndarray, names: tuple[str, str], request: Request) -> bytes:
+def _bernoulli(x: float) -> MarkovChannel:
+    from fractions import Fraction
+
+    lam = Fraction(x).limit_denominator(10**6)
+    return MarkovChannel("bernoulli", 0, (lam,), {"arrival_probability": lam})
+
+
+def _draw_region(
+    values: np.ndarray, labels: np.ndarray, exact: np.ndarray, complete: bool, axes: tuple[str, ...], request: Request
+) -> bytes:
     from matplotlib.colors import ListedColormap
     from matplotlib.patches import Patch
 
     fig = _figure()
     ax = fig.subplots()
-    step = grid[1] - grid[0] if len(grid) > 1 else 1.0
-    extent = (grid[0] - step / 2, grid[-1] + step / 2, grid[0] - step / 2, grid[-1] + step / 2)
+    step = values[1] - values[0] if len(values) > 1 else 1.0
+    extent = (values[0] - step / 2, values[-1] + step / 2, values[0] - step / 2, values[-1] + step / 2)
     cmap = ListedColormap(["#e8a0a0", "#f0f0c0", "#a0d0a0"])
-    ax.imshow(bound_map, origin="lower", extent=extent, cmap=cmap, vmin=-1, vmax=1, interpolation="nearest", aspect="auto")
-    xs, ys = np.meshgrid(grid, grid)
-    handles = [
+    # labels[i][j] is lambda_1 = values[i], lambda_2 = values[j]: lambda_1 on the x axis
+    ax.imshow(labels.T, origin="lower", extent=extent, cmap=cmap, vmin=-1, vmax=1, interpolation="nearest", aspect="auto")
+    handles: list[Any] = [
         Patch(color="#a0d0a0", label="stable (LMI bound)"),
         Patch(color="#f0f0c0", label="undecided by the bounds"),
         Patch(color="#e8a0a0", label="unstable (lower bound)"),
     ]
-    for value, marker, label in ((1.0, "o", "exact: stable"), (-1.0, "x", "exact: unstable"), (0.0, "s", "exact: boundary")):
-        mask = exact_map == value
+    x1, x2 = np.meshgrid(values, values, indexing="ij")
+    for code, marker, label in ((1.0, "o", "exact: stable"), (-1.0, "x", "exact: unstable"), (0.0, "s", "exact: boundary")):
+        mask = exact == code
         if mask.any():
-            handles.append(ax.scatter(xs[mask], ys[mask], marker=marker, s=10, c="k", lw=0.8, label=label))
+            handles.append(ax.scatter(x1[mask], x2[mask], marker=marker, s=14, c="k", lw=0.8, label=label))
     chans = dict(request.channel.channels)  # type: ignore[union-attr]
-    p = (float(chans[names[0]].table[0]), float(chans[names[1]].table[0]))
-    handles.append(ax.scatter([p[0]], [p[1]], marker="*", s=120, c="blue", label="request"))
-    ax.set_xlim(0, 1)
-    ax.set_ylim(0, 1)
-    ax.set_xlabel(f"lambda_1 (sensor {names[0]!r})")
-    ax.set_ylabel(f"lambda_2 (sensor {names[1]!r})")
-    ax.set_title("Stability region for two sensors")
-    ax.legend(handles=handles, fontsize="x-small", loc="lower left")
+    point = [float(chans[name].table[0]) for name, _ in request.channel.channels]  # type: ignore[union-attr]
+    handles.append(ax.scatter([point[0]], [point[1]], marker="*", s=140, c="blue", label="request"))
+    ax.set_xlim(extent[0], extent[1])
+    ax.set_ylim(extent[2], extent[3])
+    ax.set_xlabel(f"lambda_1 ({axes[0]})")
+    ax.set_ylabel(f"lambda_2 ({axes[1]})")
+    title = "Stability region for two sensors (exact verdict: kfio extension of seed 001)"
+    ax.set_title(title if complete else title + "\nexact overlay cut short by the time budget", fontsize="medium")
+    ax.legend(handles=handles, fontsize="x-small", loc="upper left", bbox_to_anchor=(1.01, 1.0))
     return _png(fig)
