@@ -18,6 +18,7 @@ from fastapi.responses import Response
 from analyzer import InvalidInput, load_json, parse_number
 
 from .cache import AnswerCache, CachedAnswer, canonical_json
+from .jobs import PRELOAD
 from .pool import WorkerPool
 from .problems import Problem, ProblemError, problem_from_exception
 from .settings import Settings
@@ -66,7 +67,7 @@ class Dispatcher:
         self.pool = WorkerPool(
             settings.workers,
             "service.jobs:run_job",
-            preload=("service.jobs",),
+            preload=PRELOAD,
             max_waiting=settings.max_queue,
             kill_grace_s=settings.kill_grace_s,
         )

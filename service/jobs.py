@@ -33,6 +33,10 @@ from .settings import Settings
 
 log = logging.getLogger("kfio.service")
 
+#: Modules the workers' forkserver imports once, so that every worker, a
+#: replacement too, starts with them loaded (a missing one is skipped).
+PRELOAD = ("service.jobs", "service.plots", "analyzer.bounds", "analyzer.simulate", "matplotlib.figure")
+
 JSON = "application/json"
 PNG = "image/png"
 

@@ -13,6 +13,7 @@ from fastapi.testclient import TestClient
 
 from service.api.schemas import REQUEST_EXAMPLES
 from service.app import create_app
+from service.jobs import PRELOAD
 from service.pool import PoolBusy, PoolTimeout, WorkerCrashed, WorkerPool
 from service.settings import Settings
 from service.testing import slow_request
@@ -35,7 +36,7 @@ def crasher(code: int, budget_s: float) -> None:
 
 def pool(size: int, runner: str, **kw: object) -> WorkerPool:
     # the same preload as the app: whichever pool starts the (shared) forkserver decides it
-    return WorkerPool(size, f"{HERE}:{runner}", preload=("service.jobs",), **kw)  # type: ignore[arg-type]
+    return WorkerPool(size, f"{HERE}:{runner}", preload=PRELOAD, **kw)  # type: ignore[arg-type]
 
 
 def test_deadline_kills_the_stuck_worker_and_replaces_it() -> None:
