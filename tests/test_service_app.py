@@ -69,6 +69,8 @@ def test_docs_page_is_served(client: TestClient) -> None:
     [
         ("analyze", SCALAR),
         ("analyze", REQUEST_EXAMPLES["seed004-3x3"]["value"]),
+        ("bounds", REQUEST_EXAMPLES["seed002-2x2"]["value"]),
+        ("bounds", REQUEST_EXAMPLES["seed000-two-sensors"]["value"]),
         ("simulate", {**SCALAR, "options": {"simulate": {"steps": 30, "trajectories": 200, "seed": 3}}}),
     ],
 )
@@ -157,3 +159,23 @@ def test_simulation_plot_is_png(client: TestClient) -> None:
     r = client.post("/v1/plots/simulation", json=body)
     assert r.status_code == 200, r.text
     assert r.headers["content-type"] == "image/png" and r.content.startswith(b"\x89PNG\r\n\x1a\n")
+
+
+def test_phase_transition_plot_is_png(client: TestClient) -> None:
+    r = client.post("/v1/plots/phase-transition?points=20&lambda_min=0.3", json=REQUEST_EXAMPLES["seed004-3x3"]["value"])
+    assert r.status_code == 200, r.text
+    assert r.headers["content-type"] == "image/png" and r.content.startswith(b"\x89PNG\r\n\x1a\n")
+
+
+def test_region_plot_is_png(client: TestClient) -> None:
+    r = client.post("/v1/plots/region?points=11&overlay=3", json=REQUEST_EXAMPLES["seed000-two-sensors"]["value"])
+    assert r.status_code == 200, r.text
+    assert r.headers["content-type"] == "image/png" and r.content.startswith(b"\x89PNG\r\n\x1a\n")
+
+
+@pytest.mark.parametrize("path", ["/v1/plots/region", "/v1/plots/phase-transition"])
+def test_plots_refuse_requests_they_cannot_draw(client: TestClient, path: str) -> None:
+    # region: one packet; phase transition: two sensors
+    body = SCALAR if path.endswith("region") else REQUEST_EXAMPLES["seed000-two-sensors"]["value"]
+    r = client.post(path, json=body)
+    assert r.status_code == 422 and r.json()["field"] == "/channel/model"

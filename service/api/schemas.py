@@ -121,6 +121,40 @@ _SEED004_SCALAR_REPORT = {
     "warnings": [],
 }
 
+#: ``kfio bounds --json`` on ``_SEED004_SCALAR`` (abbreviated: P_hat_N for N = 1 and 8 only).
+_SEED004_SCALAR_BOUNDS = {
+    "command": "bounds",
+    "packets": [{"name": None, "rows": [0], "arrival_probability": 0.5, "arrival_probability_exact": "1/2"}],
+    "spectral_radius_A": 1.25,
+    "hypotheses": {"A_unstable": True, "A_C_detectable": True, "A_Q_controllable": True},
+    "operating_point": {
+        "verdict_by_bounds": "stable",
+        "reason": "the stability LMI is feasible here, certificate re-checked (seed 004 Theorems 3 and 5)",
+        "certificate": {"method": "exact_rational", "at": ["1/2"], "margin": 0.21875},
+    },
+    "critical_probability": {
+        "lower": {"value": 0.36, "formula": "max(0, 1 - 1/(rho(A)^2 prod_{other sensors r} (1 - lambda_r)))"},
+        "upper": {"value": 0.360000152588, "exact": "90000038147/250000000000", "tolerance": 1e-06},
+        "gap": 1.5258800001305417e-07,
+    },
+    "sensors": None,
+    "variance_threshold": {"value": 0.5904, "formula": "max(0, 1 - 1/rho(A)^4)"},
+    "covariance": {
+        "S_bar": {"exists": True, "matrix": [[4.571428571428574]], "trace": 4.571428571428574},
+        "V_bar": {"exists": True, "matrix": [[11.95589431671333]], "trace": 11.95589431671333},
+        "ordering": {"S_bar_le_V_bar": True},
+    },
+    "p_hat": {
+        "horizon": 8,
+        "entries": [
+            {"N": 1, "exists": True, "trace": 11.95589431671333, "improvement_over_P_hat_1_percent": 0.0},
+            {"N": 8, "exists": True, "trace": 10.913904278352348, "improvement_over_P_hat_1_percent": 8.715283112735184},
+        ],
+    },
+    "region": None,
+    "notes": [],
+}
+
 #: ``kfio simulate --json`` on ``_SEED004_SCALAR`` with steps 4, 1000 trajectories, seed 1 (rounded).
 _SEED004_SCALAR_SIMULATION = {
     "steps": 4,
@@ -316,6 +350,34 @@ COMPONENTS: dict[str, dict[str, Any]] = {
         },
         "required": ["verdict", "blocks"],
         "examples": [_SEED004_SCALAR_REPORT],
+    },
+    "BoundsReport": {
+        "type": "object",
+        "description": (
+            "The report of `kfio bounds --json`: bounds on the critical arrival probability (closed-form lower, "
+            "certified LMI upper), S_bar <= lim E[P_t] <= V_bar at the operating point, seed 002's P_hat_N for "
+            "one packet, and the region map for two packets when options.bounds.grid is set."
+        ),
+        "properties": {
+            "command": {"const": "bounds"},
+            "packets": {"type": "array", "items": {"type": "object"}},
+            "spectral_radius_A": {"type": ["number", "null"]},
+            "hypotheses": {"type": "object"},
+            "operating_point": {
+                "type": "object",
+                "properties": {"verdict_by_bounds": {"type": "string", "enum": ["stable", "unstable", "undecided"]}},
+                "required": ["verdict_by_bounds"],
+            },
+            "critical_probability": {"type": ["object", "null"]},
+            "sensors": {"type": ["array", "null"]},
+            "variance_threshold": {"type": ["object", "null"]},
+            "covariance": {"type": "object"},
+            "p_hat": {"type": ["object", "null"]},
+            "region": {"type": ["object", "null"]},
+            "notes": {"type": "array", "items": {"type": "string"}},
+        },
+        "required": ["command", "packets", "operating_point", "covariance"],
+        "examples": [_SEED004_SCALAR_BOUNDS],
     },
     "SimulationReport": {
         "type": "object",
