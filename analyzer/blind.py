@@ -395,8 +395,6 @@ class SearchResult:
     maximal:
         Maximal blind sets found: every shift orbit once when enumerating,
         only the best one under branch and bound.
-    best_value:
-        Score of ``maximal[0]`` under branch and bound (``nan`` otherwise).
     nodes:
         Flats expanded.
     planes:
@@ -406,7 +404,6 @@ class SearchResult:
     """
 
     maximal: tuple[np.ndarray, ...]
-    best_value: float
     nodes: int
     planes: int
     window: int
@@ -510,6 +507,6 @@ def search(space: SlotSpace, budget: Budget, margins: Margins, objective: Object
         stack.extend((_child(exp, c), float(bounds[c])) for c in deeper[np.argsort(bounds[deeper], kind="stable")])
     if objective is None:
         found = tuple(best.found[k] for k in sorted(best.found))
-        return SearchResult(maximal=found, best_value=float("nan"), nodes=nodes, planes=0, window=W)
+        return SearchResult(maximal=found, nodes=nodes, planes=0, window=W)
     assert best.mask is not None  # some maximal blind set has a canonical rotation
-    return SearchResult(maximal=(best.mask,), best_value=best.value, nodes=nodes, planes=resolved, window=W)
+    return SearchResult(maximal=(best.mask,), nodes=nodes, planes=resolved, window=W)
