@@ -21,7 +21,6 @@ Examples
 from __future__ import annotations
 
 import importlib
-import inspect
 import json
 import logging
 from typing import Any, Callable, Mapping
@@ -59,15 +58,6 @@ def resolve(module: str, name: str) -> Callable[..., Any]:
     return fn
 
 
-def call_with_budget(fn: Callable[..., Any], request: Request, budget: Budget) -> Any:
-    """``fn(request, budget=budget)``, or ``fn(request)`` if ``fn`` takes no budget."""
-    try:
-        takes_budget = "budget" in inspect.signature(fn).parameters
-    except (TypeError, ValueError):  # pragma: no cover - builtins
-        takes_budget = False
-    return fn(request, budget=budget) if takes_budget else fn(request)
-
-
 def report_json(report: Any) -> JobOutput:
     """The report as the CLI prints it with ``--json`` (same function, same bytes)."""
     from .io import dump_json
@@ -83,19 +73,19 @@ def parse(body: bytes, settings: Settings) -> Request:
 def analyze_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[str, Any]) -> JobOutput:
     """``kfio analyze``: the exact verdict (seed 001, Theorem 1)."""
     request = parse(body, settings)
-    return report_json(call_with_budget(resolve("analyzer", "analyze"), request, budget))
+    return report_json(resolve("analyzer", "analyze")(request, budget=budget))
 
 
 def bounds_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[str, Any]) -> JobOutput:
     """``kfio bounds``: bounds on the critical probability and on ``E[P]``."""
     request = parse(body, settings)
-    return report_json(call_with_budget(resolve("analyzer.bounds", "compute_bounds"), request, budget))
+    return report_json(resolve("analyzer.bounds", "compute_bounds")(request, budget=budget))
 
 
 def simulate_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[str, Any]) -> JobOutput:
     """``kfio simulate``: Monte Carlo error bands."""
     request = parse(body, settings)
-    return report_json(call_with_budget(resolve("analyzer.simulate", "simulate"), request, budget))
+    return report_json(resolve("analyzer.simulate", "simulate")(request, budget=budget))
 
 
 def _plot_job(name: str) -> JobFn:

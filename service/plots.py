@@ -18,7 +18,7 @@ import numpy as np
 from analyzer import Budget, BudgetExceeded, InvalidInput, Request
 from analyzer.model import MarkovChannel, PerSensorChannel, to_float
 
-from .jobs import call_with_budget, resolve
+from .jobs import resolve
 
 _SIZE = (7.0, 4.5)
 _DPI = 100
@@ -62,7 +62,7 @@ def simulation(request: Request, budget: Budget, params: Mapping[str, Any]) -> b
     Draws :func:`analyzer.simulate.simulate`'s report, and the exact
     ``E[P_t]`` when ``options.simulate.exact_steps`` asked for it.
     """
-    report = call_with_budget(resolve("analyzer.simulate", "simulate"), request, budget).to_dict()
+    report = resolve("analyzer.simulate", "simulate")(request, budget=budget).to_dict()
     t = np.arange(report["steps"] + 1)
     fig = _figure()
     ax = fig.subplots()
@@ -98,9 +98,9 @@ def _value(node: Any) -> float | None:
 
 def _critical_values(request: Request, budget: Budget) -> dict[str, float | None]:
     """Bounds on lambda_c (:func:`analyzer.bounds.compute_bounds`) and the exact value (:func:`analyzer.analyze`)."""
-    report = call_with_budget(resolve("analyzer.bounds", "compute_bounds"), request, budget).to_dict()
+    report = resolve("analyzer.bounds", "compute_bounds")(request, budget=budget).to_dict()
     crit = report.get("critical_probability") or {}
-    exact = call_with_budget(resolve("analyzer", "analyze"), request, budget).to_dict()
+    exact = resolve("analyzer", "analyze")(request, budget=budget).to_dict()
     value = exact.get("critical_arrival_probability")
     return {
         "lower": _value(crit.get("lower")),
@@ -201,7 +201,7 @@ def region(request: Request, budget: Budget, params: Mapping[str, Any]) -> bytes
         raise InvalidInput("/channel/model", "the region plot needs two sensors with a per_sensor channel")
     grid_options = {**request.options.get("bounds", {}), "grid": int(params.get("points", 21))}
     gridded = dataclasses.replace(request, options={**request.options, "bounds": grid_options})
-    report = call_with_budget(resolve("analyzer.bounds", "compute_bounds"), gridded, budget).to_dict()["region"]
+    report = resolve("analyzer.bounds", "compute_bounds")(gridded, budget=budget).to_dict()["region"]
     values = np.array(report["values"], dtype=float)
     labels = np.array([[_LABEL_CODE.get(x, 0.0) for x in row] for row in report["labels"]])
     exact, complete = _exact_overlay(request, values, int(params.get("overlay", 9)), budget)
@@ -229,7 +229,7 @@ def _exact_overlay(request: Request, values: np.ndarray, per_axis: int, budget: 
             point = dataclasses.replace(request, channel=PerSensorChannel(chans))
             try:
                 sub.tick("exact overlay", 64)  # checks the clock on every cell
-                verdict = call_with_budget(analyze_fn, point, sub).verdict
+                verdict = analyze_fn(point, budget=sub).verdict
             except BudgetExceeded:
                 return exact, False
             except AnalyzerError:
