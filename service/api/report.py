@@ -1,0 +1,30 @@
+"""The shape shared by the report endpoints: a request body in, the CLI's ``--json`` report out."""
+
+from __future__ import annotations
+
+from fastapi import APIRouter
+from fastapi.responses import Response
+
+from .deps import BodyDep, DispatcherDep
+from .schemas import REQUEST_EXAMPLES, json_body, json_response, problem_responses
+
+
+def report_router(path: str, job: str, schema: str, summary: str, description: str) -> APIRouter:
+    """A router with ``POST path`` answering job ``job`` with a ``schema`` report."""
+    router = APIRouter(tags=["analysis"])
+
+    async def endpoint(body: BodyDep, dispatcher: DispatcherDep) -> Response:
+        return await dispatcher.answer(job, body, {})
+
+    endpoint.__name__ = job  # the OpenAPI operationId derives from it
+    router.add_api_route(
+        path,
+        endpoint,
+        methods=["POST"],
+        summary=summary,
+        description=f"{description} Takes exactly the JSON of `kfio {job} FILE` and returns exactly its `--json` report.",
+        response_class=Response,
+        responses={**json_response(schema, f"The {job} report"), **problem_responses(413, 422, 501, 503, 504)},
+        openapi_extra=json_body(REQUEST_EXAMPLES),
+    )
+    return router
