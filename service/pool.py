@@ -21,11 +21,12 @@ would block the event loop).  Then, per task, the parent sends
 from __future__ import annotations
 
 import asyncio
+import fcntl
 import importlib
 import logging
 import multiprocessing
 import os
-import threading
+import signal
 import time
 from dataclasses import dataclass, field
 from multiprocessing.connection import Connection
@@ -54,25 +55,29 @@ class WorkerCrashed(PoolError):
     """The worker died while running the task (it was replaced)."""
 
 
-def _exit_when_orphaned(interval: float = 1.0) -> None:
-    """Exit once the parent (the forkserver) is gone, even in the middle of a task.
+def _exit_with_server(lifeline: Connection) -> None:
+    """Let the kernel end this worker as soon as the server is gone, even mid-task.
 
-    If the server is killed outright it cannot kill its workers; its
-    forkserver then exits, and this keeps a busy worker from running on.
+    ``lifeline`` is the read end of a pipe of this worker alone (``F_SETOWN``
+    is per open file description) whose write end only the server holds and
+    nobody writes to, so it hangs up exactly when the server has exited,
+    however it died, or has dropped this worker.  In ``O_ASYNC`` mode the hang-up sends SIGIO,
+    whose default action ends the process in the kernel: no Python thread
+    has to run, so a task stuck in a long C call holding the GIL is ended
+    too.  (Watching the parent process would not do: it is the forkserver,
+    which lives as long as any of its children.)
     """
-    parent = os.getppid()
-
-    def watch() -> None:
-        while os.getppid() == parent:
-            time.sleep(interval)
+    fd = lifeline.fileno()
+    signal.signal(signal.SIGIO, signal.SIG_DFL)
+    fcntl.fcntl(fd, fcntl.F_SETOWN, os.getpid())
+    fcntl.fcntl(fd, fcntl.F_SETFL, fcntl.fcntl(fd, fcntl.F_GETFL) | os.O_ASYNC)
+    if lifeline.poll(0):  # the server died before we were watching
         os._exit(1)
 
-    threading.Thread(target=watch, name="kfio-orphan-watch", daemon=True).start()
 
-
-def _worker_main(conn: Connection, runner_path: str) -> None:
-    """Body of a worker process: answer tasks until told to stop or killed."""
-    _exit_when_orphaned()
+def _worker_main(conn: Connection, runner_path: str, lifeline: Connection) -> None:
+    """Body of a worker process: answer tasks until told to stop, killed, or the server is gone."""
+    _exit_with_server(lifeline)
     module, _, name = runner_path.partition(":")
     runner: Callable[..., Any] = getattr(importlib.import_module(module), name)
     conn.send("ready")
@@ -91,13 +96,15 @@ def _worker_main(conn: Connection, runner_path: str) -> None:
 class _Worker:
     process: Any  # multiprocessing.Process of the pool's context
     conn: Connection
+    keep_alive: Connection  # write end of the worker's lifeline
     started: float = field(default_factory=time.monotonic)
 
     def kill(self) -> None:
-        try:
-            self.conn.close()
-        except OSError:  # pragma: no cover - already closed
-            pass
+        for end in (self.conn, self.keep_alive):
+            try:
+                end.close()
+            except OSError:  # pragma: no cover - already closed
+                pass
         if self.process.is_alive():
             self.process.kill()
         self.process.join(timeout=5)
@@ -169,10 +176,14 @@ class WorkerPool:
 
     def _spawn(self) -> _Worker:
         parent_end, child_end = self._ctx.Pipe(duplex=True)
-        proc = self._ctx.Process(target=_worker_main, args=(child_end, self.runner), daemon=True, name="kfio-worker")
+        lifeline, keep_alive = self._ctx.Pipe(duplex=False)
+        proc = self._ctx.Process(
+            target=_worker_main, args=(child_end, self.runner, lifeline), daemon=True, name="kfio-worker"
+        )
         proc.start()
         child_end.close()  # so that the worker's death reads as EOF here
-        return _Worker(proc, parent_end)
+        lifeline.close()  # the worker has its own copy; we keep only the write end
+        return _Worker(proc, parent_end, keep_alive)
 
     async def _new_worker(self) -> _Worker:
         """A started worker that has said ``"ready"`` (its imports are done)."""

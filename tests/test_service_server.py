@@ -4,7 +4,10 @@ from __future__ import annotations
 
 import asyncio
 import json
+import os
+import signal
 import socket
+import threading
 import time
 from collections.abc import Iterator
 
@@ -110,3 +113,57 @@ def test_healthz_under_100_ms_while_every_worker_is_busy(server: LiveServer) -> 
     assert max(latencies) < 0.1, latencies
     # two ran out of budget in a worker (504); the one that waited for a worker got 503
     assert sorted(statuses) == [503, 504, 504]
+
+
+def descendants(pid: int) -> set[int]:
+    """Every live process below ``pid`` (from /proc)."""
+    children: dict[int, list[int]] = {}
+    for entry in os.listdir("/proc"):
+        if entry.isdigit():
+            try:
+                stat = open(f"/proc/{entry}/stat").read()
+            except OSError:
+                continue
+            ppid = int(stat.rsplit(")", 1)[1].split()[1])
+            children.setdefault(ppid, []).append(int(entry))
+    out, todo = set(), [pid]
+    while todo:
+        for child in children.get(todo.pop(), []):
+            out.add(child)
+            todo.append(child)
+    return out
+
+
+def alive(pid: int) -> bool:
+    try:
+        state = open(f"/proc/{pid}/stat").read().rsplit(")", 1)[1].split()[0]
+    except OSError:
+        return False
+    return state != "Z"
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc"), reason="needs /proc")
+def test_workers_die_with_a_killed_server_even_mid_computation() -> None:
+    with LiveServer(workers=2) as live:
+        for seed in (41, 42):  # both workers stuck in one long C call (exact validation)
+            body = slow_request(time_budget_s=600, seed=seed)
+            threading.Thread(target=lambda b=body: _post_quietly(live.url, b), daemon=True).start()
+        deadline = time.monotonic() + 10
+        while httpx.get(f"{live.url}/readyz").json()["pool"]["busy"] < 2:
+            assert time.monotonic() < deadline
+            time.sleep(0.05)
+        below = descendants(live.proc.pid)  # forkserver, workers, resource tracker
+        assert len(below) >= 3
+        os.kill(live.proc.pid, signal.SIGKILL)
+        live.proc.wait(timeout=10)
+        deadline = time.monotonic() + 5
+        while any(alive(p) for p in below) and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert not [p for p in below if alive(p)], "processes outlived the killed server"
+
+
+def _post_quietly(url: str, body: bytes) -> None:
+    try:
+        httpx.post(f"{url}/v1/analyze", content=body, timeout=30)
+    except httpx.HTTPError:
+        pass  # the server is killed under it
