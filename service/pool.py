@@ -28,7 +28,7 @@ import multiprocessing
 import os
 import signal
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from multiprocessing.connection import Connection
 from typing import Any, Callable
 
@@ -61,10 +61,10 @@ def _exit_with_server(lifeline: Connection) -> None:
     ``lifeline`` is the read end of a pipe of this worker alone (``F_SETOWN``
     is per open file description) whose write end only the server holds and
     nobody writes to, so it hangs up exactly when the server has exited,
-    however it died, or has dropped this worker.  In ``O_ASYNC`` mode the hang-up sends SIGIO,
-    whose default action ends the process in the kernel: no Python thread
-    has to run, so a task stuck in a long C call holding the GIL is ended
-    too.  (Watching the parent process would not do: it is the forkserver,
+    however it died, or has dropped this worker.  In ``O_ASYNC`` mode the
+    hang-up sends SIGIO, whose default action ends the process in the
+    kernel: no Python thread has to run, so a task stuck in a long C call
+    holding the GIL is ended too.  (Watching the parent process would not do: it is the forkserver,
     which lives as long as any of its children.)
     """
     fd = lifeline.fileno()
@@ -76,7 +76,7 @@ def _exit_with_server(lifeline: Connection) -> None:
 
 
 def _worker_main(conn: Connection, runner_path: str, lifeline: Connection) -> None:
-    """Body of a worker process: answer tasks until told to stop, killed, or the server is gone."""
+    """Body of a worker process: answer tasks until killed or the server is gone."""
     _exit_with_server(lifeline)
     module, _, name = runner_path.partition(":")
     runner: Callable[..., Any] = getattr(importlib.import_module(module), name)
@@ -85,8 +85,6 @@ def _worker_main(conn: Connection, runner_path: str, lifeline: Connection) -> No
         try:
             msg = conn.recv()
         except (EOFError, OSError):
-            return
-        if msg is None:
             return
         args, budget_s = msg
         conn.send(runner(*args, budget_s))
@@ -97,7 +95,6 @@ class _Worker:
     process: Any  # multiprocessing.Process of the pool's context
     conn: Connection
     keep_alive: Connection  # write end of the worker's lifeline
-    started: float = field(default_factory=time.monotonic)
 
     def kill(self) -> None:
         for end in (self.conn, self.keep_alive):
