@@ -88,7 +88,12 @@ class Result:
 
 
 async def closed_loop(
-    client: httpx.AsyncClient, path: str, make_body: Callable[[int], bytes], clients: int, duration: float, result: Result
+    client: httpx.AsyncClient,
+    path: str,
+    make_body: Callable[[int], bytes],
+    clients: int,
+    duration: float,
+    result: Result,
 ) -> None:
     """``clients`` loops, each sending its next request when the previous one is answered."""
     stop = time.monotonic() + duration
@@ -114,7 +119,12 @@ async def fast_under_slow(client: httpx.AsyncClient, slow_clients: int, duration
     # every slow request distinct: identical ones would share one computation
     slow = asyncio.create_task(
         closed_loop(
-            client, "/v1/analyze", lambda i: slow_request(time_budget_s=5, seed=next(_unique)), slow_clients, duration, slow_result
+            client,
+            "/v1/analyze",
+            lambda i: slow_request(time_budget_s=5, seed=next(_unique)),
+            slow_clients,
+            duration,
+            slow_result,
         )
     )
     await asyncio.sleep(0.5)  # let the slow ones occupy the pool first

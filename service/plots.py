@@ -218,7 +218,9 @@ def _exact_overlay(request: Request, values: np.ndarray, per_axis: int, budget: 
     inner = [i for i, v in enumerate(values) if 0 < v < 1]  # Assumption 1 of seed 001
     if per_axis <= 0 or not inner:
         return exact, True
-    picks = sorted({inner[round(k * (len(inner) - 1) / max(1, per_axis - 1))] for k in range(min(per_axis, len(inner)))})
+    picks = sorted(
+        {inner[round(k * (len(inner) - 1) / max(1, per_axis - 1))] for k in range(min(per_axis, len(inner)))}
+    )
     remaining = budget.remaining()
     sub = Budget(seconds=None if remaining is None else remaining / 2)
     analyze_fn = resolve("analyzer", "analyze")
@@ -257,14 +259,20 @@ def _draw_region(
     extent = (values[0] - step / 2, values[-1] + step / 2, values[0] - step / 2, values[-1] + step / 2)
     cmap = ListedColormap(["#e8a0a0", "#f0f0c0", "#a0d0a0"])
     # labels[i][j] is lambda_1 = values[i], lambda_2 = values[j]: lambda_1 on the x axis
-    ax.imshow(labels.T, origin="lower", extent=extent, cmap=cmap, vmin=-1, vmax=1, interpolation="nearest", aspect="auto")
+    ax.imshow(
+        labels.T, origin="lower", extent=extent, cmap=cmap, vmin=-1, vmax=1, interpolation="nearest", aspect="auto"
+    )
     handles: list[Any] = [
         Patch(color="#a0d0a0", label="stable (LMI bound)"),
         Patch(color="#f0f0c0", label="undecided by the bounds"),
         Patch(color="#e8a0a0", label="unstable (lower bound)"),
     ]
     x1, x2 = np.meshgrid(values, values, indexing="ij")
-    for code, marker, label in ((1.0, "o", "exact: stable"), (-1.0, "x", "exact: unstable"), (0.0, "s", "exact: boundary")):
+    for code, marker, label in (
+        (1.0, "o", "exact: stable"),
+        (-1.0, "x", "exact: unstable"),
+        (0.0, "s", "exact: boundary"),
+    ):
         mask = exact == code
         if mask.any():
             handles.append(ax.scatter(x1[mask], x2[mask], marker=marker, s=14, c="k", lw=0.8, label=label))

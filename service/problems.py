@@ -85,7 +85,12 @@ class Problem:
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON document (members that are ``None`` are left out)."""
-        doc: dict[str, Any] = {"type": _PREFIX + self.kind, "title": self.title, "status": self.status, "detail": self.detail}
+        doc: dict[str, Any] = {
+            "type": _PREFIX + self.kind,
+            "title": self.title,
+            "status": self.status,
+            "detail": self.detail,
+        }
         for key in ("field", "rule"):
             if getattr(self, key) is not None:
                 doc[key] = getattr(self, key)
@@ -141,7 +146,9 @@ def problem_from_exception(exc: BaseException) -> Problem:
     if isinstance(exc, InvalidInput):
         return input_problem("invalid-input", "Invalid request", exc)
     if isinstance(exc, BudgetExceeded):
-        return Problem(504, "budget-exceeded", "Time budget exceeded", f"the computation did not finish within its budget: {exc}")
+        return Problem(
+            504, "budget-exceeded", "Time budget exceeded", f"the computation did not finish within its budget: {exc}"
+        )
     if isinstance(exc, PoolTimeout):
         return Problem(504, "budget-exceeded", "Time budget exceeded", str(exc))
     if isinstance(exc, PoolBusy):
@@ -154,7 +161,9 @@ def problem_from_exception(exc: BaseException) -> Problem:
         return Problem(422, "analysis-error", "The analysis could not be completed", str(exc))
     if isinstance(exc, (Unavailable, NotImplementedError)):
         return Problem(501, "not-implemented", "Not available in this build", str(exc) or "not implemented yet")
-    return Problem(500, "internal", "Internal error", "an unexpected error occurred (this is a bug; it has been logged)")
+    return Problem(
+        500, "internal", "Internal error", "an unexpected error occurred (this is a bug; it has been logged)"
+    )
 
 
 def _pointer(parts: tuple[Any, ...]) -> str:
@@ -168,8 +177,13 @@ async def problem_handler(request: Request, exc: Exception) -> JSONResponse:
         loc = tuple(err.get("loc", ()))
         where, rest = (str(loc[0]), loc[1:]) if loc else ("body", ())
         problem = Problem(
-            422, "invalid-input", "Invalid request", f"{_pointer(rest)}: {err.get('msg')}",
-            field=_pointer(rest), rule=str(err.get("msg")), location=where,
+            422,
+            "invalid-input",
+            "Invalid request",
+            f"{_pointer(rest)}: {err.get('msg')}",
+            field=_pointer(rest),
+            rule=str(err.get("msg")),
+            location=where,
         )
     elif isinstance(exc, StarletteHTTPException):
         problem = Problem(exc.status_code, f"http-{exc.status_code}", str(exc.detail), str(exc.detail))

@@ -90,7 +90,9 @@ def test_numbers_stay_exact(client: TestClient) -> None:
         r = client.post("/v1/analyze", json=with_channel(SCALAR, arrival_probability=lam))
         assert r.status_code == 200, r.text
         assert r.json()["verdict"] == "boundary", lam
-    assert client.post("/v1/analyze", json=with_channel(SCALAR, arrival_probability=0.3601)).json()["verdict"] == "stable"
+    assert (
+        client.post("/v1/analyze", json=with_channel(SCALAR, arrival_probability=0.3601)).json()["verdict"] == "stable"
+    )
 
 
 def test_identical_requests_are_answered_from_the_cache(client: TestClient) -> None:
@@ -162,7 +164,9 @@ def test_simulation_plot_is_png(client: TestClient) -> None:
 
 
 def test_phase_transition_plot_is_png(client: TestClient) -> None:
-    r = client.post("/v1/plots/phase-transition?points=20&lambda_min=0.3", json=REQUEST_EXAMPLES["seed004-3x3"]["value"])
+    r = client.post(
+        "/v1/plots/phase-transition?points=20&lambda_min=0.3", json=REQUEST_EXAMPLES["seed004-3x3"]["value"]
+    )
     assert r.status_code == 200, r.text
     assert r.headers["content-type"] == "image/png" and r.content.startswith(b"\x89PNG\r\n\x1a\n")
 

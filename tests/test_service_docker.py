@@ -76,7 +76,9 @@ def copy_context(sources: list[str], dest: Path, patterns: list[str]) -> None:
 
 def test_dockerfile_install_and_start_commands_work(tmp_path: Path) -> None:
     steps = instructions((REPO / "Dockerfile").read_text())
-    patterns = [p.strip() for p in (REPO / ".dockerignore").read_text().splitlines() if p.strip() and not p.startswith("#")]
+    patterns = [
+        p.strip() for p in (REPO / ".dockerignore").read_text().splitlines() if p.strip() and not p.startswith("#")
+    ]
     kinds = [k for k, _ in steps]
     assert steps[0][0] == "FROM" and steps[0][1].startswith("python:3.11-slim")
     assert any(k == "RUN" and "useradd" in a for k, a in steps) and dict(steps)["USER"] not in ("root", "0")
@@ -110,7 +112,12 @@ def test_dockerfile_install_and_start_commands_work(tmp_path: Path) -> None:
     # the installed package is used, not this checkout
     where = subprocess.run(
         [str(bindir / "python"), "-c", "import service; print(service.__file__)"],
-        cwd=tmp_path, env=env, capture_output=True, text=True, check=True, timeout=60,
+        cwd=tmp_path,
+        env=env,
+        capture_output=True,
+        text=True,
+        check=True,
+        timeout=60,
     ).stdout.strip()
     assert where.startswith(str(venv)), where
 

@@ -139,7 +139,10 @@ def test_past_its_budget_a_request_gets_504_promptly_and_the_service_recovers(cl
 def test_healthz_stays_fast_while_every_worker_is_busy(client: TestClient) -> None:
     results: list[int] = []
     slow = [slow_request(time_budget_s=4, seed=s) for s in (11, 12)]  # distinct: no shared computation
-    threads = [threading.Thread(target=lambda b=b: results.append(client.post("/v1/analyze", content=b).status_code)) for b in slow]
+    threads = [
+        threading.Thread(target=lambda b=b: results.append(client.post("/v1/analyze", content=b).status_code))
+        for b in slow
+    ]
     for t in threads:
         t.start()
     try:

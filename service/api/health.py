@@ -31,5 +31,7 @@ async def healthz() -> JSONResponse:
 )
 async def readyz(dispatcher: DispatcherDep) -> JSONResponse:
     if not dispatcher.pool.ready:
-        raise ProblemError(Problem(503, "not-ready", "Service not ready", "the worker pool is not running yet", retry_after=1))
+        raise ProblemError(
+            Problem(503, "not-ready", "Service not ready", "the worker pool is not running yet", retry_after=1)
+        )
     return JSONResponse({"status": "ready", "pool": dispatcher.pool.stats(), "cache": dispatcher.cache.stats()})

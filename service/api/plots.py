@@ -44,8 +44,15 @@ async def phase_transition(
 ) -> Response:
     if lambda_min is not None and lambda_max is not None and lambda_min >= lambda_max:
         raise ProblemError(
-            Problem(422, "invalid-input", "Invalid request", "/lambda_max: must exceed lambda_min",
-                    field="/lambda_max", rule="lambda_max must exceed lambda_min", location="query")
+            Problem(
+                422,
+                "invalid-input",
+                "Invalid request",
+                "/lambda_max: must exceed lambda_min",
+                field="/lambda_max",
+                rule="lambda_max must exceed lambda_min",
+                location="query",
+            )
         )
     params = {"points": points, "lambda_min": lambda_min, "lambda_max": lambda_max}
     return await dispatcher.answer("plot-phase-transition", body, params)

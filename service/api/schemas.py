@@ -148,7 +148,12 @@ _SEED004_SCALAR_BOUNDS = {
         "horizon": 8,
         "entries": [
             {"N": 1, "exists": True, "trace": 11.95589431671333, "improvement_over_P_hat_1_percent": 0.0},
-            {"N": 8, "exists": True, "trace": 10.913904278352348, "improvement_over_P_hat_1_percent": 8.715283112735184},
+            {
+                "N": 8,
+                "exists": True,
+                "trace": 10.913904278352348,
+                "improvement_over_P_hat_1_percent": 8.715283112735184,
+            },
         ],
     },
     "region": None,
@@ -225,7 +230,10 @@ COMPONENTS: dict[str, dict[str, Any]] = {
     },
     "Probability": {
         "description": "An exact number in [0, 1].",
-        "anyOf": [{"type": "number", "minimum": 0, "maximum": 1}, {"type": "string", "pattern": _NUMBER_PATTERN, "maxLength": 816}],
+        "anyOf": [
+            {"type": "number", "minimum": 0, "maximum": 1},
+            {"type": "string", "pattern": _NUMBER_PATTERN, "maxLength": 816},
+        ],
         "examples": [0.5, "9/25"],
     },
     "Matrix": {
@@ -305,7 +313,12 @@ COMPONENTS: dict[str, dict[str, Any]] = {
         "examples": [_SEED001_DEGENERATE_GE["channel"]],
     },
     "Channel": {
-        "oneOf": [_ref("BernoulliChannel"), _ref("GilbertElliottChannel"), _ref("MarkovChannel"), _ref("PerSensorChannel")],
+        "oneOf": [
+            _ref("BernoulliChannel"),
+            _ref("GilbertElliottChannel"),
+            _ref("MarkovChannel"),
+            _ref("PerSensorChannel"),
+        ],
         "examples": [{"model": "bernoulli", "arrival_probability": 0.5}],
     },
     "Options": {
@@ -335,7 +348,7 @@ COMPONENTS: dict[str, dict[str, Any]] = {
         "type": "object",
         "description": (
             "The report of `kfio analyze --json`: the verdict of seed 001, Theorem 1, with its evidence per "
-            "FMO block.  Exact values are strings (\"9/25\"), their float approximations numbers."
+            'FMO block.  Exact values are strings ("9/25"), their float approximations numbers.'
         ),
         "properties": {
             "verdict": {"type": "string", "enum": ["stable", "unstable", "boundary"]},
