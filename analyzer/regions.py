@@ -64,6 +64,7 @@ from .regions_constraints import (
 )
 from .regions_curve import DEFAULT_SAMPLES, BoundaryCurve, boundary_curve
 from .request import require_assumption_1
+from .sigma import SigmaResult
 
 VERDICTS = ("stable", "boundary", "unstable")
 BASIS = "extension"
@@ -272,6 +273,7 @@ def sensor_thresholds(
     budget: Budget | None = None,
     *,
     fmo: Sequence[FmoBlock] | None = None,
+    sigma: Sequence[SigmaResult | None] | None = None,
 ) -> SensorThresholds:
     """Exact critical arrival probability of each Bernoulli sensor given the others (extension).
 
@@ -297,8 +299,9 @@ def sensor_thresholds(
         (``consistent_with_analyze``).
     budget:
         Work budget for the eigenstructure and the blind-set enumeration.
-    fmo:
-        ``fmo_blocks(request.system)`` if already computed.
+    fmo, sigma:
+        ``fmo_blocks(request.system)`` and their ``compute_sigma`` results,
+        if already computed (see :func:`analyzer.regions_constraints.block_constraints`).
 
     Returns
     -------
@@ -326,7 +329,7 @@ def sensor_thresholds(
     """
     require_assumption_1(request.channel)
     names, lambdas = bernoulli_packets(request)
-    blocks = block_constraints(request.system, budget, fmo)
+    blocks = block_constraints(request.system, budget, fmo, sigma)
     verdicts, exact = _operating_point(blocks, lambdas)
     verdict = max(verdicts, key=VERDICTS.index, default="stable")
     rates = tuple(block_rate(b, [float(x) for x in lambdas]) for b in blocks)
@@ -400,6 +403,7 @@ def exact_region_grid(
     *,
     samples: int = DEFAULT_SAMPLES,
     fmo: Sequence[FmoBlock] | None = None,
+    sigma: Sequence[SigmaResult | None] | None = None,
 ) -> RegionGrid:
     """Label the ``K x K`` grid of ``(lambda_1, lambda_2)`` exactly: stable / unstable / boundary.
 
@@ -420,8 +424,8 @@ def exact_region_grid(
         Work budget.
     samples:
         Samples of the boundary curve ``h`` on ``[0, 1]``.
-    fmo:
-        ``fmo_blocks(request.system)`` if already computed.
+    fmo, sigma:
+        ``fmo_blocks(request.system)`` and their ``compute_sigma`` results, if already computed.
 
     Raises
     ------
@@ -451,7 +455,7 @@ def exact_region_grid(
         raise InvalidInput("/options/regions/grid", f"{len(grid)} values given for a grid of side {K}")
     if any(not 0 <= v <= 1 for v in grid):
         raise InvalidInput("/options/regions/values", "grid values must lie in [0, 1]")
-    blocks = block_constraints(request.system, budget, fmo)
+    blocks = block_constraints(request.system, budget, fmo, sigma)
     certified = all(b.certified for b in blocks)
     labels = []
     for a in grid:
@@ -469,7 +473,12 @@ def exact_region_grid(
 
 
 def region_report(
-    request: Request, budget: Budget | None = None, *, fmo: Sequence[FmoBlock] | None = None, report: Any = None
+    request: Request,
+    budget: Budget | None = None,
+    *,
+    report: Any = None,
+    fmo: Sequence[FmoBlock] | None = None,
+    sigma: Sequence[SigmaResult | None] | None = None,
 ) -> dict[str, Any] | None:
     """The ``regions`` block of the ``analyze`` report, or ``None`` when it does not apply.
 
@@ -478,18 +487,45 @@ def region_report(
     the report already has ``critical_arrival_probability``; channels with
     memory: no closed form).
 
+    Parameters
+    ----------
+    request:
+        The validated request (Assumption 1 already checked by ``analyze``).
+    budget:
+        The analysis budget.
+    report:
+        ``analyze``'s :class:`~analyzer.verdict.StabilityReport`, if built
+        first: its verdicts are cross-checked (``consistent_with_analyze``).
+    fmo, sigma:
+        ``analyze``'s ``fmo_blocks`` and, aligned with them, the
+        ``compute_sigma`` result of each block (``None`` where it has none):
+        with Bernoulli channels the maximal blind sets do not depend on the
+        probabilities, so passing them avoids a second enumeration.
+
     Returns
     -------
     dict or None
-        ``{"basis": "extension", "statement", "verdict", "blocks",
+        ``{"basis": "extension", "statement", "verdict", "certified",
+        "consistent_with_analyze", "blocks": [constraints, verdict, rate],
         "sensors": [per-sensor thresholds], "boundary": curve (two sensors
         only, else null)}``.
+
+    Examples
+    --------
+    >>> from analyzer import load_request
+    >>> req = load_request('{"system": {"A": [[1.25, 0], [1, 1.1]], "C": [[1, 0], [1, 1]],'
+    ...     ' "sensors": [{"name": "s1", "rows": [0]}, {"name": "s2", "rows": [1]}]},'
+    ...     ' "channel": {"model": "per_sensor", "channels": {"s1": {"model": "bernoulli", "arrival_probability": 0.25},'
+    ...     ' "s2": {"model": "bernoulli", "arrival_probability": 0.25}}}}')
+    >>> out = region_report(req)
+    >>> out["verdict"], [s["critical_arrival_probability_exact"] for s in out["sensors"]]
+    ('stable', ['11/75', '21/121'])
     """
     if not isinstance(request.channel, PerSensorChannel) or request.system.sensors is None:
         return None
     if any(c.order != 0 for _, c in request.channel.channels):
         return None
-    th = sensor_thresholds(request, report, budget, fmo=fmo)
+    th = sensor_thresholds(request, report, budget, fmo=fmo, sigma=sigma)
     out = th.to_dict()
     out["boundary"] = (
         boundary_curve(th.blocks, (th.sensors[0], th.sensors[1])).to_dict() if len(th.sensors) == 2 else None

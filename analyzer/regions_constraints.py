@@ -47,9 +47,10 @@ import sympy
 from .algebraic import AlgebraicReal
 from .budget import Budget
 from .decide import compare_rate_bernoulli
+from .errors import NumericalFailure
 from .fmo import FmoBlock, fmo_blocks
 from .model import MarkovChannel, System
-from .sigma import compute_sigma
+from .sigma import SigmaResult, compute_sigma
 
 #: Working precision (decimal digits) of the numerical side of exact comparisons.
 DIGITS = 60
@@ -172,8 +173,51 @@ def _unstable_modulus(block: FmoBlock) -> bool:
     return block.modulus_sq_float >= 1.0
 
 
+def _certify_maximal(block: FmoBlock, patterns: Sequence[BlindPattern], budget: Budget | None) -> tuple[bool, str]:
+    """Confirm in exact arithmetic that every binding pattern is blind and maximal.
+
+    :func:`analyzer.sigma.compute_sigma` confirms the rank drop of every
+    maximal blind set and the maximality of the worst one; the region needs
+    every binding pattern, so each one-slot extension of each is checked here
+    (``rank = L`` exactly; rank is shift invariant, phases taken mod ``N0``).
+
+    Raises
+    ------
+    NumericalFailure
+        Exact arithmetic contradicts the numerical enumeration.
+    """
+    phase = block.phase
+    assert phase is not None
+    oracle = phase.exact_rank
+    if oracle is None:
+        return False, "binding patterns not confirmed exactly: no exact rank oracle for this block"
+    L, N0, G = phase.n_columns, phase.base_period, len(phase.row_groups)
+    checks = 0
+    for p in patterns:
+        base = {(n % N0, g) for n, g in p.slots}
+        if len(base) == N0 * G:
+            continue  # every slot: the block is unobservable, nothing to extend
+        for slot in ((n, g) for n in range(N0) for g in range(G)):
+            if slot in base:
+                continue
+            if budget is not None:
+                budget.tick("regions: exact maximality checks")
+            rank = oracle(sorted(base | {slot}))
+            checks += 1
+            if rank is None:
+                return False, "binding patterns not confirmed exactly: the exact oracle gave no answer"
+            if rank < L:
+                raise NumericalFailure(
+                    f"the blind set {sorted(base)} is not maximal in exact arithmetic (adding {slot} keeps rank {rank} < {L})"
+                )
+    return True, f"binding patterns confirmed maximal by {checks} exact ranks"
+
+
 def block_constraints(
-    system: System, budget: Budget | None = None, fmo: Sequence[FmoBlock] | None = None
+    system: System,
+    budget: Budget | None = None,
+    fmo: Sequence[FmoBlock] | None = None,
+    sigma: Sequence[SigmaResult | None] | None = None,
 ) -> tuple[BlockConstraints, ...]:
     """The constraints of every FMO block with ``|alpha| >= 1`` (blocks inside the unit circle impose none).
 
@@ -185,6 +229,11 @@ def block_constraints(
         Work budget for the eigenstructure and the blind-set enumeration.
     fmo:
         The blocks of ``fmo_blocks(system)`` if the caller already has them.
+    sigma:
+        ``compute_sigma`` results aligned with ``fmo`` (``None`` entries are
+        computed here) for Bernoulli channels: with several sensors the
+        enumeration of maximal blind sets does not depend on the arrival
+        probabilities, so ``analyze``'s results can be reused.
 
     Examples
     --------
@@ -198,25 +247,29 @@ def block_constraints(
     [('25/4', [(1, 0)]), ('9/4', [(0, 1)])]
     """
     blocks = fmo if fmo is not None else fmo_blocks(system, budget)
+    if sigma is not None and len(sigma) != len(blocks):
+        raise ValueError("sigma results must be aligned with the FMO blocks")
     sensors = len(system.sensors) if system.sensors is not None else 1
     out = []
-    for block in blocks:
+    for i, block in enumerate(blocks):
         if not _unstable_modulus(block):
             continue
         assert block.phase is not None
-        res = compute_sigma(block.phase, [_PROBE] * sensors, budget)
+        given = sigma[i] if sigma is not None else None
+        res = given if given is not None else compute_sigma(block.phase, [_PROBE] * sensors, budget)
         N = res.period
         sets = res.maximal_blind_sets or (res.worst_blind_set,)
-        patterns = [BlindPattern(tuple(sorted(F)), _misses(F, N, sensors)) for F in sets]
+        patterns = minimal_patterns([BlindPattern(tuple(sorted(F)), _misses(F, N, sensors)) for F in sets])
+        maximal, note = _certify_maximal(block, patterns, budget) if res.certified else (False, "")
         out.append(
             BlockConstraints(
                 eigenvalues=block.eigenvalue_texts,
                 beta=block.modulus_sq,
                 beta_float=block.modulus_sq_float,
                 period=N,
-                patterns=minimal_patterns(patterns),
-                certified=res.certified and block.certified and block.modulus_sq is not None,
-                notes=tuple(block.notes) + tuple(res.notes),
+                patterns=patterns,
+                certified=res.certified and maximal and block.certified and block.modulus_sq is not None,
+                notes=tuple(block.notes) + tuple(res.notes) + ((note,) if note else ()),
                 beta_expr=block.modulus_sq.expr() if block.modulus_sq is not None else None,
             )
         )

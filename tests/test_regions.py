@@ -325,3 +325,34 @@ def test_grid_errors() -> None:
     three = sensor_request([[2, 0], [0, 3]], [[[1, 0]], [[0, 1]], [[1, 1]]], ["1/2", "1/2", "1/2"], noise=False)
     with pytest.raises(InvalidInput, match="exactly two sensors"):
         exact_region_grid(three, 5)
+
+
+def test_region_report_reuses_analyze_sigma_results() -> None:
+    """Passing ``analyze``'s FMO blocks and sigma results (real channels) gives the same report."""
+    from analyzer.fmo import fmo_blocks
+    from analyzer.sigma import compute_sigma
+
+    A, Cs = system("last")
+    req = sensor_request(A, Cs, ["1/4", "1/4"])
+    blocks = fmo_blocks(req.system)
+    chans = [c for _, c in req.channel.channels]
+    sig = [None if b.phase is None or b.modulus_sq_float < 1 else compute_sigma(b.phase, chans) for b in blocks]
+    assert region_report(req, fmo=blocks, sigma=sig) == region_report(req)
+
+
+EXPECTED_EXAMPLES = {
+    "regions_seed000_last.json": ["11/75", "21/121"],
+    "regions_seed000_diagonal.json": ["21/25", "5/9"],
+    "regions_degenerate_swap.json": ["3/8", "0"],
+}
+
+
+@pytest.mark.parametrize("name", sorted(EXPECTED_EXAMPLES))
+def test_examples(name: str) -> None:
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "examples" / name
+    req = load_request(path.read_text())
+    out = region_report(req, report=analyze(req))
+    assert out is not None and out["verdict"] == "stable" and out["consistent_with_analyze"]
+    assert [s["critical_arrival_probability_exact"] for s in out["sensors"]] == EXPECTED_EXAMPLES[name]
