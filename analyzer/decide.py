@@ -52,9 +52,14 @@ def compare_rate_bernoulli(beta: AlgebraicReal | None, beta_float: float, N: int
 
 
 def _rho_poly(P: Sequence[Sequence[Fraction]]) -> Poly:
+    """Square-free part of ``det(x I - P)``: same distinct roots, each simple.
+
+    ``count_roots`` and ``CRootOf`` count multiplicities; the square-free part
+    makes "the largest real root" the last index and root counts distinct.
+    """
     k = len(P)
     dm = DomainMatrix([[QQ(x.numerator, x.denominator) for x in row] for row in P], (k, k), QQ)
-    return Poly(dm.charpoly(), X, domain=QQ)
+    return Poly(dm.charpoly(), X, domain=QQ).sqf_part()
 
 
 def spectral_radius(P: Sequence[Sequence[Fraction]], digits: int = 30) -> mpmath.mpf:

@@ -164,7 +164,7 @@ def _sigma_exact_text(res: SigmaResult, lambdas: Sequence[Fraction]) -> str | No
 
 
 def _analyze_block(block: FmoBlock, channels: list[MarkovChannel], basis: str, budget: Budget) -> BlockReport:
-    base = dict(
+    base: dict[str, Any] = dict(
         eigenvalues=block.eigenvalue_texts,
         eigenvalues_numeric=block.eigenvalue_values,
         modulus=block.modulus,

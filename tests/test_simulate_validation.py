@@ -60,7 +60,10 @@ def check_growth(req: Request, horizon: int = 20, window: int = 6) -> tuple[str,
     assert v in ("stable", "unstable"), "validation cases are chosen away from the boundary"
     rep = expected_covariance(req, horizon)
     g = rep.growth_per_step(window)
-    assert g is not None and rep.imprecise_probability[-1] == 0
+    # Sequences whose update lost more than 12 digits are flagged "imprecise" but kept; their
+    # total probability must stay negligible (tests/test_finite_horizon.py shows the mean is
+    # still accurate to 1e-9 against exact rational arithmetic in such cases).
+    assert g is not None and rep.imprecise_probability[-1] < 1e-4
     if v == "unstable":
         assert rate > 1
         assert abs(math.log(g) - math.log(rate)) < GROWTH_TOL, (g, rate)

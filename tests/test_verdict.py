@@ -250,3 +250,13 @@ def test_similarity_and_row_scaling_invariance(case, seed, scale):
         assert b1.eigenvalues == b2.eigenvalues or sorted(b1.eigenvalues) == sorted(b2.eigenvalues)
         assert b1.degenerate == b2.degenerate and b1.period == b2.period
         assert (b1.sigma is None and b2.sigma is None) or b1.sigma == pytest.approx(b2.sigma, abs=1e-12)
+
+
+def test_markov_rate_with_repeated_zero_eigenvalues_and_irrational_modulus():
+    # Regression: the one-period transfer matrix of "no arrivals" under an order-2 channel has
+    # eigenvalues (P(0|00)^2, 0, 0, 0); the Perron root must not be read off a repeated zero.
+    # Lemma 2: rate = |alpha|^2 P(0|00) with |alpha|^2 = (29 + sqrt 57)/8 ... = 4.5687
+    ch = {"model": "markov", "order": 2, "arrival_probability": {"00": "9/20", "01": "13/20", "10": "17/20", "11": "9/10"}}
+    r = run([["-2", "-1"], ["-1/2", "3/2"]], [[1, 1]], ch)
+    assert r.verdict == "unstable" and r.blocks[0].rate == pytest.approx(4.568729304408843 * 0.55)
+    assert [b.verdict for b in r.blocks] == ["unstable", "unstable"]
