@@ -119,6 +119,7 @@ class BlockConstraints:
     certified: bool
     notes: tuple[str, ...] = ()
     beta_expr: Any = field(default=None, repr=False, compare=False)
+    beta_mp: Any = field(default=None, repr=False, compare=False)  # beta at DIGITS digits (certified root)
 
     @property
     def beta_text(self) -> str:
@@ -127,8 +128,12 @@ class BlockConstraints:
     def log_beta_power(self) -> mpmath.mpf:
         """``N log beta`` at :data:`DIGITS` digits."""
         with mpmath.workdps(DIGITS + 10):
-            b = self.beta.approx(DIGITS) if self.beta is not None else mpmath.mpf(self.beta_float)
-            return self.period * mpmath.log(b)
+            return self.period * mpmath.log(self._beta_mp())
+
+    def _beta_mp(self) -> mpmath.mpf:
+        if self.beta_mp is not None:
+            return self.beta_mp
+        return self.beta.approx(DIGITS) if self.beta is not None else mpmath.mpf(self.beta_float)
 
     def to_dict(self, names: Sequence[str]) -> dict[str, Any]:
         return {
@@ -271,6 +276,7 @@ def block_constraints(
                 certified=res.certified and maximal and block.certified and block.modulus_sq is not None,
                 notes=tuple(block.notes) + tuple(res.notes) + ((note,) if note else ()),
                 beta_expr=block.modulus_sq.expr() if block.modulus_sq is not None else None,
+                beta_mp=block.modulus_sq.approx(DIGITS) if block.modulus_sq is not None else None,
             )
         )
     return tuple(out)
@@ -300,7 +306,7 @@ def rate_sign(block: BlockConstraints, c: Fraction) -> tuple[int, bool]:
         return (v > 0) - (v < 0), True
     if block.beta is not None:
         with mpmath.workdps(40):
-            v = block.beta.approx(30) ** block.period * (mpmath.mpf(c.numerator) / c.denominator) - 1
+            v = block._beta_mp() ** block.period * (mpmath.mpf(c.numerator) / c.denominator) - 1
             if abs(v) > mpmath.mpf(10) ** -20:
                 return (1 if v > 0 else -1), True
     return compare_rate_bernoulli(block.beta, block.beta_float, block.period, c)
