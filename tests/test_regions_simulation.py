@@ -20,8 +20,8 @@ least squares on ``log`` over ``t = 20..100`` (or ``20..120``).
 
 Why not the exact finite-horizon mean: ``2^(2T)`` sequences cap ``T`` at 10,
 and with ``P_0 = Q = 20 I`` the mean is still in its transient there on both
-sides (measured per-step growth 1.17-1.23 at every point above), so it
-cannot tell them apart.
+sides (measured growth of the last step: x1.150 at the stable point,
+x1.167 and x1.229 at the unstable ones), so it cannot tell them apart.
 
 Tolerances.  Near or past the threshold ``trace P_t`` is heavy-tailed and the
 sample mean *underestimates* ``E[trace P_t]`` once the rare long loss runs
