@@ -163,7 +163,7 @@ def exact_check(plant: ExactPlant, weights: Sequence[Fraction], K: Sequence[np.n
             continue
         F = Aq + to_domain(_rational(Ks)) * to_domain(Cs)
         M = M - scaled(F * Xq * F.transpose(), w)
-    return is_psd(_matrix(Xq), strict=True) and is_psd(_matrix(M), strict=True)
+    return is_psd(_matrix(Xq), strict=True, exact=True) and is_psd(_matrix(M), strict=True, exact=True)
 
 
 def certify(

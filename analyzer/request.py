@@ -10,12 +10,12 @@ probability ranges, Markov tables.
 from __future__ import annotations
 
 from fractions import Fraction
-from typing import Any, Mapping
+from typing import Any, Mapping, Optional
 
 from .errors import InvalidInput, LimitExceeded
 from .exact import load_json, parse_number
 from .limits import DEFAULT_LIMITS, Limits
-from .model import Channel, MarkovChannel, Matrix, PerSensorChannel, Request, Sensor, System, to_domain
+from .model import Channel, MarkovChannel, Matrix, PerSensorChannel, Request, Sensor, System
 
 #: Option groups a request may carry, one per command.  Commands validate their own group.
 OPTION_GROUPS = ("analyze", "bounds", "simulate")
@@ -24,12 +24,17 @@ _TOP_KEYS = {"system", "channel", "options"}
 _SYSTEM_KEYS = {"A", "C", "Q", "R", "sensors"}
 
 
+def pointer(where: str, key: str) -> str:
+    """``where`` extended by one object key, escaped as RFC 6901 requires (``~0``, ``~1``)."""
+    return f"{where}/{key.replace('~', '~0').replace('/', '~1')}"
+
+
 def _check_keys(obj: Any, where: str, allowed: set[str], required: set[str]) -> Mapping[str, Any]:
     if not isinstance(obj, dict):
         raise InvalidInput(where, "expected a JSON object")
     for key in obj:
         if key not in allowed:
-            raise InvalidInput(f"{where}/{key}", f"unknown field {key!r}; allowed: {', '.join(sorted(allowed))}")
+            raise InvalidInput(pointer(where, key), f"unknown field {key[:64]!r}; allowed: {', '.join(sorted(allowed))}")
     for key in sorted(required):
         if key not in obj:
             raise InvalidInput(f"{where}/{key}", "required field is missing")
@@ -57,29 +62,81 @@ def parse_matrix(obj: Any, where: str, name: str, limits: Limits, max_rows: int,
     return tuple(rows)
 
 
-def charpoly_coeffs(m: Matrix) -> list[Fraction]:
-    """Coefficients of ``det(x I - m)``, highest degree first, exactly."""
-    coeffs = to_domain(m).charpoly()
-    return [Fraction(int(c.numerator), int(c.denominator)) for c in coeffs]
+#: Wall-clock allowance (s) for the exact fallback of :func:`is_psd`.
+EXACT_PSD_SECONDS = 10.0
 
 
-def is_psd(m: Matrix, strict: bool) -> bool:
+def _float_filter(m: Matrix) -> Optional[int]:
+    """Sign of ``lambda_min`` when floating point decides it, else ``None``.
+
+    The symmetric eigensolver is backward stable, and by Weyl's inequality
+    rounding ``m`` moves each eigenvalue by at most ``n eps ||m||``; a
+    computed ``|lambda_min| > 1e-9 ||m||_F`` is far outside both errors.
+    """
+    import numpy as np
+
+    scale = max(abs(x) for row in m for x in row)
+    if scale == 0:
+        return 0
+    M = np.array([[float(x / scale) for x in row] for row in m])
+    lam = float(np.linalg.eigvalsh(M)[0])
+    tol = 1e-9 * float(np.linalg.norm(M))
+    if lam > tol:
+        return 1
+    if lam < -tol:
+        return -1
+    return None
+
+
+def is_psd(m: Matrix, strict: bool, where: str = "/", exact: bool = False) -> bool:
     """Exact (semi)definiteness of a symmetric rational matrix.
 
-    All roots of the characteristic polynomial of a symmetric matrix are real;
-    by Descartes' rule they are all ``>= 0`` iff the coefficients of
-    ``det(x I - m)`` alternate in sign (zeros allowed), and all ``> 0`` iff
-    additionally the constant term is non-zero.
+    A floating-point filter (:func:`_float_filter`) decides clear cases.
+    Near-singular matrices go to a symmetric-pivoted ``L D L^T`` in exact
+    rationals (python-flint ``fmpq``): pivot on the largest remaining diagonal
+    entry; a negative one means indefinite; when every remaining diagonal
+    entry is zero, the matrix is semidefinite iff the remaining block is zero
+    (``m_ij^2 <= m_ii m_jj``).  The exact route has :data:`EXACT_PSD_SECONDS`;
+    past it, :class:`LimitExceeded` names ``where`` instead of hanging.
+    ``exact=True`` (certificates) skips the filter and the time allowance.
     """
-    c = charpoly_coeffs(m)
-    n = len(c) - 1
-    for k, ck in enumerate(c):
-        if ck * (-1) ** k < 0:
+    import time
+
+    import flint
+
+    sign = None if exact else _float_filter(m)
+    if sign is not None:
+        return sign > 0 or (sign == 0 and not strict)
+    start = time.monotonic()
+    n = len(m)
+    M = [[flint.fmpq(x.numerator, x.denominator) for x in row] for row in m]
+    rest = list(range(n))
+    while rest:
+        if not exact and time.monotonic() - start > EXACT_PSD_SECONDS:
+            raise LimitExceeded(
+                where,
+                f"the matrix is too close to singular to decide its definiteness exactly within "
+                f"{EXACT_PSD_SECONDS:g} s; use entries with fewer digits",
+            )
+        k = max(rest, key=lambda i: M[i][i])
+        d = M[k][k]
+        if d < 0:
             return False
-    return c[n] != 0 if strict else True
+        if d == 0:
+            return not strict and all(M[i][j] == 0 for i in rest for j in rest)
+        rest.remove(k)
+        for i in rest:
+            if M[i][k] == 0:
+                continue
+            f = M[i][k] / d
+            for j in rest:
+                if M[k][j] != 0:
+                    M[i][j] -= f * M[k][j]
+    return True
 
 
-def _check_symmetric(m: Matrix, where: str, name: str, n: int) -> None:
+def check_symmetric(m: Matrix, where: str, name: str, n: int) -> None:
+    """``m`` is ``n x n`` and exactly symmetric, else :class:`InvalidInput` at ``where``."""
     if len(m) != n or len(m[0]) != n:
         raise InvalidInput(where, f"{name} must be {n}x{n}; got {len(m)}x{len(m[0])}")
     for i in range(n):
@@ -109,13 +166,13 @@ def parse_system(obj: Any, limits: Limits = DEFAULT_LIMITS, where: str = "/syste
     Q = R = None
     if obj.get("Q") is not None or "Q" in obj:
         Q = parse_matrix(obj["Q"], f"{where}/Q", "Q", limits, limits.max_states, limits.max_states)
-        _check_symmetric(Q, f"{where}/Q", "Q", n)
-        if not is_psd(Q, strict=False):
+        check_symmetric(Q, f"{where}/Q", "Q", n)
+        if not is_psd(Q, strict=False, where=f"{where}/Q"):
             raise InvalidInput(f"{where}/Q", "Q must be positive semidefinite")
     if "R" in obj:
         R = parse_matrix(obj["R"], f"{where}/R", "R", limits, limits.max_outputs, limits.max_outputs)
-        _check_symmetric(R, f"{where}/R", "R", p)
-        if not is_psd(R, strict=True):
+        check_symmetric(R, f"{where}/R", "R", p)
+        if not is_psd(R, strict=True, where=f"{where}/R"):
             raise InvalidInput(f"{where}/R", "R must be positive definite")
     sensors = None
     if "sensors" in obj:
@@ -181,7 +238,7 @@ def parse_markov_channel(obj: Any, limits: Limits = DEFAULT_LIMITS, where: str =
             raise InvalidInput(f"{where}/arrival_probability", 'expected an object mapping histories such as "01" to probabilities')
         table: list[Fraction | None] = [None] * (1 << nu)
         for key, val in table_obj.items():
-            kw = f"{where}/arrival_probability/{key}"
+            kw = pointer(f"{where}/arrival_probability", key)
             if len(key) != nu or any(ch not in "01" for ch in key):
                 raise InvalidInput(kw, f"a history key must be {nu} characters of 0/1 (oldest first)")
             table[int(key, 2) if nu else 0] = _parse_probability(val, kw, limits)
@@ -210,12 +267,12 @@ def parse_channel(obj: Any, system: System, limits: Limits = DEFAULT_LIMITS, whe
         names = [s.name for s in system.sensors]
         for key in chans:
             if key not in names:
-                raise InvalidInput(f"{where}/channels/{key}", f"unknown sensor {key!r}; sensors are {names}")
+                raise InvalidInput(pointer(f"{where}/channels", key), f"unknown sensor {key[:64]!r}; sensors are {names}")
         out = []
         for name in names:
             if name not in chans:
-                raise InvalidInput(f"{where}/channels/{name}", f"sensor {name!r} has no channel")
-            out.append((name, parse_markov_channel(chans[name], limits, f"{where}/channels/{name}")))
+                raise InvalidInput(pointer(f"{where}/channels", name), f"sensor {name!r} has no channel")
+            out.append((name, parse_markov_channel(chans[name], limits, pointer(f"{where}/channels", name))))
         return PerSensorChannel(tuple(out))
     if system.sensors is not None and len(system.sensors) > 1:
         raise InvalidInput(f"{where}/model", "with several sensors the channel must be {'model': 'per_sensor', 'channels': {...}}")

@@ -49,7 +49,7 @@ import numpy as np
 from .errors import InvalidInput, LimitExceeded
 from .limits import DEFAULT_LIMITS
 from .model import MarkovChannel, Matrix, PerSensorChannel, Request, to_float
-from .request import _check_symmetric, is_psd, parse_matrix
+from .request import check_symmetric, is_psd, parse_matrix
 
 OPTIONS_FIELD = "/options/simulate"
 PERCENTILES = (50, 90, 99)
@@ -189,8 +189,8 @@ def _int_option(raw: Mapping[str, Any], key: str, default: int | None, lo: int, 
 def _parse_p0(raw: Any, n: int) -> Matrix:
     where = f"{OPTIONS_FIELD}/P0"
     m = parse_matrix(raw, where, "P0", DEFAULT_LIMITS, DEFAULT_LIMITS.max_states, DEFAULT_LIMITS.max_states)
-    _check_symmetric(m, where, "P0", n)
-    if not is_psd(m, strict=False):
+    check_symmetric(m, where, "P0", n)
+    if not is_psd(m, strict=False, where=where):
         raise InvalidInput(where, "P0 must be positive semidefinite")
     return m
 

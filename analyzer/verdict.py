@@ -10,9 +10,10 @@ exact eigenstructure (:mod:`analyzer.eigen`), FMO blocks in phase form
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Any, Sequence
+from typing import Any, Optional, Sequence
 
 import mpmath
 import sympy
@@ -23,6 +24,7 @@ from .errors import InvalidInput
 from .exact import fraction_text
 from .fmo import FmoBlock, fmo_blocks
 from .model import MarkovChannel, PerSensorChannel, Request, System, to_domain
+from .regions import region_report
 from .request import require_assumption_1
 from .sigma import SigmaResult, compute_sigma, period_transfer_matrix
 
@@ -85,6 +87,7 @@ class StabilityReport:
     system: dict[str, Any]
     assumptions: tuple[str, ...] = ()
     warnings: tuple[str, ...] = ()
+    regions: Optional[dict[str, Any]] = None
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON report (stable field names; see README)."""
@@ -98,6 +101,7 @@ class StabilityReport:
             "system": self.system,
             "assumptions": list(self.assumptions),
             "warnings": list(self.warnings),
+            "regions": self.regions,
         }
 
     def summary(self) -> str:
@@ -120,6 +124,12 @@ class StabilityReport:
                 f"sigma = {b.sigma:.6g}, rate |alpha|^2 sigma = {b.rate:.6g}"
                 + ("" if b.certified else "  (not certified)")
             )
+        for s in (self.regions or {}).get("sensors", []):
+            if s.get("status") == "threshold":
+                crit = f"{s['critical_arrival_probability']:.6g} (exact: {s['critical_arrival_probability_exact']})"
+            else:
+                crit = {"zero": "0 (any arrival probability)", "none": "none: no arrival probability suffices"}.get(s.get("status"), str(s.get("status")))
+            lines.append(f"sensor {s['sensor']}: critical arrival probability given the others {crit}  [extension]")
         for a in self.assumptions:
             lines.append(f"assumption: {a}")
         for w in self.warnings:
@@ -163,7 +173,9 @@ def _sigma_exact_text(res: SigmaResult, lambdas: Sequence[Fraction]) -> str | No
     return str(sympy.nsimplify(expr))
 
 
-def _analyze_block(block: FmoBlock, channels: list[MarkovChannel], basis: str, budget: Budget) -> BlockReport:
+def _analyze_block(
+    block: FmoBlock, channels: list[MarkovChannel], basis: str, budget: Budget
+) -> tuple[BlockReport, Optional[SigmaResult]]:
     base: dict[str, Any] = dict(
         eigenvalues=block.eigenvalue_texts,
         eigenvalues_numeric=block.eigenvalue_values,
@@ -180,7 +192,7 @@ def _analyze_block(block: FmoBlock, channels: list[MarkovChannel], basis: str, b
         if block.phase is not None:
             degenerate = block.phase.numeric_rank([(0, g) for g in range(len(block.phase.row_groups))]) < block.phase.n_columns
         return BlockReport(period=None, degenerate=degenerate, sigma=None, sigma_exact=None, rate=None,
-                           verdict="stable", certified=True, notes=block.notes, **base)
+                           verdict="stable", certified=True, notes=block.notes, **base), None
     res = compute_sigma(block.phase, channels, budget)
     N = res.period
     lambdas = [ch.bernoulli_lambda for ch in channels]
@@ -208,7 +220,7 @@ def _analyze_block(block: FmoBlock, channels: list[MarkovChannel], basis: str, b
     verdict = {1: "unstable", 0: "boundary", -1: "stable"}[s]
     if not exact:
         notes.append("rate compared with 1 numerically (50 digits), not exactly")
-    return BlockReport(
+    report = BlockReport(
         period=N,
         degenerate=res.degenerate,
         sigma=res.sigma,
@@ -221,6 +233,7 @@ def _analyze_block(block: FmoBlock, channels: list[MarkovChannel], basis: str, b
         bernoulli_blind_fraction=res.bernoulli_exponents if all_bernoulli else None,
         **base,
     )
+    return report, res
 
 
 def _bernoulli_exponents(F: frozenset, N: int, groups: int) -> tuple[Fraction, ...]:
@@ -301,7 +314,9 @@ def analyze(request: Request, budget: Budget | None = None) -> StabilityReport:
     system = request.system
     channels = _channels_of(request)
     basis = "extension" if len(channels) > 1 else "theorem"
-    blocks = [_analyze_block(b, channels, basis, budget) for b in fmo_blocks(system, budget)]
+    fmo = fmo_blocks(system, budget)
+    analyzed = [_analyze_block(b, channels, basis, budget) for b in fmo]
+    blocks = [rep for rep, _ in analyzed]
     verdict = max((b.verdict for b in blocks), key=VERDICTS.index, default="stable")
     warnings: list[str] = []
     assumptions: list[str] = []
@@ -323,7 +338,7 @@ def analyze(request: Request, budget: Budget | None = None) -> StabilityReport:
         if isinstance(ch, PerSensorChannel)
         else ch.describe()
     )
-    return StabilityReport(
+    report = StabilityReport(
         verdict=verdict,
         blocks=tuple(blocks),
         critical_arrival_probability=crit,
@@ -333,6 +348,12 @@ def analyze(request: Request, budget: Budget | None = None) -> StabilityReport:
         assumptions=tuple(assumptions),
         warnings=tuple(warnings),
     )
+    if basis != "extension":
+        return report
+    # per-sensor Bernoulli channels: exact critical probability of each sensor, and for two
+    # sensors the boundary curve (issue 6; an extension of seed 001, see docs/regions.md)
+    regions = region_report(request, budget, report=report, fmo=fmo, sigma=[res for _, res in analyzed])
+    return dataclasses.replace(report, regions=regions)
 
 
 __all__ = ["BlockReport", "StabilityReport", "analyze", "fraction_text"]

@@ -181,3 +181,22 @@ def test_options_groups():
     assert e.value.field == "/options/colour"
     with pytest.raises(InvalidInput, match=r"\(0, 3600\]"):
         load_request(body(options={"time_budget_s": 0}))
+
+
+def test_json_pointer_escapes_keys():
+    # RFC 6901: "~" -> "~0", "/" -> "~1"
+    with pytest.raises(InvalidInput) as e:
+        load_request(body(system__extra_a=None).replace('"extra_a"', '"a/b~c"'))
+    assert e.value.field == "/system/a~1b~0c"
+
+
+def test_definiteness_filter_and_exact_fallback():
+    from analyzer.request import is_psd
+
+    m = lambda rows: tuple(tuple(Fraction(x) for x in r) for r in rows)  # noqa: E731
+    assert is_psd(m([[1, 0], [0, 0]]), strict=False) and not is_psd(m([[1, 0], [0, 0]]), strict=True)
+    # singular PSD with tiny off-diagonal structure: only the exact route can tell
+    eps = Fraction(1, 10**40)
+    assert is_psd(m([[1, eps], [eps, eps * eps]]), strict=False)
+    assert not is_psd(m([[1, eps], [eps, eps * eps - Fraction(1, 10**120)]]), strict=False)
+    assert not is_psd(m([[0, 1], [1, 0]]), strict=False)
