@@ -15,7 +15,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from analyzer import Budget, BudgetExceeded, InvalidInput, Request
+from analyzer import Budget, InvalidInput, Request
 from analyzer.model import MarkovChannel, PerSensorChannel, to_float
 
 from .jobs import resolve
@@ -188,67 +188,33 @@ _LABEL_CODE = {"unstable": -1.0, "undecided": 0.0, "stable": 1.0}
 def region(request: Request, budget: Budget, params: Mapping[str, Any]) -> bytes:
     """The ``(lambda_1, lambda_2)`` square for two sensors: stable, unstable, undecided.
 
-    The map is the bounds report's (``options.bounds.grid`` set to the
-    ``points`` parameter): unstable by the lower bound, stable by the LMI of
-    seed 000.  kfio's exact verdict (MATH.md, "exact partial-loss regions",
-    an extension of seed 001) is overlaid on at most ``overlay`` x
-    ``overlay`` interior cells, within half of the remaining budget; the
-    title says if the overlay was cut short.
+    The coloured map is the bounds report's (``options.bounds.grid`` set to
+    the ``points`` parameter): unstable by the lower bound, stable by the LMI
+    of seed 000.  Over it, kfio's exact labels for every cell and the exact
+    boundary curve ``lambda_2 = h(lambda_1)``
+    (:func:`analyzer.regions.exact_region_grid`; MATH.md, "exact
+    partial-loss regions", an extension of seed 001).
     """
     import dataclasses
 
     if not isinstance(request.channel, PerSensorChannel) or len(request.channel.channels) != 2:
         raise InvalidInput("/channel/model", "the region plot needs two sensors with a per_sensor channel")
-    grid_options = {**request.options.get("bounds", {}), "grid": int(params.get("points", 21))}
+    points = int(params.get("points", 21))
+    grid_options = {**request.options.get("bounds", {}), "grid": points}
     gridded = dataclasses.replace(request, options={**request.options, "bounds": grid_options})
     report = resolve("analyzer.bounds", "compute_bounds")(gridded, budget=budget).to_dict()["region"]
     values = np.array(report["values"], dtype=float)
     labels = np.array([[_LABEL_CODE.get(x, 0.0) for x in row] for row in report["labels"]])
-    exact, complete = _exact_overlay(request, values, int(params.get("overlay", 9)), budget)
-    return _draw_region(values, labels, exact, complete, tuple(report["axes"]), request)
+    grid = resolve("analyzer.regions", "exact_region_grid")(request, points, budget=budget)
+    exact = np.array([[_EXACT_CODE[x] for x in row] for row in grid.labels])
+    return _draw_region(values, labels, exact, grid.curve, tuple(report["axes"]), request)
 
 
-def _exact_overlay(request: Request, values: np.ndarray, per_axis: int, budget: Budget) -> tuple[np.ndarray, bool]:
-    """Exact verdicts (-1, 0, +1; NaN where not computed) on a subgrid of interior cells."""
-    import dataclasses
-
-    from analyzer import AnalyzerError
-
-    exact = np.full((len(values), len(values)), math.nan)
-    inner = [i for i, v in enumerate(values) if 0 < v < 1]  # Assumption 1 of seed 001
-    if per_axis <= 0 or not inner:
-        return exact, True
-    picks = sorted(
-        {inner[round(k * (len(inner) - 1) / max(1, per_axis - 1))] for k in range(min(per_axis, len(inner)))}
-    )
-    remaining = budget.remaining()
-    sub = Budget(seconds=None if remaining is None else remaining / 2)
-    analyze_fn = resolve("analyzer", "analyze")
-    names = [name for name, _ in request.channel.channels]  # type: ignore[union-attr]
-    for i in picks:
-        for j in picks:
-            chans = tuple((n, _bernoulli(values[k])) for n, k in zip(names, (i, j)))
-            point = dataclasses.replace(request, channel=PerSensorChannel(chans))
-            try:
-                sub.tick("exact overlay", 64)  # checks the clock on every cell
-                verdict = analyze_fn(point, budget=sub).verdict
-            except BudgetExceeded:
-                return exact, False
-            except AnalyzerError:
-                continue
-            exact[i, j] = {"unstable": -1.0, "stable": 1.0, "boundary": 0.0}.get(verdict, math.nan)
-    return exact, True
-
-
-def _bernoulli(x: float) -> MarkovChannel:
-    from fractions import Fraction
-
-    lam = Fraction(x).limit_denominator(10**6)
-    return MarkovChannel("bernoulli", 0, (lam,), {"arrival_probability": lam})
+_EXACT_CODE = {"unstable": -1.0, "stable": 1.0, "boundary": 0.0}
 
 
 def _draw_region(
-    values: np.ndarray, labels: np.ndarray, exact: np.ndarray, complete: bool, axes: tuple[str, ...], request: Request
+    values: np.ndarray, labels: np.ndarray, exact: np.ndarray, curve: Any, axes: tuple[str, ...], request: Request
 ) -> bytes:
     from matplotlib.colors import ListedColormap
     from matplotlib.patches import Patch
@@ -276,6 +242,14 @@ def _draw_region(
         mask = exact == code
         if mask.any():
             handles.append(ax.scatter(x1[mask], x2[mask], marker=marker, s=14, c="k", lw=0.8, label=label))
+    xs = [x for x, y in curve.samples if y is not None]
+    ys = [y for _, y in curve.samples if y is not None]
+    if xs:
+        (line,) = ax.plot(xs, ys, color="navy", lw=1.6, label="exact boundary lambda_2 = h(lambda_1)")
+        handles.append(line)
+    lam1_min = curve.envelope.lambda_1_min
+    if lam1_min is not None and curve.envelope.vertical:
+        ax.axvline(lam1_min, color="navy", lw=1.6)
     chans = dict(request.channel.channels)  # type: ignore[union-attr]
     point = [float(chans[name].table[0]) for name, _ in request.channel.channels]  # type: ignore[union-attr]
     handles.append(ax.scatter([point[0]], [point[1]], marker="*", s=140, c="blue", label="request"))
@@ -283,7 +257,7 @@ def _draw_region(
     ax.set_ylim(extent[2], extent[3])
     ax.set_xlabel(f"lambda_1 ({axes[0]})")
     ax.set_ylabel(f"lambda_2 ({axes[1]})")
-    title = "Stability region for two sensors (exact verdict: kfio extension of seed 001)"
-    ax.set_title(title if complete else title + "\nexact overlay cut short by the time budget", fontsize="medium")
+    ax.set_title("Stability region for two sensors: bounds (colours, seed 000)\n"
+                 "and exact verdict (markers, line: kfio extension of seed 001)", fontsize="medium")
     ax.legend(handles=handles, fontsize="x-small", loc="upper left", bbox_to_anchor=(1.01, 1.0))
     return _png(fig)
