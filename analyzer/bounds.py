@@ -117,7 +117,16 @@ def _p_hat(A, C, Q, R, lam: float, horizon: int, budget: Budget) -> PHatBounds:
     return PHatBounds(horizon, tuple(seq[N] for N in wanted))
 
 
-def _region(search: CertifiedSearch, opts: BoundsOptions, rho: float) -> RegionMap:
+def _region(search: CertifiedSearch, opts: BoundsOptions, rho: float, request: Request, budget: Budget) -> RegionMap:
+    """The bounds' map of the square (seed 000, Figs. 4-5) with kfio's exact labels and boundary beside it.
+
+    The exact part is :func:`analyzer.regions.exact_region_grid` (an extension
+    of seed 001, MATH.md section 3); it is absent when the request's channels
+    are outside Assumption 1 of seed 001.
+    """
+    from .errors import AssumptionViolation
+    from .regions import exact_region_grid
+
     K = opts.grid
     assert K is not None
     values = tuple(Fraction(i, K - 1) for i in range(K))
@@ -125,7 +134,13 @@ def _region(search: CertifiedSearch, opts: BoundsOptions, rho: float) -> RegionM
     before = search.solves
     labels, certified = search.region(values, unstable)
     names = tuple(p.name or f"sensor {i}" for i, p in enumerate(opts.packets))
-    return RegionMap((names[0], names[1]), values, tuple(tuple(r) for r in labels), certified, search.solves - before)
+    try:
+        exact = exact_region_grid(request, K, budget=budget).to_dict()
+    except AssumptionViolation:
+        exact = None
+    return RegionMap(
+        (names[0], names[1]), values, tuple(tuple(r) for r in labels), certified, search.solves - before, exact
+    )
 
 
 def compute_bounds(
@@ -180,7 +195,7 @@ def compute_bounds(
     if one and opts.horizon is not None:
         rows = list(opts.packets[0].rows)
         p_hat = _p_hat(A, C[rows, :], Q, R[np.ix_(rows, rows)], float(lams[0]), opts.horizon, budget)
-    region = _region(search, opts, rho) if opts.grid is not None else None
+    region = _region(search, opts, rho, request, budget) if opts.grid is not None else None
     return BoundsReport(
         packets=opts.packets,
         arrival=lams,

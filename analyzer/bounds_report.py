@@ -201,6 +201,7 @@ class RegionMap:
     labels: tuple[tuple[str, ...], ...]
     certified_cells: int
     lmi_solves: int
+    exact: dict[str, Any] | None = None  # analyzer.regions.exact_region_grid(...).to_dict()
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -216,6 +217,7 @@ class RegionMap:
             },
             "certified_cells": self.certified_cells,
             "lmi_solves": self.lmi_solves,
+            "exact": self.exact,
         }
 
 
