@@ -25,7 +25,6 @@ import numpy as np
 
 from .bounds_vech import congruence_matrix, unvech, vech, vech_layout
 from .budget import Budget
-from .errors import NumericalFailure
 from .riccati import DIVERGENCE_RATIO, v_bar
 
 #: The batch at the bottom of the tree holds at most ``2**CHUNK_LEVELS`` matrices.
@@ -223,31 +222,3 @@ def p_hat_sequence(
     for N in sorted(set(horizons)):
         get(N)
     return out
-
-
-def p_hat(A: np.ndarray, C: np.ndarray, Q: np.ndarray, R: np.ndarray, lam: float, N: int) -> np.ndarray:
-    """Seed 002's ``P_hat_N``: the fixed point of ``g_N`` (eq. 15), ``N >= 1``.
-
-    See :func:`p_hat_sequence` for the algorithm.  ``p_hat(..., 1)`` is
-    ``V_bar``.
-
-    Raises
-    ------
-    NumericalFailure
-        If ``P_hat_N`` does not exist at this ``lam`` (the iteration diverges)
-        or the iteration stalls.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> A, C, Q, R = np.array([[-1.25]]), np.array([[1.0]]), np.array([[1.0]]), np.array([[2.5]])
-    >>> P1, P8 = p_hat(A, C, Q, R, 0.4, 1), p_hat(A, C, Q, R, 0.4, 8)
-    >>> bool(P8[0, 0] < P1[0, 0])
-    True
-    """
-    if N < 1:
-        raise ValueError("N must be at least 1")
-    res = p_hat_sequence(A, C, Q, R, lam, [N])[N]
-    if res.matrix is None:
-        raise NumericalFailure(f"P_hat_{N}: {res.reason}")
-    return res.matrix

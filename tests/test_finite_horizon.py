@@ -22,6 +22,7 @@ from analyzer import finite_horizon as fh
 from analyzer.errors import InvalidInput
 from analyzer.finite_horizon import expected_covariance, log_slope_growth
 from analyzer.model import MarkovChannel, PerSensorChannel, Request, to_float
+from tests.factories import bern, ge, make
 
 SEED004 = {
     "A": [[1.25, 1, 0], [0, 0.9, 7], [0, 0, 0.6]],
@@ -30,21 +31,6 @@ SEED004 = {
     "R": [[2.5]],
 }
 TWO_STATE = {"A": [[1.25, 0], [1, 1.1]], "C": [[1, 1]], "Q": [[20, 0], [0, 20]], "R": [[2.5]]}
-
-
-def make(system: dict, channel: dict, simulate: dict | None = None) -> Request:
-    body = {"system": system, "channel": channel}
-    if simulate is not None:
-        body["options"] = {"simulate": simulate}
-    return load_request(json.dumps(body))
-
-
-def bern(lam) -> dict:
-    return {"model": "bernoulli", "arrival_probability": lam}
-
-
-def ge(p, q) -> dict:
-    return {"model": "gilbert_elliott", "failure_rate": p, "recovery_rate": q}
 
 
 MARKOV2 = {"model": "markov", "order": 2, "arrival_probability": {"00": 0.3, "01": 0.6, "10": "1/2", "11": 0.8}}

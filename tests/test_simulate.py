@@ -8,14 +8,14 @@ import math
 import numpy as np
 import pytest
 
-from analyzer import InvalidInput, LimitExceeded, load_request
+from analyzer import InvalidInput, LimitExceeded
 from analyzer.budget import Budget
 from analyzer.errors import BudgetExceeded
 from analyzer.finite_horizon import expected_covariance
-from analyzer.model import Request
 from analyzer.sim_kernel import GroupedRiccatiStep, RiccatiStep
 from analyzer.sim_setup import SimulationLimits, parse_options, sim_system
 from analyzer.simulate import run_monte_carlo, simulate
+from tests.factories import bern, ge, make
 
 SEED004 = {
     "A": [[1.25, 1, 0], [0, 0.9, 7], [0, 0, 0.6]],
@@ -30,21 +30,6 @@ TWO_SENSORS = {
     "R": [[2.5, 0.5, 0], [0.5, 2, 0.25], [0, 0.25, 1]],
     "sensors": [{"name": "a", "rows": [0, 2]}, {"name": "b", "rows": [1]}],
 }
-
-
-def make(system: dict, channel: dict, simulate: dict | None = None) -> Request:
-    body = {"system": system, "channel": channel}
-    if simulate is not None:
-        body["options"] = {"simulate": simulate}
-    return load_request(json.dumps(body))
-
-
-def bern(lam) -> dict:
-    return {"model": "bernoulli", "arrival_probability": lam}
-
-
-def ge(p, q) -> dict:
-    return {"model": "gilbert_elliott", "failure_rate": p, "recovery_rate": q}
 
 
 CHANNELS = {

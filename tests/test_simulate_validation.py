@@ -16,31 +16,18 @@ chosen with ``rate >= 1.25`` or ``rate <= 0.7``, so "stable" (growth 1) and "uns
 
 from __future__ import annotations
 
-import json
 import math
 from fractions import Fraction
 
 import numpy as np
 import pytest
 
-from analyzer import load_request
 from analyzer.finite_horizon import expected_covariance
 from analyzer.model import Request
+from tests.factories import bern, ge, make
 
 GROWTH_TOL = 0.06
 LEVELS_OFF = 1.05  # per-step growth at the end of the horizon that counts as levelled off
-
-
-def make(system: dict, channel: dict) -> Request:
-    return load_request(json.dumps({"system": system, "channel": channel}))
-
-
-def bern(lam) -> dict:
-    return {"model": "bernoulli", "arrival_probability": lam}
-
-
-def ge(p, q) -> dict:
-    return {"model": "gilbert_elliott", "failure_rate": p, "recovery_rate": q}
 
 
 def verdict(req: Request) -> tuple[str, float]:
