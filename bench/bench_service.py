@@ -48,7 +48,7 @@ import httpx
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from service.api.schemas import REQUEST_EXAMPLES  # noqa: E402
-from service.testing import LiveServer, slow_request  # noqa: E402
+from service.testing import SLOW_PATH, LiveServer, slow_request  # noqa: E402
 
 #: One-packet seed systems (per-sensor systems are left out: simulate/bounds treat them alike).
 SEEDS = [REQUEST_EXAMPLES[k]["value"] for k in ("seed004-scalar", "seed004-3x3", "seed002-2x2")]
@@ -120,7 +120,7 @@ async def fast_under_slow(client: httpx.AsyncClient, slow_clients: int, duration
     slow = asyncio.create_task(
         closed_loop(
             client,
-            "/v1/analyze",
+            SLOW_PATH,
             lambda i: slow_request(time_budget_s=5, seed=next(_unique)),
             slow_clients,
             duration,

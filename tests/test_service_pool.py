@@ -16,7 +16,7 @@ from service.app import create_app
 from service.jobs import PRELOAD
 from service.pool import PoolBusy, PoolTimeout, WorkerCrashed, WorkerPool
 from service.settings import Settings
-from service.testing import slow_request
+from service.testing import SLOW_PATH, slow_request
 
 HERE = __name__  # the workers import this module to find the runners below
 
@@ -125,7 +125,7 @@ def client_not_ready(c: TestClient) -> bool:
 
 def test_past_its_budget_a_request_gets_504_promptly_and_the_service_recovers(client: TestClient) -> None:
     t0 = time.monotonic()
-    r = client.post("/v1/analyze", content=slow_request(time_budget_s=1))
+    r = client.post(SLOW_PATH, content=slow_request(time_budget_s=1))
     elapsed = time.monotonic() - t0
     assert r.status_code == 504, r.text
     assert r.headers["content-type"] == "application/problem+json"
@@ -133,14 +133,15 @@ def test_past_its_budget_a_request_gets_504_promptly_and_the_service_recovers(cl
     assert elapsed < 3.0, elapsed  # budget 1 s + grace 0.25 s + parsing
     ok = client.post("/v1/analyze", json=REQUEST_EXAMPLES["seed002-2x2"]["value"])
     assert ok.status_code == 200, ok.text
-    assert client.get("/readyz").json()["pool"]["replaced"] >= 1
+    pool = client.get("/readyz").json()["pool"]  # budget hit in the worker, or the worker killed: whole again
+    assert pool["alive"] == pool["size"] and pool["busy"] == 0
 
 
 def test_healthz_stays_fast_while_every_worker_is_busy(client: TestClient) -> None:
     results: list[int] = []
     slow = [slow_request(time_budget_s=4, seed=s) for s in (11, 12)]  # distinct: no shared computation
     threads = [
-        threading.Thread(target=lambda b=b: results.append(client.post("/v1/analyze", content=b).status_code))
+        threading.Thread(target=lambda b=b: results.append(client.post(SLOW_PATH, content=b).status_code))
         for b in slow
     ]
     for t in threads:

@@ -16,7 +16,7 @@ import pytest
 
 from service.api.schemas import REQUEST_EXAMPLES
 from service.openapi_gen import DEFAULT_PATH
-from service.testing import LiveServer, slow_request
+from service.testing import SLOW_PATH, LiveServer, slow_request
 
 SEED_2X2 = REQUEST_EXAMPLES["seed002-2x2"]["value"]
 
@@ -81,21 +81,24 @@ def test_oversized_chunked_body_is_refused_while_streaming(server: LiveServer) -
 
 def test_timeout_is_504_promptly_and_the_server_keeps_serving(server: LiveServer) -> None:
     t0 = time.monotonic()
-    r = httpx.post(f"{server.url}/v1/analyze", content=slow_request(time_budget_s=1, seed=21), timeout=30)
+    r = httpx.post(f"{server.url}{SLOW_PATH}", content=slow_request(time_budget_s=1, seed=21), timeout=30)
     assert r.status_code == 504 and r.headers["content-type"] == "application/problem+json"
     assert time.monotonic() - t0 < 3.0
     assert (
         httpx.post(f"{server.url}/v1/analyze", json=REQUEST_EXAMPLES["seed004-3x3"]["value"], timeout=30).status_code
         == 200
     )
-    assert httpx.get(f"{server.url}/readyz").json()["pool"]["replaced"] >= 1
+    # the 504 came from the budget (checked between simulation steps) or from killing the worker
+    # (the kill path itself: tests/test_service_pool.py); either way the pool is whole again
+    pool = httpx.get(f"{server.url}/readyz").json()["pool"]
+    assert pool["alive"] == pool["size"] and pool["busy"] == 0
 
 
 def test_healthz_under_100_ms_while_every_worker_is_busy(server: LiveServer) -> None:
     async def scenario() -> tuple[list[float], list[int]]:
         async with httpx.AsyncClient(base_url=server.url, timeout=30) as client:
             slow = [
-                asyncio.create_task(client.post("/v1/analyze", content=slow_request(time_budget_s=4, seed=s)))
+                asyncio.create_task(client.post(SLOW_PATH, content=slow_request(time_budget_s=4, seed=s)))
                 for s in (31, 32, 33)  # three for two workers: one waits in the queue
             ]
             deadline = time.monotonic() + 5
@@ -148,7 +151,7 @@ def alive(pid: int) -> bool:
 @pytest.mark.skipif(not os.path.isdir("/proc"), reason="needs /proc")
 def test_workers_die_with_a_killed_server_even_mid_computation() -> None:
     with LiveServer(workers=2) as live:
-        for seed in (41, 42):  # both workers stuck in one long C call (exact validation)
+        for seed in (41, 42):  # both workers busy with long batched Riccati steps (numpy C calls)
             body = slow_request(time_budget_s=600, seed=seed)
             threading.Thread(target=lambda b=body: _post_quietly(live.url, b), daemon=True).start()
         deadline = time.monotonic() + 10
@@ -167,6 +170,6 @@ def test_workers_die_with_a_killed_server_even_mid_computation() -> None:
 
 def _post_quietly(url: str, body: bytes) -> None:
     try:
-        httpx.post(f"{url}/v1/analyze", content=body, timeout=30)
+        httpx.post(f"{url}{SLOW_PATH}", content=body, timeout=30)
     except httpx.HTTPError:
         pass  # the server is killed under it
