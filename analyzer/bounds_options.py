@@ -19,6 +19,7 @@ from .bounds_phat import max_horizon
 from .errors import InvalidInput, LimitExceeded
 from .exact import parse_number
 from .model import MarkovChannel, PerSensorChannel, Request
+from .request import option_group
 
 DEFAULT_TOLERANCE = 1e-6
 MIN_TOLERANCE, MAX_TOLERANCE = 1e-9, 1e-1
@@ -150,12 +151,7 @@ def parse_bounds_options(request: Request, flags: Mapping[str, Any] | None = Non
             f"the stability LMI for {n} states and {m} sensors has n(2^m + 1) = {n * ((1 << m) + 1)} rows; "
             f"the limit is {MAX_LMI_ROWS}",
         )
-    raw = request.options.get("bounds", {})
-    if not isinstance(raw, dict):
-        raise InvalidInput(_WHERE, "expected a JSON object")
-    for key in raw:
-        if key not in _KEYS:
-            raise InvalidInput(f"{_WHERE}/{key}", f"unknown option {key!r}; allowed: {', '.join(_KEYS)}")
+    raw = option_group(request, "bounds", _KEYS)
     merged = {**raw, **{k: v for k, v in flags.items() if v is not None}}
 
     tolerance = DEFAULT_TOLERANCE

@@ -10,7 +10,7 @@ probability ranges, Markov tables.
 from __future__ import annotations
 
 from fractions import Fraction
-from typing import Any, Mapping, Optional
+from typing import Any, Iterable, Mapping, Optional
 
 from .errors import InvalidInput, LimitExceeded
 from .exact import load_json, parse_number
@@ -299,6 +299,23 @@ def parse_request(obj: Any, limits: Limits = DEFAULT_LIMITS) -> Request:
             else:
                 options[key] = val
     return Request(system=system, channel=channel, options=options, time_budget_s=time_budget)
+
+
+def option_group(request: Request, group: str, allowed: Iterable[str]) -> Mapping[str, Any]:
+    """``request.options[group]`` (``{}`` if absent), with every key checked against ``allowed``.
+
+    Each command validates the values of its own group; the unknown-key rule is
+    the same for all, and its message names ``/options/<group>/<key>``.
+    """
+    raw = request.options.get(group, {})
+    where = f"/options/{group}"
+    if not isinstance(raw, Mapping):
+        raise InvalidInput(where, "expected a JSON object")
+    names = sorted(allowed)
+    for key in raw:
+        if key not in names:
+            raise InvalidInput(pointer(where, key), f"unknown option {key[:64]!r}; allowed: {', '.join(names)}")
+    return raw
 
 
 def load_request(text: str | bytes, limits: Limits = DEFAULT_LIMITS) -> Request:

@@ -49,7 +49,7 @@ import numpy as np
 from .errors import InvalidInput, LimitExceeded
 from .limits import DEFAULT_LIMITS
 from .model import MarkovChannel, Matrix, PerSensorChannel, Request, to_float
-from .request import check_symmetric, is_psd, parse_matrix
+from .request import check_symmetric, is_psd, option_group, parse_matrix
 
 OPTIONS_FIELD = "/options/simulate"
 PERCENTILES = (50, 90, 99)
@@ -223,12 +223,7 @@ def parse_options(request: Request, limits: SimulationLimits = DEFAULT_SIMULATIO
         ``steps``, ``steps * trajectories``, ``trajectories * n^2`` or the
         enumeration size above ``limits``.
     """
-    raw = request.options.get("simulate", {})
-    if not isinstance(raw, Mapping):
-        raise InvalidInput(OPTIONS_FIELD, "expected a JSON object")
-    for key in raw:
-        if key not in _KEYS:
-            raise InvalidInput(f"{OPTIONS_FIELD}/{key}", f"unknown option {key!r}; allowed: {', '.join(sorted(_KEYS))}")
+    raw = option_group(request, "simulate", _KEYS)
     if "percentiles" in raw and raw["percentiles"] != list(PERCENTILES):
         raise InvalidInput(f"{OPTIONS_FIELD}/percentiles", f"percentiles are fixed at {list(PERCENTILES)}")
     steps = _int_option(raw, "steps", limits.default_steps, 1, limits.max_steps)

@@ -172,7 +172,7 @@ def test_phase_transition_plot_is_png(client: TestClient) -> None:
 
 
 def test_region_plot_is_png(client: TestClient) -> None:
-    r = client.post("/v1/plots/region?points=11&overlay=3", json=REQUEST_EXAMPLES["seed000-two-sensors"]["value"])
+    r = client.post("/v1/plots/region?points=11", json=REQUEST_EXAMPLES["seed000-two-sensors"]["value"])
     assert r.status_code == 200, r.text
     assert r.headers["content-type"] == "image/png" and r.content.startswith(b"\x89PNG\r\n\x1a\n")
 

@@ -63,9 +63,9 @@ async def phase_transition(
     summary="Stability region for two sensors (seed 000, Figs. 4-5)",
     description=(
         "Two sensors over Bernoulli channels.  Colours the (lambda_1, lambda_2) square as the bounds report's "
-        "region map does (unstable by the lower bound, stable by the LMI, undecided between them), overlays "
-        "kfio's exact verdict on a subgrid (within half of the remaining time budget), and marks the "
-        "request's own point."
+        "region map does (unstable by the lower bound, stable by the LMI, undecided between them), marks kfio's "
+        "exact verdict on every cell and draws the exact boundary lambda_2 = h(lambda_1) (an extension of "
+        "seed 001), and marks the request's own point."
     ),
     response_class=Response,
     responses={**_PNG, **_ERRORS},
@@ -75,11 +75,8 @@ async def region(
     body: BodyDep,
     dispatcher: DispatcherDep,
     points: Annotated[int, Query(ge=2, le=41, description="grid points per axis (options.bounds.grid)")] = 21,
-    overlay: Annotated[
-        int, Query(ge=0, le=41, description="interior grid points per axis that get kfio's exact verdict (0: none)")
-    ] = 9,
 ) -> Response:
-    return await dispatcher.answer("plot-region", body, {"points": points, "overlay": overlay})
+    return await dispatcher.answer("plot-region", body, {"points": points})
 
 
 @router.post(
