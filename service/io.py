@@ -7,7 +7,7 @@ import json
 import sys
 from typing import Any, Callable
 
-from analyzer.errors import BudgetExceeded, InvalidInput
+from analyzer.errors import BudgetExceeded, InvalidInput, NumericalFailure
 from analyzer.limits import Limits
 
 from . import exitcodes
@@ -55,6 +55,9 @@ def run_guarded(body: Callable[[], int]) -> int:
     except BudgetExceeded as exc:
         print(f"kfio: budget exceeded: {exc}", file=sys.stderr)
         return exitcodes.BUDGET
+    except NumericalFailure as exc:
+        print(f"kfio: numerical failure: {exc}", file=sys.stderr)
+        return exitcodes.NUMERICAL
     except KeyboardInterrupt:
         print("kfio: interrupted", file=sys.stderr)
         return 130

@@ -74,3 +74,16 @@ def test_console_script_runs_as_a_process(tmp_path):
     p = subprocess.run([sys.executable, "-m", "service.cli", "analyze", str(EXAMPLES / "boundary.json")],
                        capture_output=True, text=True, timeout=120)
     assert p.returncode == 3 and "BOUNDARY" in p.stdout
+
+
+def test_budget_and_numerical_failures_have_their_own_exit_codes(capsys, monkeypatch):
+    import service.commands.analyze as cmd
+    from analyzer.errors import BudgetExceeded, NumericalFailure
+
+    for exc, code, word in ((BudgetExceeded("sigma: more than 1 s"), 4, "budget exceeded"),
+                            (NumericalFailure("roots did not converge"), 5, "numerical failure")):
+        def boom(*a, exc=exc, **k):
+            raise exc
+        monkeypatch.setattr(cmd, "analyze", boom)
+        c, out, err = run_cli(["analyze", str(EXAMPLES / "boundary.json")], capsys=capsys)
+        assert c == code and out == "" and err.startswith(f"kfio: {word}:") and "Traceback" not in err
