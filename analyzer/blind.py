@@ -29,7 +29,10 @@ flats, never the ``2^(N0 G)`` subsets:
   can only beat it by missing at most ``w_max`` slots, so canonical window 0
   misses at most ``j = floor(W w_max / N0)``: the search only grows flats from
   nearly full window-0 prefixes.  For seed-type blocks (``N0 = 60``,
-  ``L = 8``, largest blind set 36) that is ``j = 3``;
+  ``L = 8``, largest blind set 36) that is ``j = 3``.  An objective may
+  sharpen ``j`` (:attr:`Objective.window_misses`): in canonical rotation
+  every window misses at least as much as window 0, which the Markov
+  objective of :mod:`analyzer.sigma` turns into a bound on the score;
 * **branch and bound** for a monotone score (``rho(M_F)`` is monotone in
   ``F``): a subtree lies inside its *hull* (the flat plus the later slots
   whose closure with the parent is still blind and keeps the prefix), so a
@@ -77,10 +80,18 @@ class Objective:
     max_weight:
         Given the incumbent's score, the largest number of slots a set may
         miss and still score higher (drives the window bound).
+    window_misses:
+        Optional: given the incumbent's score, ``W`` and the fewest slots a
+        window of the incumbent misses (a ``c`` known to be possible), the
+        largest ``c`` such that a set whose every window misses at least
+        ``c`` slots may still score as high (``None``: no sharper than
+        ``max_weight``).  A sharper window bound than averaging
+        ``max_weight`` over the windows.
     """
 
     score: Score
     max_weight: Callable[[float], int]
+    window_misses: Callable[[float, int, int], int | None] | None = None
 
 
 @dataclass
@@ -187,6 +198,11 @@ class SlotSpace:
             if self.rank(np.arange(self.size) < W * self.n_groups, margins) == self.n_columns:
                 return W
         return self.n_phases
+
+    def fewest_window_misses(self, mask: np.ndarray, W: int) -> int:
+        """The fewest slots of ``mask``'s complement in any ``W`` consecutive phases (cyclically)."""
+        misses = self.n_groups - mask.reshape(self.n_phases, self.n_groups).sum(axis=1)
+        return int(min(np.roll(misses, -k)[:W].sum() for k in range(self.n_phases)))
 
     def rotate(self, mask: np.ndarray, k: int) -> np.ndarray:
         """The mask of ``F + k`` (phases shifted by ``k`` modulo ``N0``)."""
@@ -418,6 +434,7 @@ class _Incumbent:
     mask: np.ndarray | None = None
     value: float = -np.inf
     found: dict[tuple[int, ...], np.ndarray] = field(default_factory=dict)
+    _j: tuple[float, int, int] | None = None  # (incumbent value, W, j_max) of the last j_max call
 
     def beats(self, bound: float) -> bool:
         """Whether nothing scoring at most ``bound`` can beat the incumbent."""
@@ -434,8 +451,21 @@ class _Incumbent:
         return self.objective.max_weight(self.value)
 
     def j_max(self, W: int) -> int:
-        """Most misses canonical window 0 of a set that beats the incumbent may have."""
-        return W * self.max_misses() // self.space.n_phases
+        """Most misses canonical window 0 of a set that beats the incumbent may have.
+
+        Every slot lies in ``W`` windows, so a set missing ``w`` slots has a
+        window missing at most ``floor(W w / N0)``; canonical window 0 misses
+        the fewest.  :attr:`Objective.window_misses` may sharpen this: in
+        canonical rotation every window misses at least as many slots as
+        window 0.
+        """
+        j = W * self.max_misses() // self.space.n_phases
+        if self.objective is None or self.mask is None or self.objective.window_misses is None:
+            return j
+        if self._j is None or self._j[:2] != (self.value, W):
+            sharper = self.objective.window_misses(self.value, W, self.space.fewest_window_misses(self.mask, W))
+            self._j = (self.value, W, j if sharper is None else min(j, sharper))
+        return self._j[2]
 
     def promising(self, masks: np.ndarray) -> np.ndarray:
         """Rows that miss few enough slots to beat the incumbent (a cheap test before scoring)."""
