@@ -27,10 +27,6 @@ from .algebraic import AlgebraicReal
 from .eigen import X
 
 
-def sign(x: Fraction) -> int:
-    return (x > 0) - (x < 0)
-
-
 def bernoulli_factor(exponents: Sequence[Fraction], lambdas: Sequence[Fraction], N: int) -> Fraction:
     """``sigma^N = prod_g (1 - lambda_g)^{z_g}`` with ``z_g = N * exponents[g]``."""
     c = Fraction(1)

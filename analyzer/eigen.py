@@ -128,21 +128,18 @@ class EigenFactor:
             return [Fraction(int(elem.numerator), int(elem.denominator))]
         return [Fraction(int(c.numerator), int(c.denominator)) for c in reversed(elem.to_list())]
 
-    def eigvec_values(self, i: int) -> list[list[mpmath.mpc]]:
-        """Numerical eigenvectors of root ``i`` (basis of its eigenspace), rows."""
+    def value_at(self, coeffs: list[Fraction], i: int) -> mpmath.mpc:
+        """A field element given by :meth:`coeffs_of`, evaluated at root ``i`` (Horner, 70 digits)."""
         theta = self.roots[i]
         with mpmath.workdps(DIGITS + 10):
-            powers = [mpmath.mpc(1)]
-            for _ in range(max(1, self.degree)):
-                powers.append(powers[-1] * theta)
-            out = []
-            for row in self._eig_rows():
-                out.append([sum((mpmath.mpf(c.numerator) / c.denominator) * powers[k] for k, c in enumerate(cs)) for cs in row])
-            return out
+            acc = mpmath.mpc(0)
+            for c in reversed(coeffs):
+                acc = acc * theta + mpmath.mpf(c.numerator) / c.denominator
+            return acc
 
-    def _eig_rows(self) -> list[list[list[Fraction]]]:
-        rows = self.eigvecs.to_list()
-        return [[self.coeffs_of(e) for e in row] for row in rows]
+    def eigvec_values(self, i: int) -> list[list[mpmath.mpc]]:
+        """Numerical eigenvectors of root ``i`` (basis of its eigenspace), rows."""
+        return [[self.value_at(self.coeffs_of(e), i) for e in row] for row in self.eigvecs.to_list()]
 
 
 def irreducible_factors(A: Matrix) -> tuple[list[tuple[Poly, int]], DomainMatrix]:

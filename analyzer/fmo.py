@@ -32,6 +32,7 @@ from .algebraic import AlgebraicReal, real_root_matching
 from .budget import Budget
 from .eigen import DIGITS, EigenFactor, X, eigen_factors
 from .errors import NumericalFailure
+from .exact import fraction_text
 from .model import Matrix, System, to_domain
 from .phases import PhaseBlock, Slot
 
@@ -266,9 +267,7 @@ def modulus_squared(f: EigenFactor, index: int) -> AlgebraicReal | None:
     non-real root.
     """
     if f.is_rational:
-        c = f.poly.TC()
-        v = Fraction(int(c.numerator), int(c.denominator))
-        return AlgebraicReal.of_rational(v * v)
+        return AlgebraicReal.of_rational(f.rational_root**2)
     theta = f.roots[index]
     with mpmath.workdps(DIGITS + 10):
         target = abs(theta) ** 2
@@ -303,9 +302,7 @@ def modulus_squared(f: EigenFactor, index: int) -> AlgebraicReal | None:
 def _eigen_text(f: EigenFactor, index: int) -> str:
     """Exact text of a root: rational, quadratic radicals, else its polynomial and a numerical value."""
     if f.is_rational:
-        c = -f.poly.TC()
-        v = Fraction(int(c.numerator), int(c.denominator))
-        return str(v.numerator) if v.denominator == 1 else f"{v.numerator}/{v.denominator}"
+        return fraction_text(f.rational_root)
     if f.degree == 2:
         from sympy import roots as radical_roots
 
@@ -455,12 +452,10 @@ def build_block(
         CV = Cd.convert_to(f.field) * f.eigvecs.transpose()  # p x g, exact over Q(theta)
         cols = CV.transpose().to_list()
         with mpmath.workdps(DIGITS + 10):
-            theta = f.roots[ri]
             for col in cols:
                 coeffs = [f.coeffs_of(x) for x in col]
                 exact_cols.append(((fi, ri), coeffs))
-                vals = [complex(sum((mpmath.mpf(c.numerator) / c.denominator) * theta**k for k, c in enumerate(cs))) for cs in coeffs]
-                v = np.array(vals, dtype=complex)
+                v = np.array([complex(f.value_at(cs, ri)) for cs in coeffs], dtype=complex)
                 nrm = np.linalg.norm(v)
                 columns_num.append(v / nrm if nrm > 0 else v)
                 exponents.append(e)

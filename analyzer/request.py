@@ -164,7 +164,7 @@ def parse_system(obj: Any, limits: Limits = DEFAULT_LIMITS, where: str = "/syste
         raise InvalidInput(f"{where}/C", f"C must have {n} columns (A is {n}x{n}); got {len(C[0])}")
     p = len(C)
     Q = R = None
-    if obj.get("Q") is not None or "Q" in obj:
+    if "Q" in obj:
         Q = parse_matrix(obj["Q"], f"{where}/Q", "Q", limits, limits.max_states, limits.max_states)
         check_symmetric(Q, f"{where}/Q", "Q", n)
         if not is_psd(Q, strict=False, where=f"{where}/Q"):

@@ -21,7 +21,6 @@ import sympy
 from .budget import Budget
 from .decide import bernoulli_factor, compare_rate_bernoulli, compare_rate_markov
 from .errors import InvalidInput
-from .exact import fraction_text
 from .fmo import FmoBlock, fmo_blocks
 from .model import MarkovChannel, PerSensorChannel, Request, System, to_domain
 from .regions import region_report
@@ -356,4 +355,4 @@ def analyze(request: Request, budget: Budget | None = None) -> StabilityReport:
     return dataclasses.replace(report, regions=regions)
 
 
-__all__ = ["BlockReport", "StabilityReport", "analyze", "fraction_text"]
+__all__ = ["BlockReport", "StabilityReport", "analyze"]

@@ -36,9 +36,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     try:
         args = parser.parse_args(argv)
-    except SystemExit as exc:  # argparse: usage errors are invalid input
-        code = exc.code if isinstance(exc.code, int) else exitcodes.INVALID_INPUT
-        return exitcodes.INVALID_INPUT if code not in (0,) else 0
+    except SystemExit as exc:  # argparse: --help exits 0, usage errors are invalid input
+        return 0 if exc.code == 0 else exitcodes.INVALID_INPUT
     try:
         return int(args.func(args))
     except Exception:  # noqa: BLE001 - last resort: a bug, reported as such

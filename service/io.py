@@ -8,7 +8,6 @@ import sys
 from typing import Any, Callable
 
 from analyzer.errors import BudgetExceeded, InvalidInput, NumericalFailure
-from analyzer.limits import Limits
 
 from . import exitcodes
 
@@ -39,10 +38,6 @@ def add_request_arguments(p: argparse.ArgumentParser) -> None:
 def dump_json(report: dict[str, Any]) -> str:
     """Stable JSON text: fixed key order as built, two-space indent."""
     return json.dumps(report, indent=2, allow_nan=False)
-
-
-def limits_from_args(args: argparse.Namespace) -> Limits:
-    return Limits()
 
 
 def run_guarded(body: Callable[[], int]) -> int:
