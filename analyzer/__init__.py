@@ -1,10 +1,10 @@
 """kfio's math library: stability of Kalman filters with lossy measurement channels.
 
-Knows nothing of HTTP or the command line (see :mod:`service`).  Exact in,
+Knows nothing of HTTP or the command line (see :mod:`kfio.service`).  Exact in,
 exact through, converted at the edge.
 """
 
-from .budget import Budget
+from ._budget import Budget
 from .errors import (
     AnalyzerError,
     AssumptionViolation,
@@ -13,23 +13,23 @@ from .errors import (
     LimitExceeded,
     NumericalFailure,
 )
-from .exact import load_json, parse_number
-from .limits import DEFAULT_LIMITS, Limits
-from .model import MarkovChannel, PerSensorChannel, Request, Sensor, System
-from .request import load_request, parse_request
-from .verdict import StabilityReport, analyze
+from .model._exact import load_json, parse_number
+from .model._limits import DEFAULT_LIMITS, Limits
+from .model._request import load_request, parse_request
+from .model._types import MarkovChannel, PerSensorChannel, Request, Sensor, System
+from .stability._verdict import StabilityReport, analyze
 
 # Bounds pull in CVXPY (seconds to import) and simulation is large: both are
 # exported lazily so that ``kfio analyze`` starts fast.
 _LAZY = {
-    "compute_bounds": ".bounds",
-    "BoundsReport": ".bounds_report",
-    "simulate": ".simulate",
-    "SimulationReport": ".simulate",
-    "expected_covariance": ".finite_horizon",
-    "FiniteHorizonReport": ".finite_horizon",
-    "SimulationLimits": ".sim_setup",
-    "DEFAULT_SIMULATION_LIMITS": ".sim_setup",
+    "compute_bounds": ".mare",
+    "BoundsReport": ".mare",
+    "simulate": ".simulation",
+    "SimulationReport": ".simulation",
+    "expected_covariance": ".simulation",
+    "FiniteHorizonReport": ".simulation",
+    "SimulationLimits": ".simulation",
+    "DEFAULT_SIMULATION_LIMITS": ".simulation",
 }
 
 
@@ -40,7 +40,7 @@ def __getattr__(name: str):
         value = getattr(importlib.import_module(_LAZY[name], __name__), name)
         globals()[name] = value
         return value
-    raise AttributeError(f"module 'analyzer' has no attribute {name!r}")
+    raise AttributeError(f"module 'kfio' has no attribute {name!r}")
 
 
 __all__ = [

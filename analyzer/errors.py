@@ -10,7 +10,7 @@ from __future__ import annotations
 
 
 class AnalyzerError(Exception):
-    """Base class of every error raised by :mod:`analyzer`."""
+    """Base class of every error raised by :mod:`kfio`."""
 
 
 class InvalidInput(AnalyzerError, ValueError):

@@ -24,13 +24,13 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from analyzer import riccati  # noqa: E402
-from analyzer.bounds import critical_lower_bound  # noqa: E402
-from analyzer.bounds_certificate import ExactPlant  # noqa: E402
-from analyzer.bounds_phat import BatchedMare, p_hat_sequence  # noqa: E402
-from analyzer.bounds_search import CertifiedSearch  # noqa: E402
-from analyzer.bounds_vech import vech  # noqa: E402
-from analyzer.lmi import StabilityLMI  # noqa: E402
+from kfio.mare import _riccati as riccati  # noqa: E402
+from kfio.mare._certificate import ExactPlant  # noqa: E402
+from kfio.mare._compute import critical_lower_bound  # noqa: E402
+from kfio.mare._lmi import StabilityLMI  # noqa: E402
+from kfio.mare._phat import BatchedMare, p_hat_sequence  # noqa: E402
+from kfio.mare._search import CertifiedSearch  # noqa: E402
+from kfio.mare._vech import vech  # noqa: E402
 
 
 class RebuildingSearch(CertifiedSearch):

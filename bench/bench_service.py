@@ -45,10 +45,11 @@ from typing import Callable
 
 import httpx
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
 
-from service.api.schemas import REQUEST_EXAMPLES  # noqa: E402
-from service.testing import SLOW_PATH, LiveServer, slow_request  # noqa: E402
+from kfio.service.api.schemas import REQUEST_EXAMPLES  # noqa: E402
+
+from support.live_server import SLOW_PATH, LiveServer, slow_request  # noqa: E402
 
 #: One-packet seed systems (per-sensor systems are left out: simulate/bounds treat them alike).
 SEEDS = [REQUEST_EXAMPLES[k]["value"] for k in ("seed004-scalar", "seed004-3x3", "seed002-2x2")]

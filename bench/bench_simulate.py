@@ -25,11 +25,11 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from analyzer import load_request  # noqa: E402
-from analyzer.finite_horizon import expected_covariance  # noqa: E402
-from analyzer.sim_kernel import GroupedRiccatiStep, RiccatiStep  # noqa: E402
-from analyzer.sim_setup import SimulationLimits, parse_options, sim_system  # noqa: E402
-from analyzer.simulate import run_monte_carlo, simulate  # noqa: E402
+from kfio import load_request  # noqa: E402
+from kfio.simulation._finite_horizon import expected_covariance  # noqa: E402
+from kfio.simulation._kernel import GroupedRiccatiStep, RiccatiStep  # noqa: E402
+from kfio.simulation._setup import SimulationLimits, parse_options, sim_system  # noqa: E402
+from kfio.simulation._simulate import run_monte_carlo, simulate  # noqa: E402
 
 SEED004 = {
     "A": [[1.25, 1, 0], [0, 0.9, 7], [0, 0, 0.6]],

@@ -22,7 +22,7 @@ import time
 import numpy as np
 import sympy
 
-from analyzer import analyze, load_request
+from kfio import analyze, load_request
 
 
 def rot(a, b):
@@ -72,7 +72,9 @@ def cases():
     A8, C8 = random_irreducible(8, 8)
     out.append(("random 8x8, irreducible octic", A8, C8, bern))
     # 12x12: rotation blocks of orders 4, 3, 6 and repeated Jordan blocks, all of modulus 2 -> one FMO class
-    A12 = blkdiag(rot(0, 2), [[-1, -3], [1, -1]], [[1, -3], [1, 1]], [[2, 1], [0, 2]], [[2, 1], [0, 2]], [[-2, 1], [0, -2]])
+    A12 = blkdiag(
+        rot(0, 2), [[-1, -3], [1, -1]], [[1, -3], [1, 1]], [[2, 1], [0, 2]], [[2, 1], [0, 2]], [[-2, 1], [0, -2]]
+    )
     rng = random.Random(12)
     C12 = [[rng.randint(-2, 2) for _ in range(12)] for _ in range(2)]
     A12o, C12o = obscure(A12, C12, 12)

@@ -1,1 +1,1 @@
-"""kfio's shells around :mod:`analyzer`: the ``kfio`` CLI and the HTTP service."""
+"""kfio's shells around :mod:`kfio`: the ``kfio`` CLI and the HTTP service."""

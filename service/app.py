@@ -1,7 +1,7 @@
 """The FastAPI application: ``create_app(settings)`` builds it, nothing at import.
 
-Run it with ``kfio serve`` (see :mod:`service.commands.serve`) or, for
-development, ``uvicorn --factory service.app:create_app``.
+Run it with ``kfio serve`` (see :mod:`kfio.service.commands.serve`) or, for
+development, ``uvicorn --factory kfio.service.app:create_app``.
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ from fastapi.exceptions import RequestValidationError
 from fastapi.openapi.utils import get_openapi
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
-from analyzer.errors import AnalyzerError
+from kfio.errors import AnalyzerError
 
 from .api import api_router
 from .api.schemas import COMPONENTS
@@ -41,7 +41,7 @@ Stability analysis of Kalman filters whose measurements travel over lossy packet
 
 
 def create_app(settings: Settings | None = None) -> FastAPI:
-    """Build the app for ``settings`` (default: :func:`service.settings.get_settings`).
+    """Build the app for ``settings`` (default: :func:`kfio.service.settings.get_settings`).
 
     The worker pool starts in the background when the app starts (``/readyz``
     says when it is up) and is killed when the app stops.

@@ -24,7 +24,7 @@ def canonical_json(tree: Any) -> str:
 
     Examples
     --------
-    >>> from analyzer import load_json
+    >>> from kfio import load_json
     >>> canonical_json(load_json('{"b": [1.10, "x"], "a": null}'))
     '{"a":null,"b":[1.10,"x"]}'
     """

@@ -1,7 +1,7 @@
 """The ``kfio`` command line: ``kfio analyze FILE [--json]`` and friends.
 
-Sub-commands live in :mod:`service.commands`, one module each, discovered at
-start-up.  Exit codes are listed in :mod:`service.exitcodes`.
+Sub-commands live in :mod:`kfio.service.commands`, one module each, discovered at
+start-up.  Exit codes are listed in :mod:`kfio.service.exitcodes`.
 """
 
 from __future__ import annotations
@@ -29,7 +29,6 @@ def build_parser() -> argparse.ArgumentParser:
         module = importlib.import_module(f"{commands.__name__}.{info.name}")
         module.register(sub)
     return parser
-
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -2,7 +2,7 @@
 
 The event loop does only cheap work here: read the body (bounded), parse its
 JSON once for the cache key, look up the cache.  Validation and analysis run
-in a worker via :func:`service.jobs.run_job`.  Identical requests that arrive
+in a worker via :func:`kfio.service.jobs.run_job`.  Identical requests that arrive
 while the first is still computing wait for the same computation.
 """
 
@@ -15,7 +15,7 @@ from typing import Any, Mapping
 from fastapi import Request
 from fastapi.responses import Response
 
-from analyzer import InvalidInput, load_json, parse_number
+from kfio import InvalidInput, load_json, parse_number
 
 from .cache import AnswerCache, CachedAnswer, canonical_json
 from .jobs import PRELOAD
@@ -66,7 +66,7 @@ class Dispatcher:
         self.settings = settings
         self.pool = WorkerPool(
             settings.workers,
-            "service.jobs:run_job",
+            "kfio.service.jobs:run_job",
             preload=PRELOAD,
             max_waiting=settings.max_queue,
             kill_grace_s=settings.kill_grace_s,

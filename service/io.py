@@ -7,7 +7,7 @@ import json
 import sys
 from typing import Any, Callable
 
-from analyzer.errors import BudgetExceeded, InvalidInput, NumericalFailure
+from kfio.errors import BudgetExceeded, InvalidInput, NumericalFailure
 
 from . import exitcodes
 

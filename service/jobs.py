@@ -2,12 +2,12 @@
 
 Each job takes the raw request bytes, parses them with
 :func:`analyzer.load_request` (numbers stay exact) and calls the same
-:mod:`analyzer` function the CLI calls.  The HTTP service runs jobs in worker
+:mod:`kfio` function the CLI calls.  The HTTP service runs jobs in worker
 processes through :func:`run_job`; the CLI may call :data:`JOBS` directly.
 
 Analyzer functions are looked up when a job runs (after the request is
 validated), not at import, so the service starts while a part of
-:mod:`analyzer` is still being written; such a job answers "501 not
+:mod:`kfio` is still being written; such a job answers "501 not
 implemented" instead of failing.
 
 Examples
@@ -25,7 +25,7 @@ import json
 import logging
 from typing import Any, Callable, Mapping
 
-from analyzer import Budget, Request, load_request
+from kfio import Budget, Request, load_request
 
 from .problems import Unavailable, problem_from_exception
 from .settings import Settings
@@ -34,7 +34,13 @@ log = logging.getLogger("kfio.service")
 
 #: Modules the workers' forkserver imports once, so that every worker, a
 #: replacement too, starts with them loaded (a missing one is skipped).
-PRELOAD = ("service.jobs", "service.plots", "analyzer.bounds", "analyzer.simulate", "matplotlib.figure")
+PRELOAD = (
+    "kfio.service.jobs",
+    "kfio.service.plots",
+    "kfio.mare._compute",
+    "kfio.simulation._simulate",
+    "matplotlib.figure",
+)
 
 JSON = "application/json"
 PNG = "image/png"
@@ -73,19 +79,19 @@ def parse(body: bytes, settings: Settings) -> Request:
 def analyze_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[str, Any]) -> JobOutput:
     """``kfio analyze``: the exact verdict (seed 001, Theorem 1)."""
     request = parse(body, settings)
-    return report_json(resolve("analyzer", "analyze")(request, budget=budget))
+    return report_json(resolve("kfio", "analyze")(request, budget=budget))
 
 
 def bounds_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[str, Any]) -> JobOutput:
     """``kfio bounds``: bounds on the critical probability and on ``E[P]``."""
     request = parse(body, settings)
-    return report_json(resolve("analyzer.bounds", "compute_bounds")(request, budget=budget))
+    return report_json(resolve("kfio.mare._compute", "compute_bounds")(request, budget=budget))
 
 
 def simulate_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[str, Any]) -> JobOutput:
     """``kfio simulate``: Monte Carlo error bands."""
     request = parse(body, settings)
-    return report_json(resolve("analyzer.simulate", "simulate")(request, budget=budget))
+    return report_json(resolve("kfio.simulation._simulate", "simulate")(request, budget=budget))
 
 
 def _plot_job(name: str) -> JobFn:
@@ -95,7 +101,7 @@ def _plot_job(name: str) -> JobFn:
         return getattr(plots, name)(parse(body, settings), budget, params), PNG
 
     job.__name__ = f"{name}_job"
-    job.__doc__ = f"PNG from :func:`service.plots.{name}`."
+    job.__doc__ = f"PNG from :func:`kfio.service.plots.{name}`."
     return job
 
 
@@ -116,7 +122,7 @@ def run_job(name: str, body: bytes, settings: Settings, params: Mapping[str, Any
     -------
     tuple
         ``("ok", content, media_type)``, or ``("problem", fields)`` where
-        ``fields`` rebuilds a :class:`service.problems.Problem`.
+        ``fields`` rebuilds a :class:`kfio.service.problems.Problem`.
     """
     try:
         fn = JOBS.get(name)

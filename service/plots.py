@@ -4,7 +4,7 @@ Figures are built with the object API (:class:`matplotlib.figure.Figure`),
 never ``pyplot``: no global state, no GUI backend.  Each function takes a
 validated request, a :class:`analyzer.Budget` and the plot's query
 parameters, and returns PNG bytes.  They compute nothing of their own:
-every value drawn comes from :mod:`analyzer` (the same calls as the CLI).
+every value drawn comes from :mod:`kfio` (the same calls as the CLI).
 """
 
 from __future__ import annotations
@@ -15,8 +15,8 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from analyzer import Budget, InvalidInput, Request
-from analyzer.model import MarkovChannel, PerSensorChannel, to_float
+from kfio import Budget, InvalidInput, Request
+from kfio.model._types import MarkovChannel, PerSensorChannel, to_float
 
 from .jobs import resolve
 
@@ -59,10 +59,10 @@ def _require_noise(request: Request, what: str) -> None:
 def simulation(request: Request, budget: Budget, params: Mapping[str, Any]) -> bytes:
     """``trace(P_t)`` against ``t``: mean with its 95% band, and the 50/90/99th percentiles.
 
-    Draws :func:`analyzer.simulate.simulate`'s report, and the exact
+    Draws :func:`kfio.simulation._simulate.simulate`'s report, and the exact
     ``E[P_t]`` when ``options.simulate.exact_steps`` asked for it.
     """
-    report = resolve("analyzer.simulate", "simulate")(request, budget=budget).to_dict()
+    report = resolve("kfio.simulation._simulate", "simulate")(request, budget=budget).to_dict()
     t = np.arange(report["steps"] + 1)
     fig = _figure()
     ax = fig.subplots()
@@ -97,10 +97,10 @@ def _value(node: Any) -> float | None:
 
 
 def _critical_values(request: Request, budget: Budget) -> dict[str, float | None]:
-    """Bounds on lambda_c (:func:`analyzer.bounds.compute_bounds`) and the exact value (:func:`analyzer.analyze`)."""
-    report = resolve("analyzer.bounds", "compute_bounds")(request, budget=budget).to_dict()
+    """Bounds on lambda_c (:func:`kfio.mare._compute.compute_bounds`) and the exact value (:func:`analyzer.analyze`)."""
+    report = resolve("kfio.mare._compute", "compute_bounds")(request, budget=budget).to_dict()
     crit = report.get("critical_probability") or {}
-    exact = resolve("analyzer", "analyze")(request, budget=budget).to_dict()
+    exact = resolve("kfio", "analyze")(request, budget=budget).to_dict()
     value = exact.get("critical_arrival_probability")
     return {
         "lower": _value(crit.get("lower")),
@@ -112,9 +112,9 @@ def _critical_values(request: Request, budget: Budget) -> dict[str, float | None
 def phase_transition(request: Request, budget: Budget, params: Mapping[str, Any]) -> bytes:
     """``trace(S_bar)`` and ``trace(V_bar)`` against lambda, critical values marked.
 
-    ``S_bar`` (:func:`analyzer.riccati.s_bar`, exists for lambda above the
+    ``S_bar`` (:func:`kfio.mare._riccati.s_bar`, exists for lambda above the
     lower bound) bounds the limit of ``E[P_t]`` from below and ``V_bar``
-    (:func:`analyzer.riccati.v_bar`, exists above the LMI bound) from above
+    (:func:`kfio.mare._riccati.v_bar`, exists above the LMI bound) from above
     (seed 004, Theorems 3-6).  Marked: the lower bound ``1 - 1/rho(A)^2``,
     the LMI upper bound and kfio's exact ``lambda_c`` (seed 001).
 
@@ -125,8 +125,8 @@ def phase_transition(request: Request, budget: Budget, params: Mapping[str, Any]
     """
     lam0 = _bernoulli_lambda(request, "phase transition")
     _require_noise(request, "phase transition")
-    s_bar = resolve("analyzer.riccati", "s_bar")
-    v_bar = resolve("analyzer.riccati", "v_bar")
+    s_bar = resolve("kfio.mare._riccati", "s_bar")
+    v_bar = resolve("kfio.mare._riccati", "v_bar")
     crit = _critical_values(request, budget)
     A, C, Q, R = (to_float(getattr(request.system, k)) for k in ("A", "C", "Q", "R"))
     lower = crit["lower"] or 0.0
@@ -168,7 +168,7 @@ def phase_transition(request: Request, budget: Budget, params: Mapping[str, Any]
 
 def _trace_or_nan(fn: Any, *args: Any) -> float:
     """``trace(fn(*args))``; NaN where the bound does not exist (``None``, non-finite, or refused)."""
-    from analyzer import AnalyzerError
+    from kfio import AnalyzerError
 
     try:
         value = fn(*args)
@@ -192,7 +192,7 @@ def region(request: Request, budget: Budget, params: Mapping[str, Any]) -> bytes
     the ``points`` parameter): unstable by the lower bound, stable by the LMI
     of seed 000.  Over it, kfio's exact labels for every cell and the exact
     boundary curve ``lambda_2 = h(lambda_1)``
-    (:func:`analyzer.regions.exact_region_grid`; MATH.md, "exact
+    (:func:`kfio.stability._regions.exact_region_grid`; MATH.md, "exact
     partial-loss regions", an extension of seed 001).
     """
     import dataclasses
@@ -202,10 +202,10 @@ def region(request: Request, budget: Budget, params: Mapping[str, Any]) -> bytes
     points = int(params.get("points", 21))
     grid_options = {**request.options.get("bounds", {}), "grid": points}
     gridded = dataclasses.replace(request, options={**request.options, "bounds": grid_options})
-    report = resolve("analyzer.bounds", "compute_bounds")(gridded, budget=budget).to_dict()["region"]
+    report = resolve("kfio.mare._compute", "compute_bounds")(gridded, budget=budget).to_dict()["region"]
     values = np.array(report["values"], dtype=float)
     labels = np.array([[_LABEL_CODE.get(x, 0.0) for x in row] for row in report["labels"]])
-    grid = resolve("analyzer.regions", "exact_region_grid")(request, points, budget=budget)
+    grid = resolve("kfio.stability._regions", "exact_region_grid")(request, points, budget=budget)
     exact = np.array([[_EXACT_CODE[x] for x in row] for row in grid.labels])
     return _draw_region(values, labels, exact, grid.curve, tuple(report["axes"]), request)
 
@@ -257,7 +257,10 @@ def _draw_region(
     ax.set_ylim(extent[2], extent[3])
     ax.set_xlabel(f"lambda_1 ({axes[0]})")
     ax.set_ylabel(f"lambda_2 ({axes[1]})")
-    ax.set_title("Stability region for two sensors: bounds (colours, seed 000)\n"
-                 "and exact verdict (markers, line: kfio extension of seed 001)", fontsize="medium")
+    ax.set_title(
+        "Stability region for two sensors: bounds (colours, seed 000)\n"
+        "and exact verdict (markers, line: kfio extension of seed 001)",
+        fontsize="medium",
+    )
     ax.legend(handles=handles, fontsize="x-small", loc="upper left", bbox_to_anchor=(1.01, 1.0))
     return _png(fig)

@@ -7,8 +7,8 @@ and a fresh worker takes the slot.  The event loop never computes and never
 blocks on a worker: it waits for the pipe with ``loop.add_reader``, so
 ``/healthz`` stays fast while every worker is busy.
 
-Workers are forked from a *forkserver* that has imported :mod:`service.jobs`
-(and with it :mod:`analyzer`, NumPy and SymPy) once, so a replacement worker
+Workers are forked from a *forkserver* that has imported :mod:`kfio.service.jobs`
+(and with it :mod:`kfio`, NumPy and SymPy) once, so a replacement worker
 is ready in milliseconds, and no worker inherits the server's threads.
 
 The worker protocol is pickled messages over the pipe.  A new worker says
@@ -40,7 +40,7 @@ _THREAD_ENV = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NU
 
 
 class PoolError(RuntimeError):
-    """Base of the pool's own failures (mapped to 503/504 by :mod:`service.problems`)."""
+    """Base of the pool's own failures (mapped to 503/504 by :mod:`kfio.service.problems`)."""
 
 
 class PoolBusy(PoolError):
@@ -135,7 +135,7 @@ class WorkerPool:
     --------
     ::
 
-        pool = WorkerPool(2, "service.jobs:run_job")
+        pool = WorkerPool(2, "kfio.service.jobs:run_job")
         await pool.start()
         value = await pool.run(("analyze", body, settings), budget_s=30)
         await pool.close()

@@ -33,7 +33,7 @@ from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
-from analyzer.errors import (
+from kfio.errors import (
     AnalyzerError,
     AssumptionViolation,
     BudgetExceeded,
@@ -122,7 +122,7 @@ class ProblemError(Exception):
 
 
 class Unavailable(RuntimeError):
-    """A part of :mod:`analyzer` a job needs does not exist (yet) in this build."""
+    """A part of :mod:`kfio` a job needs does not exist (yet) in this build."""
 
 
 def input_problem(kind: str, title: str, exc: InvalidInput) -> Problem:

@@ -1,7 +1,7 @@
 """Deployment settings of the HTTP service (pydantic-settings, env prefix ``KFIO_``).
 
 Nothing is read at import time: :func:`get_settings` builds the object on
-first use and caches it, and :func:`service.app.create_app` takes a
+first use and caches it, and :func:`kfio.service.app.create_app` takes a
 :class:`Settings` explicitly so tests pass their own.
 
 Examples
@@ -18,7 +18,7 @@ from functools import lru_cache
 from pydantic import Field
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
-from analyzer.limits import Limits
+from kfio.model._limits import Limits
 
 
 def _default_workers() -> int:
@@ -46,7 +46,7 @@ class Settings(BaseSettings):
     cache_entries, cache_bytes:
         Bounds of the in-memory LRU cache of answers.
     max_states, max_markov_order, max_digits, max_outputs, max_sensors:
-        Request size limits (:class:`analyzer.limits.Limits`).
+        Request size limits (:class:`kfio.model._limits.Limits`).
     """
 
     model_config = SettingsConfigDict(env_prefix="KFIO_", frozen=True, extra="ignore")
@@ -82,6 +82,6 @@ def get_settings() -> Settings:
     """The settings of this process, read from the environment once.
 
     Tests build their own :class:`Settings` and pass it to
-    :func:`service.app.create_app`, or call ``get_settings.cache_clear()``.
+    :func:`kfio.service.app.create_app`, or call ``get_settings.cache_clear()``.
     """
     return Settings()

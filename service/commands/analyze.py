@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from analyzer import analyze, load_request
+from kfio import analyze, load_request
 
 from .. import exitcodes
 from ..io import add_request_arguments, dump_json, read_request_text, run_guarded

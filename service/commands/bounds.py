@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import argparse
 
-from analyzer import load_request
-from analyzer.bounds import compute_bounds
+from kfio import load_request
+from kfio.mare._compute import compute_bounds
 
 from .. import exitcodes
 from ..io import add_request_arguments, dump_json, read_request_text, run_guarded

@@ -13,10 +13,10 @@ import argparse
 import dataclasses
 from typing import Any
 
-from analyzer import load_request
-from analyzer.model import Request
-from analyzer.sim_setup import packets_of
-from analyzer.simulate import simulate
+from kfio import load_request
+from kfio.model._types import Request
+from kfio.simulation._setup import packets_of
+from kfio.simulation._simulate import simulate
 
 from .. import exitcodes
 from ..io import add_request_arguments, dump_json, read_request_text, run_guarded

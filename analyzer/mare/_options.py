@@ -1,0 +1,198 @@
+"""Validation of what ``kfio bounds`` needs beyond a valid request.
+
+The request parser (:mod:`kfio.model._request`) has already checked shapes,
+``Q >= 0``, ``R > 0`` and that sensors partition the rows of ``C``.  Here:
+``Q`` and ``R`` must be present, every packet's channel must be i.i.d.
+(the bounds of seeds 004 and 000 are about Bernoulli losses), the LMI must
+fit the size limit, and ``request.options["bounds"]`` is checked key by key.
+Every error names its field as a JSON pointer.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from decimal import Decimal
+from fractions import Fraction
+from typing import Any, Mapping
+
+from ..errors import InvalidInput, LimitExceeded
+from ..model._exact import parse_number
+from ..model._request import option_group
+from ..model._types import MarkovChannel, PerSensorChannel, Request
+from ._phat import max_horizon
+
+DEFAULT_TOLERANCE = 1e-6
+MIN_TOLERANCE, MAX_TOLERANCE = 1e-9, 1e-1
+DEFAULT_HORIZON = 8
+MIN_GRID, MAX_GRID = 2, 41
+#: The stability LMI has ``n (2^m + 1)`` rows for ``n`` states and ``m`` packets.
+MAX_LMI_ROWS = 200
+
+_KEYS = ("tolerance", "horizon", "grid", "arrival_probability")
+_WHERE = "/options/bounds"
+
+
+@dataclass(frozen=True)
+class Packet:
+    """One measurement packet: its name (``None`` for a request without sensors) and rows of ``C``."""
+
+    name: str | None
+    rows: tuple[int, ...]
+
+
+@dataclass(frozen=True)
+class BoundsOptions:
+    """Validated options of the bounds command.
+
+    Attributes
+    ----------
+    packets:
+        The packets, in request order.
+    arrival:
+        Exact arrival probability of each packet (channel value or override).
+    tolerance:
+        Bisection tolerance for ``lambda_upper``.
+    horizon:
+        Largest ``N`` of seed 002's ``P_hat_N`` (one packet only), else ``None``.
+    grid:
+        Side ``K`` of the region map (two packets only), or ``None``.
+    """
+
+    packets: tuple[Packet, ...]
+    arrival: tuple[Fraction, ...]
+    tolerance: float
+    horizon: int | None
+    grid: int | None
+
+
+def _source(key: str, flags: Mapping[str, Any]) -> str:
+    return f" (given as --{key})" if key in flags else ""
+
+
+def _integer(value: Any, key: str, flags: Mapping[str, Any]) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, Decimal)) or int(value) != value:
+        raise InvalidInput(f"{_WHERE}/{key}", f"{key} must be an integer{_source(key, flags)}")
+    return int(value)
+
+
+def _iid(channel: MarkovChannel, where: str) -> Fraction:
+    lam = channel.bernoulli_lambda
+    if lam is None:
+        raise InvalidInput(
+            f"{where}/model",
+            f"the bounds of seeds 004 and 000 assume i.i.d. (Bernoulli) packet losses; this {channel.model} "
+            "channel has memory (use 'kfio analyze' for its exact verdict)",
+        )
+    return lam
+
+
+def _packets(request: Request) -> tuple[tuple[Packet, ...], tuple[Fraction, ...]]:
+    system, channel = request.system, request.channel
+    if isinstance(channel, PerSensorChannel):
+        assert system.sensors is not None  # guaranteed by parse_channel
+        lams = tuple(_iid(channel.for_sensor(s.name), f"/channel/channels/{s.name}") for s in system.sensors)
+        return tuple(Packet(s.name, s.rows) for s in system.sensors), lams
+    lam = _iid(channel, "/channel")
+    if system.sensors is not None:  # a single sensor carrying every row
+        s = system.sensors[0]
+        return (Packet(s.name, s.rows),), (lam,)
+    return (Packet(None, tuple(range(system.p))),), (lam,)
+
+
+def _arrival_overrides(raw: Any, packets: tuple[Packet, ...], lams: tuple[Fraction, ...]) -> tuple[Fraction, ...]:
+    where = f"{_WHERE}/arrival_probability"
+
+    def prob(x: Any, at: str) -> Fraction:
+        if isinstance(x, bool):
+            raise InvalidInput(at, "an arrival probability must be a number in [0, 1]")
+        v = parse_number(x, at)
+        if not 0 <= v <= 1:
+            raise InvalidInput(at, f"an arrival probability must lie in [0, 1]; got {float(v):g}")
+        return v
+
+    if len(packets) == 1:
+        if isinstance(raw, dict):
+            raise InvalidInput(where, "with one packet, arrival_probability is a number in [0, 1]")
+        return (prob(raw, where),)
+    if not isinstance(raw, dict):
+        raise InvalidInput(where, "with several sensors, arrival_probability maps sensor names to probabilities")
+    names = [p.name for p in packets]
+    out = list(lams)
+    for key, val in raw.items():
+        if key not in names:
+            raise InvalidInput(f"{where}/{key}", f"unknown sensor {key!r}; sensors are {names}")
+        out[names.index(key)] = prob(val, f"{where}/{key}")
+    return tuple(out)
+
+
+def parse_bounds_options(request: Request, flags: Mapping[str, Any] | None = None) -> BoundsOptions:
+    """Validate a request for the bounds command; ``flags`` (CLI) override ``options.bounds``.
+
+    Raises
+    ------
+    InvalidInput
+        Missing ``Q``/``R``, a channel with memory, or a bad option; the
+        field is ``/system/Q``, ``/channel/...`` or ``/options/bounds/<key>``.
+    LimitExceeded
+        The LMI would exceed :data:`MAX_LMI_ROWS` rows, a horizon or grid
+        beyond its limit.
+    """
+    flags = dict(flags or {})
+    system = request.system
+    if system.Q is None:
+        raise InvalidInput("/system/Q", "the bounds need the process noise covariance Q")
+    if system.R is None:
+        raise InvalidInput("/system/R", "the bounds need the measurement noise covariance R")
+    packets, lams = _packets(request)
+    n, m = system.n, len(packets)
+    if n * ((1 << m) + 1) > MAX_LMI_ROWS:
+        raise LimitExceeded(
+            "/system/sensors",
+            f"the stability LMI for {n} states and {m} sensors has n(2^m + 1) = {n * ((1 << m) + 1)} rows; "
+            f"the limit is {MAX_LMI_ROWS}",
+        )
+    raw = option_group(request, "bounds", _KEYS)
+    merged = {**raw, **{k: v for k, v in flags.items() if v is not None}}
+
+    tolerance = DEFAULT_TOLERANCE
+    if "tolerance" in merged:
+        at = f"{_WHERE}/tolerance"
+        if isinstance(merged["tolerance"], bool):
+            raise InvalidInput(at, "tolerance must be a number")
+        t = float(parse_number(merged["tolerance"], at))
+        if not MIN_TOLERANCE <= t <= MAX_TOLERANCE:
+            raise InvalidInput(
+                at,
+                f"tolerance must lie in [{MIN_TOLERANCE:g}, {MAX_TOLERANCE:g}]; got {t:g}{_source('tolerance', flags)}",
+            )
+        tolerance = t
+
+    limit = max_horizon(n)
+    horizon: int | None = min(DEFAULT_HORIZON, limit) if m == 1 else None
+    if "horizon" in merged:
+        at = f"{_WHERE}/horizon"
+        h = _integer(merged["horizon"], "horizon", flags)
+        if m != 1:
+            raise InvalidInput(at, f"P_hat_N (seed 002) is defined for one packet; this request has {m} sensors")
+        if h < 1:
+            raise InvalidInput(at, f"horizon must be at least 1{_source('horizon', flags)}")
+        if h > limit:
+            raise LimitExceeded(
+                at,
+                f"horizon {h} exceeds the limit {limit} for {n} states (g_N costs 2^N n^4/4){_source('horizon', flags)}",
+            )
+        horizon = h
+
+    grid = None
+    if "grid" in merged:
+        at = f"{_WHERE}/grid"
+        k = _integer(merged["grid"], "grid", flags)
+        if m != 2:
+            raise InvalidInput(at, f"the region map needs exactly two sensors; this request has {m}")
+        if not MIN_GRID <= k <= MAX_GRID:
+            raise LimitExceeded(at, f"grid must lie in [{MIN_GRID}, {MAX_GRID}]; got {k}{_source('grid', flags)}")
+        grid = k
+
+    if "arrival_probability" in merged:
+        lams = _arrival_overrides(merged["arrival_probability"], packets, lams)
+    return BoundsOptions(packets, lams, tolerance, horizon, grid)

@@ -1,0 +1,25 @@
+"""The plant and channel model, and the one route from user input to it.
+
+Exact rationals from decimal text (:func:`parse_number`), the single validator
+(:func:`parse_request`, :func:`load_request`) and the typed request objects.
+"""
+
+from ._exact import fraction_text, load_json, parse_number
+from ._limits import DEFAULT_LIMITS, Limits
+from ._request import load_request, parse_request
+from ._types import MarkovChannel, PerSensorChannel, Request, Sensor, System
+
+__all__ = [
+    "DEFAULT_LIMITS",
+    "Limits",
+    "MarkovChannel",
+    "PerSensorChannel",
+    "Request",
+    "Sensor",
+    "System",
+    "fraction_text",
+    "load_json",
+    "load_request",
+    "parse_number",
+    "parse_request",
+]

@@ -1,0 +1,348 @@
+"""Monte Carlo simulation of the stochastic Riccati recursion.
+
+Seed 001, eqs. (2)-(5): ``P_{t+1} = Phi_{g_t}(P_t)`` where ``g_t`` is the
+(random) arrival of the packets sent at ``t``; with several packets
+``Phi_S`` uses the rows of the packets in ``S`` (MATH.md section 1).  We draw
+``M`` independent arrival processes from the request's channel and propagate
+``M`` covariances at once, as one ``(M, n, n)`` array
+(:func:`kfio.simulation._kernel.riccati_update`).  At every ``t = 0..T`` we
+record statistics of ``trace(P_t)`` over the trajectories: the mean with a
+95% confidence band (normal approximation, ``mean +- 1.96 s / sqrt(M)``) and
+the 50th, 90th and 99th percentiles.
+
+Channel histories before ``t = 0`` follow ``options.simulate.
+initial_channel`` (default: the stationary distribution, see
+:mod:`kfio.simulation._setup`).  The generator is ``numpy.random.Generator(
+PCG64(seed))``: the same request and seed give the same report.
+
+Overflow.  A trajectory whose trace exceeds
+:data:`kfio.simulation._kernel.DIVERGENCE_TRACE` (or turns non-finite), or whose
+measurement update has an innovation ratio above
+:data:`kfio.simulation._kernel.PRECISION_RATIO` (float64 can no longer carry its
+posterior), is marked diverged and counts as ``+inf`` from then on.  In a
+stable regime neither happens in practice: the chance that a trajectory
+reaches a ratio ``X`` decays like a power of ``X`` above 1.  The mean is reported as
+``null`` from the first step at which any trajectory diverged
+(``mean_diverged_at``); a percentile is ``null`` once more than its tail of
+trajectories diverged.
+
+The confidence band is only as good as the central limit theorem: when
+``trace(P_t)`` is heavy-tailed (near or past the stability threshold) the
+sample mean is dominated by rare trajectories and the band is too narrow;
+read the percentiles, and use :mod:`kfio.simulation._finite_horizon` for exact means
+at short horizons.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from .._budget import Budget
+from ..model._types import Request
+from ._channel import JointChannel
+from ._finite_horizon import FiniteHorizonReport, expected_covariance
+from ._kernel import PRECISION_RATIO, GroupedRiccatiStep, RiccatiStep, healthy, traces
+from ._setup import (
+    DEFAULT_SIMULATION_LIMITS,
+    PERCENTILES,
+    SimSystem,
+    SimulateOptions,
+    SimulationLimits,
+    finite_or_none,
+    matrix_or_none,
+    parse_options,
+    sim_system,
+)
+
+#: Two-sided 95% quantile of the standard normal distribution.
+Z95 = 1.959963984540054
+
+
+@dataclass(frozen=True, eq=False)
+class TraceStatistics:
+    """Per-step statistics of ``trace(P_t)``, ``t = 0..T`` (NaN where undefined)."""
+
+    mean: np.ndarray
+    std: np.ndarray
+    percentiles: np.ndarray  # (len(PERCENTILES), T + 1); +inf where the percentile diverged
+    diverged: np.ndarray  # (T + 1,) trajectories diverged by t
+    trajectories: int
+
+    @property
+    def sem(self) -> np.ndarray:
+        """Standard error of the mean."""
+        return self.std / math.sqrt(self.trajectories)
+
+
+@dataclass(frozen=True, eq=False)
+class MonteCarloRun:
+    """Raw output of :func:`run_monte_carlo`."""
+
+    stats: TraceStatistics
+    final_mean_covariance: np.ndarray | None
+    arrival_rate: np.ndarray  # empirical, per packet
+
+
+@dataclass(frozen=True, eq=False)
+class SimulationReport:
+    """What ``kfio simulate`` reports.
+
+    Attributes
+    ----------
+    options:
+        The validated options (steps, trajectories, seed, P0, ...).
+    stats:
+        Per-step statistics of ``trace(P_t)``.
+    final_mean_covariance:
+        Sample mean of ``P_T``; ``None`` if a trajectory diverged.
+    arrival_rate, stationary_arrival_rate:
+        Observed and long-run fraction of arrivals per packet (a check on the
+        channel sampler).
+    packet_names:
+        Packet names (``""`` for the one-packet case).
+    exact:
+        Exact ``E[P_t]`` (seed 001, eq. (7)) when ``exact_steps`` was asked.
+    """
+
+    options: SimulateOptions
+    stats: TraceStatistics
+    final_mean_covariance: np.ndarray | None
+    arrival_rate: np.ndarray
+    stationary_arrival_rate: np.ndarray
+    packet_names: tuple[str, ...]
+    exact: FiniteHorizonReport | None = None
+
+    @property
+    def mean_trace(self) -> np.ndarray:
+        return self.stats.mean
+
+    @property
+    def ci95(self) -> tuple[np.ndarray, np.ndarray]:
+        """Lower and upper 95% band of the mean (normal approximation).
+
+        The lower end is clipped at 0, since ``trace(P_t) >= 0``.
+        """
+        half = Z95 * self.stats.sem
+        return np.maximum(self.stats.mean - half, 0.0), self.stats.mean + half
+
+    def percentile(self, q: int) -> np.ndarray:
+        """The ``q``-th percentile of ``trace(P_t)`` over time (``+inf`` where diverged)."""
+        return self.stats.percentiles[PERCENTILES.index(q)]
+
+    @property
+    def mean_diverged_at(self) -> int | None:
+        """First ``t`` at which some trajectory had diverged, or ``None``."""
+        return _first(self.stats.diverged > 0)
+
+    def exact_agreement(self) -> dict[str, Any] | None:
+        """How the Monte Carlo mean compares with the exact ``E[P_t]``.
+
+        ``z_t = (mean_t - E_t) / sem_t`` over the common, finite steps; about
+        95% of them should lie within the band if both routes are right.
+        """
+        if self.exact is None:
+            return None
+        k = min(self.exact.steps, self.options.steps)
+        exact = self.exact.mean_trace[: k + 1]
+        mean, sem = self.stats.mean[: k + 1], self.stats.sem[: k + 1]
+        ok = np.isfinite(exact) & np.isfinite(mean)
+        diff = np.abs(mean - exact)
+        tol = 1e-9 * np.maximum(np.abs(exact), 1.0)
+        z = np.where(sem > 0, diff / np.where(sem > 0, sem, 1.0), np.where(diff <= tol, 0.0, np.inf))
+        z = z[ok]
+        return {
+            "steps_compared": int(ok.sum()),
+            "within_ci95": int((z <= Z95).sum()),
+            "max_abs_z": finite_or_none(z.max()) if z.size else None,
+        }
+
+    def to_dict(self) -> dict[str, Any]:
+        low, high = self.ci95
+        o = self.options
+        return {
+            "steps": o.steps,
+            "trajectories": o.trajectories,
+            "seed": o.seed,
+            "initial_channel": o.initial_channel,
+            "P0": "Q" if o.P0_is_default else matrix_or_none(o.P0),
+            "mean_trace": _series(self.stats.mean),
+            "ci95_low": _series(low),
+            "ci95_high": _series(high),
+            "percentiles": {str(q): _series(self.percentile(q)) for q in PERCENTILES},
+            "diverged": self.mean_diverged_at is not None,
+            "mean_diverged_at": self.mean_diverged_at,
+            "percentile_diverged_at": {str(q): _first(~np.isfinite(self.percentile(q))) for q in PERCENTILES},
+            "diverged_trajectories": int(self.stats.diverged[-1]),
+            "final_mean_covariance": matrix_or_none(self.final_mean_covariance),
+            "checks": {
+                "arrival_rate": {
+                    name or "packet": {"observed": float(a), "stationary": float(s)}
+                    for name, a, s in zip(self.packet_names, self.arrival_rate, self.stationary_arrival_rate)
+                },
+                "exact_agreement": self.exact_agreement(),
+            },
+            "exact": None if self.exact is None else self.exact.to_dict(),
+        }
+
+    def summary(self) -> str:
+        o = self.options
+        low, high = self.ci95
+        lines = [
+            f"Monte Carlo: {o.trajectories} trajectories x {o.steps} steps, seed {o.seed}, "
+            f"channel history at t = 0: {o.initial_channel}, P0 = {'Q' if o.P0_is_default else 'given'}",
+            f"{'t':>6}  {'mean trace(P_t)':>14}  {'95% band':>25}  {'median':>11}  {'90%':>11}  {'99%':>11}",
+        ]
+        for t in _display_times(o.steps):
+            band = f"[{_fmt(low[t])}, {_fmt(high[t])}]"
+            lines.append(
+                f"{t:6d}  {_fmt(self.stats.mean[t]):>14}  {band:>25}  {_fmt(self.percentile(50)[t]):>11}"
+                f"  {_fmt(self.percentile(90)[t]):>11}  {_fmt(self.percentile(99)[t]):>11}"
+            )
+        if self.mean_diverged_at is not None:
+            lines.append(
+                f"the mean diverged at t = {self.mean_diverged_at}: by t = {o.steps}, {int(self.stats.diverged[-1])} of "
+                f"{o.trajectories} trajectories left float64's range (trace above 1e150, or an update that "
+                "cancels more than 12 digits)"
+            )
+        agree = self.exact_agreement()
+        if agree is not None and self.exact is not None:
+            max_z = agree["max_abs_z"]
+            lines.append(
+                f"exact E[P_t] (t <= {self.exact.steps}): inside the 95% band at {agree['within_ci95']} of "
+                f"{agree['steps_compared']} steps (max |z| = {'n/a' if max_z is None else f'{max_z:.3g}'})"
+            )
+        return "\n".join(lines)
+
+
+def _first(flags: np.ndarray) -> int | None:
+    idx = np.flatnonzero(flags)
+    return int(idx[0]) if idx.size else None
+
+
+def _series(x: np.ndarray) -> list[float | None]:
+    return [finite_or_none(v) for v in x]
+
+
+def _fmt(x: float) -> str:
+    return f"{x:.5g}" if math.isfinite(x) else "diverged"
+
+
+def _display_times(steps: int, rows: int = 10) -> list[int]:
+    return sorted({round(k * steps / rows) for k in range(rows + 1)})
+
+
+def _record(tr: np.ndarray, alive: np.ndarray) -> tuple[float, float, np.ndarray]:
+    """Mean, standard deviation and percentiles of the traces (diverged = +inf)."""
+    tr = np.where(alive, tr, np.inf)
+    qs = np.quantile(tr, np.array(PERCENTILES) / 100.0, method="inverted_cdf")
+    if not alive.all():
+        return math.nan, math.nan, qs
+    return float(tr.mean()), float(tr.std(ddof=1)), qs
+
+
+def run_monte_carlo(
+    sim: SimSystem,
+    opts: SimulateOptions,
+    budget: Budget | None = None,
+    update: RiccatiStep | GroupedRiccatiStep | None = None,
+) -> MonteCarloRun:
+    """Propagate ``opts.trajectories`` covariances for ``opts.steps`` steps.
+
+    ``update`` is the batched Riccati step; default the masked
+    :class:`kfio.simulation._kernel.RiccatiStep` (the benchmark also passes
+    :class:`kfio.simulation._kernel.GroupedRiccatiStep`).
+    """
+    step = update or RiccatiStep.build(sim.A, sim.Q, sim.C, sim.R)
+    rng = np.random.Generator(np.random.PCG64(opts.seed))
+    chan = JointChannel.from_packets(sim.packets)
+    M, T = opts.trajectories, opts.steps
+    hist = chan.sample_initial(opts.initial_channel, M, rng)
+    P = np.broadcast_to(opts.P0, (M, sim.n, sim.n)).copy()
+    alive = np.ones(M, dtype=bool)
+    mean, std = np.empty(T + 1), np.empty(T + 1)
+    pct = np.empty((len(PERCENTILES), T + 1))
+    diverged = np.zeros(T + 1, dtype=np.int64)
+    arrivals = np.zeros(chan.m)
+    with np.errstate(all="ignore"):
+        mean[0], std[0], pct[:, 0] = _record(traces(P), alive)
+        for t in range(T):
+            if budget is not None:
+                budget.tick("Monte Carlo simulation", M)
+            g = rng.random((M, chan.m)) < chan.arrival_probability(hist)
+            arrivals += g.sum(axis=0)
+            P, ratio = step.apply(P, g.astype(float) if chan.m == 1 else sim.row_mask(g))
+            hist = chan.advance(hist, g)
+            tr = traces(P)
+            ok = healthy(P, tr) & (ratio <= PRECISION_RATIO)
+            if not ok[alive].all():
+                alive &= ok
+                P[~alive] = 0.0  # frozen: keeps NaN and overflow out of later arithmetic
+            diverged[t + 1] = M - int(alive.sum())
+            mean[t + 1], std[t + 1], pct[:, t + 1] = _record(tr, alive)
+    final = P.mean(axis=0) if alive.all() else None
+    stats = TraceStatistics(mean=mean, std=std, percentiles=pct, diverged=diverged, trajectories=M)
+    return MonteCarloRun(stats=stats, final_mean_covariance=final, arrival_rate=arrivals / (M * T))
+
+
+def simulate(
+    request: Request,
+    budget: Budget | None = None,
+    limits: SimulationLimits = DEFAULT_SIMULATION_LIMITS,
+) -> SimulationReport:
+    """Monte Carlo statistics of ``trace(P_t)`` (and exact ``E[P_t]`` if asked).
+
+    Parameters
+    ----------
+    request:
+        A validated request with ``Q`` and ``R``; ``options.simulate`` holds
+        steps, trajectories, seed, P0, exact_steps and initial_channel (see
+        :mod:`kfio.simulation._setup`).
+    budget:
+        Work budget; default: ``request.time_budget_s`` if given.
+    limits:
+        Size limits (the service passes its own).
+
+    Returns
+    -------
+    SimulationReport
+
+    Raises
+    ------
+    InvalidInput
+        ``Q``/``R`` missing, invalid options (field under ``/options/simulate``).
+    LimitExceeded
+        Over ``limits``.
+    BudgetExceeded
+        The budget ran out.
+
+    Examples
+    --------
+    >>> from kfio import load_request
+    >>> req = load_request('{"system": {"A": [[1.2]], "C": [[1]], "Q": [[1]], "R": [[1]]},'
+    ...                    ' "channel": {"model": "bernoulli", "arrival_probability": 0.5},'
+    ...                    ' "options": {"simulate": {"steps": 20, "trajectories": 1000, "seed": 1}}}')
+    >>> rep = simulate(req)
+    >>> rep.mean_trace.shape, rep.mean_diverged_at
+    ((21,), None)
+    """
+    sim = sim_system(request)
+    opts = parse_options(request, limits)
+    if budget is None and request.time_budget_s is not None:
+        budget = Budget(seconds=request.time_budget_s)
+    exact = None
+    if opts.exact_steps is not None:
+        exact = expected_covariance(request, opts.exact_steps, budget, limits)
+    run = run_monte_carlo(sim, opts, budget)
+    return SimulationReport(
+        options=opts,
+        stats=run.stats,
+        final_mean_covariance=run.final_mean_covariance,
+        arrival_rate=run.arrival_rate,
+        stationary_arrival_rate=JointChannel.from_packets(sim.packets).stationary_arrival_rates(),
+        packet_names=tuple(pk.name for pk in sim.packets),
+        exact=exact,
+    )
