@@ -258,8 +258,8 @@ def _draw_region(
     ax.set_xlabel(f"lambda_1 ({axes[0]})")
     ax.set_ylabel(f"lambda_2 ({axes[1]})")
     ax.set_title(
-        "Stability region for two sensors: bounds (colours, seed 000)\n"
-        "and exact verdict (markers, line: kfio extension of seed 001)",
+        "Stability region for two sensors: bounds (colours, Liu and Goldsmith 2004)\n"
+        "and exact verdict (markers, line: kfio extension of Rohr, Marelli and Fu 2014)",
         fontsize="medium",
     )
     ax.legend(handles=handles, fontsize="x-small", loc="upper left", bbox_to_anchor=(1.01, 1.0))

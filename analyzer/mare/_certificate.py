@@ -85,7 +85,8 @@ class StabilityCertificate:
         )
         return {
             "method": self.method,
-            "checked": checked + " (seed 004 Theorem 5(b); seed 000 Theorem 5(b) for several packets)",
+            "checked": checked
+            + " (Sinopoli et al. 2004, Theorem 5(b); Liu and Goldsmith 2004, Theorem 5(b) for several packets)",
             "at": [str(x) for x in self.lambdas],
             "margin": _finite(self.margin),
             "closed_loop_spectral_radius_at_most": _finite(1.0 - self.margin),

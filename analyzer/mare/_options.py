@@ -80,7 +80,7 @@ def _iid(channel: MarkovChannel, where: str) -> Fraction:
     if lam is None:
         raise InvalidInput(
             f"{where}/model",
-            f"the bounds of seeds 004 and 000 assume i.i.d. (Bernoulli) packet losses; this {channel.model} "
+            f"the bounds of Sinopoli et al. 2004 and Liu and Goldsmith 2004 assume i.i.d. (Bernoulli) packet losses; this {channel.model} "
             "channel has memory (use 'kfio analyze' for its exact verdict)",
         )
     return lam
@@ -173,7 +173,9 @@ def parse_bounds_options(request: Request, flags: Mapping[str, Any] | None = Non
         at = f"{_WHERE}/horizon"
         h = _integer(merged["horizon"], "horizon", flags)
         if m != 1:
-            raise InvalidInput(at, f"P_hat_N (seed 002) is defined for one packet; this request has {m} sensors")
+            raise InvalidInput(
+                at, f"P_hat_N (Rohr, Marelli and Fu 2010) is defined for one packet; this request has {m} sensors"
+            )
         if h < 1:
             raise InvalidInput(at, f"horizon must be at least 1{_source('horizon', flags)}")
         if h > limit:

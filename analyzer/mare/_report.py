@@ -63,7 +63,7 @@ class CriticalInterval:
                 "certificate": {
                     "method": "closed_form",
                     "checked": "rho(A) from numpy.linalg.eigvals; below this value the Lyapunov lower bound "
-                    "S_bar diverges (seed 004 Theorem 3, seed 000 Theorem 3)",
+                    "S_bar diverges (Sinopoli et al. 2004, Theorem 3; Liu and Goldsmith 2004, Theorem 3)",
                 },
             },
             "upper": {
@@ -125,7 +125,7 @@ class CovarianceBounds:
                 "trace": _trace(it.matrix),
                 "reason": it.reason,
                 "iteration": {
-                    "method": "monotone iteration from 0 (seed 004 Theorem 6(a)), finished by monotone policy "
+                    "method": "monotone iteration from 0 (Sinopoli et al. 2004, Theorem 6(a)), finished by monotone policy "
                     "iteration from above; the two bracket V_bar",
                     "iterations": it.iterations,
                     "policy_iteration_steps": it.newton_steps,
@@ -186,7 +186,7 @@ class PHatBounds:
             )
         return {
             "horizon": self.horizon,
-            "method": "fixed point of g_N (seed 002 eqs. 11, 15, 22), g_N evaluated level by level on batches",
+            "method": "fixed point of g_N (Rohr, Marelli and Fu 2010, eqs. 11, 15, 22), g_N evaluated level by level on batches",
             "entries": out,
             "monotone_subsequences_hold": self.subsequences_monotone(),
         }
@@ -210,8 +210,8 @@ class RegionMap:
             "labels": [list(row) for row in self.labels],
             "indexing": "labels[i][j] is the cell lambda_1 = values[i], lambda_2 = values[j]",
             "legend": {
-                "stable": "the LMI (seed 000 eq. 20) is feasible, by a re-checked certificate at this cell or at a "
-                "cell below it in both coordinates (feasibility is monotone, seed 000 Lemma 3)",
+                "stable": "the LMI (Liu and Goldsmith 2004, eq. 20) is feasible, by a re-checked certificate at this cell or at a "
+                "cell below it in both coordinates (feasibility is monotone, Liu and Goldsmith 2004, Lemma 3)",
                 "unstable": "prod_s (1 - lambda_s) rho(A)^2 >= 1: the lower bound diverges",
                 "undecided": "neither bound decides",
             },
@@ -271,7 +271,7 @@ class BoundsReport:
             "variance_threshold": {
                 "value": num(self.variance_threshold),
                 "formula": "max(0, 1 - 1/rho(A)^4)",
-                "meaning": "finite asymptotic variance of P_t needs lambda above this (seed 002 Theorem 4)",
+                "meaning": "finite asymptotic variance of P_t needs lambda above this (Rohr, Marelli and Fu 2010, Theorem 4)",
             }
             if one
             else None,
@@ -286,12 +286,12 @@ class BoundsReport:
         if not self.one_packet:
             notes.append(
                 "several sensors: critical_probability is per sensor, see sensors[*].critical_interval; "
-                "P_hat_N and the variance threshold are one-packet results (seed 002)"
+                "P_hat_N and the variance threshold are one-packet results (Rohr, Marelli and Fu 2010)"
             )
         bad = [k for k in ("A_Q_controllable", "A_C_detectable") if self.hypotheses.get(k) is False]
         if bad:
             notes.append(
-                f"hypotheses of seed 004 Theorems 2-5 fail ({', '.join(bad)}): the bounds are computed "
+                f"hypotheses of Sinopoli et al. 2004, Theorems 2-5 fail ({', '.join(bad)}): the bounds are computed "
                 "but those theorems do not cover them"
             )
         return notes
@@ -314,7 +314,7 @@ class BoundsReport:
             lines.append(f"  {c.lower:.9g} (closed form) <= {who} <= {upper}")
         lines.append(f"  at the operating point: {self.verdict} ({self.verdict_reason})")
         if self.variance_threshold is not None:
-            lines.append(f"  finite variance needs lambda > {self.variance_threshold:.6g} (seed 002)")
+            lines.append(f"  finite variance needs lambda > {self.variance_threshold:.6g} (Rohr, Marelli and Fu 2010)")
         cov = self.covariance
         s = cov.s_bar
         s_text = f"trace {np.trace(s):.6g}" if s is not None else "none"
@@ -336,7 +336,7 @@ class BoundsReport:
                 t = float(np.trace(e.matrix))
                 t1 = t if e.N == 1 else t1
                 parts.append(f"N={e.N}: {t:.6g}" + (f" ({100 * (1 - t / t1):+.1f}%)" if t1 and e.N > 1 else ""))
-            lines.append("  P_hat_N traces (seed 002): " + ", ".join(parts))
+            lines.append("  P_hat_N traces (Rohr, Marelli and Fu 2010): " + ", ".join(parts))
         if self.region is not None:
             r = self.region
             lines.append(

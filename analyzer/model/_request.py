@@ -361,6 +361,6 @@ def require_assumption_1(channel: Channel) -> None:
                     fld = f"{base}/arrival_probability/{format(h, f'0{ch.order}b') if ch.order else ''}"
                 raise AssumptionViolation(
                     fld,
-                    "Assumption 1 of seed 001 requires every conditional arrival probability to lie strictly "
+                    "Assumption 1 of Rohr, Marelli and Fu 2014 requires every conditional arrival probability to lie strictly "
                     f"between 0 and 1 (got {int(x)}); Theorem 1 gives no verdict for this channel",
                 )

@@ -69,8 +69,8 @@ from ._sigma import SigmaResult
 VERDICTS = ("stable", "boundary", "unstable")
 BASIS = "extension"
 STATEMENT = (
-    "seed 001's FMO construction applied to separately lost Bernoulli packets (MATH.md section 3, "
-    "'Beyond the seeds: exact partial-loss regions'); not a theorem of the seeds"
+    "the FMO construction of Rohr, Marelli and Fu 2014 applied to separately lost Bernoulli packets "
+    "(docs/theory.md, 'Per-sensor exact regions'); a kfio extension, not a theorem of the papers"
 )
 
 
@@ -378,7 +378,7 @@ class RegionGrid:
                 "boundary": "the largest block rate is exactly 1: the theorem's gap",
             },
             "edge_cells": (
-                "cells with lambda = 0 or 1 lie outside seed 001's Assumption 1; they are labelled by the same "
+                "cells with lambda = 0 or 1 lie outside Assumption 1 of Rohr, Marelli and Fu 2014; they are labelled by the same "
                 "formula (0^0 = 1: a sensor that always arrives removes every pattern that misses it)"
             ),
             "certified": self.certified,

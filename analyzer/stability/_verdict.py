@@ -13,7 +13,7 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Any, Optional, Sequence
+from typing import Any, Mapping, Optional, Sequence
 
 import mpmath
 import sympy
@@ -22,6 +22,7 @@ from .._budget import Budget
 from ..errors import InvalidInput
 from ..model._request import require_assumption_1
 from ..model._types import MarkovChannel, PerSensorChannel, Request, System, to_domain
+from ..structure._display import SHORT_TEXT_CHARS, algebraic_degree, short_text
 from ..structure._fmo import FmoBlock, fmo_blocks
 from ._decide import bernoulli_factor, compare_rate_bernoulli, compare_rate_markov
 from ._regions import region_report
@@ -87,12 +88,17 @@ class StabilityReport:
     assumptions: tuple[str, ...] = ()
     warnings: tuple[str, ...] = ()
     regions: Optional[dict[str, Any]] = None
+    #: Short forms of long exact texts for :meth:`summary` (never in the JSON).
+    display: Mapping[str, str] = field(default_factory=dict, repr=False, compare=False)
+
+    def _short(self, text: str, value: complex | float) -> str:
+        return self.display.get(text) or short_text(text, value)
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON report (stable field names; see README)."""
         return {
             "verdict": self.verdict,
-            "theorem": "seed 001 (Rohr, Marelli, Fu), Theorem 1",
+            "theorem": "Rohr, Marelli and Fu 2014, Theorem 1",
             "blocks": [b.to_dict() for b in self.blocks],
             "critical_arrival_probability": self.critical_arrival_probability,
             "critical_arrival_probability_exact": self.critical_arrival_probability_exact,
@@ -105,15 +111,15 @@ class StabilityReport:
 
     def summary(self) -> str:
         """Readable multi-line summary for the terminal."""
-        lines = [f"verdict: {self.verdict.upper()}  (seed 001, Theorem 1)"]
+        lines = [f"verdict: {self.verdict.upper()}  (Rohr, Marelli and Fu 2014, Theorem 1)"]
         if self.critical_arrival_probability_exact is not None:
             lines.append(
                 f"critical arrival probability: {self.critical_arrival_probability:.6g}"
-                f"  (exact: {self.critical_arrival_probability_exact})"
+                f"  (exact: {self._short(self.critical_arrival_probability_exact, self.critical_arrival_probability)})"
             )
-        lines.append("FMO blocks (largest modulus first):")
+        lines.append("finite multiplicative order (FMO) blocks, largest modulus first:")
         for b in self.blocks:
-            eig = ", ".join(b.eigenvalues)
+            eig = ", ".join(self._short(t, z) for t, z in zip(b.eigenvalues, b.eigenvalues_numeric))
             if b.rate is None:
                 lines.append(
                     f"  [{b.verdict}] eigenvalues {eig}: |alpha| = {b.modulus:.6g} < 1, stable for any channel"
@@ -127,7 +133,8 @@ class StabilityReport:
             )
         for s in (self.regions or {}).get("sensors", []):
             if s.get("status") == "threshold":
-                crit = f"{s['critical_arrival_probability']:.6g} (exact: {s['critical_arrival_probability_exact']})"
+                exact = self._short(s["critical_arrival_probability_exact"], s["critical_arrival_probability"])
+                crit = f"{s['critical_arrival_probability']:.6g} (exact: {exact})"
             else:
                 crit = {"zero": "0 (any arrival probability)", "none": "none: no arrival probability suffices"}.get(
                     s.get("status"), str(s.get("status"))
@@ -259,7 +266,9 @@ def _bernoulli_exponents(F: frozenset, N: int, groups: int) -> tuple[Fraction, .
     return tuple(Fraction(N - sum(1 for n, g in F if g == grp), N) for grp in range(groups))
 
 
-def _critical_probability(blocks: Sequence[BlockReport]) -> tuple[float | None, str | None, list[str]]:
+def _critical_probability(
+    blocks: Sequence[BlockReport], display: dict[str, str]
+) -> tuple[float | None, str | None, list[str]]:
     """Seed 001, Corollary 2 + Theorem 1: ``lambda_c = max_k 1 - beta_k^(-N_k / z_k)``."""
     warnings: list[str] = []
     best: tuple[mpmath.mpf, Any] | None = None
@@ -284,7 +293,10 @@ def _critical_probability(blocks: Sequence[BlockReport]) -> tuple[float | None, 
         return 0.0, "0", warnings
     if best[0] < 0:
         return 0.0, "0", warnings
-    return float(best[0]), str(best[1]), warnings
+    text = str(best[1])
+    if len(text) > SHORT_TEXT_CHARS:
+        display[text] = short_text(text, float(best[0]), algebraic_degree(best[1]))
+    return float(best[0]), text, warnings
 
 
 def _parse_options(request: Request) -> None:
@@ -340,12 +352,13 @@ def analyze(request: Request, budget: Budget | None = None) -> StabilityReport:
     assumptions: list[str] = []
     if basis == "extension":
         assumptions.append(
-            "per-sensor channels: seed 001's construction applied to separately lost packets "
-            "(MATH.md section 3, 'Beyond the seeds'); not a theorem of the seeds"
+            "per-sensor channels: the construction of Rohr, Marelli and Fu 2014 applied to separately lost packets "
+            "(docs/theory.md, 'Per-sensor exact regions'); a kfio extension, not a theorem of the papers"
         )
     crit = crit_exact = None
+    display: dict[str, str] = {}
     if len(channels) == 1 and channels[0].model == "bernoulli":
-        crit, crit_exact, w = _critical_probability(blocks)
+        crit, crit_exact, w = _critical_probability(blocks, display)
         warnings.extend(w)
     controllable = _controllable(system)
     if controllable is False:
@@ -365,6 +378,7 @@ def analyze(request: Request, budget: Budget | None = None) -> StabilityReport:
         system={"n": system.n, "p": system.p, "controllable_A_Q": controllable},
         assumptions=tuple(assumptions),
         warnings=tuple(warnings),
+        display=display,
     )
     if basis != "extension":
         return report
