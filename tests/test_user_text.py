@@ -1,0 +1,68 @@
+"""User-facing text cites papers by author and year and never points outside the repository.
+
+Scanned: README.md, docs/*.md, the OpenAPI document, and what the CLI prints (human summary and
+``--json``) for every example request.  Forbidden: the project-internal design note ``MATH.md``,
+paths into ``../shared`` or ``seeds/``, and seed numbers ("seed 004", "seeds 000/003").
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+
+import pytest
+
+from kfio.service.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+EXAMPLES = sorted((ROOT / "examples").glob("*.json"))
+FORBIDDEN = re.compile(r"MATH\.md|\.\./shared|seeds/|seeds? 00\d", re.IGNORECASE)
+
+
+def _hits(text: str) -> list[str]:
+    return [text[max(0, m.start() - 40) : m.end() + 40] for m in FORBIDDEN.finditer(text)]
+
+
+def test_the_pattern_catches_what_it_must() -> None:
+    bad = ["see MATH.md section 2", "(../shared/docs)", "seeds/004_x.txt", "seed 001, Theorem 1", "Seeds 000/003"]
+    assert all(_hits(t) for t in bad)
+    assert not _hits("Rohr, Marelli and Fu (2014), Theorem 1; --seed S; examples/bounds_seed004_3x3.json")
+
+
+@pytest.mark.parametrize(
+    "path",
+    [ROOT / "README.md", ROOT / "openapi" / "openapi.json", *sorted((ROOT / "docs").glob("*.md"))],
+    ids=lambda p: p.name,
+)
+def test_documents(path: Path) -> None:
+    assert _hits(path.read_text()) == []
+
+
+def _commands(example: Path) -> list[str]:
+    name = example.name
+    if name.startswith("simulate_"):
+        return ["simulate"]
+    if name.startswith(("bounds_", "regions_")):
+        return ["analyze", "bounds"]
+    return ["analyze"]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("example", EXAMPLES, ids=lambda p: p.stem)
+def test_cli_output_of_every_example(example: Path, tmp_path: Path, capsys) -> None:
+    request = json.loads(example.read_text())
+    # keep the simulation small: its text does not depend on the horizon
+    sim = request.get("options", {}).get("simulate")
+    if sim:
+        sim.update(steps=20, trajectories=50)
+        sim.pop("exact_steps", None)
+    path = tmp_path / example.name
+    path.write_text(json.dumps(request))
+    for command in _commands(example):
+        for fmt in ([], ["--json"]):
+            code = main([command, *fmt, str(path)])
+            out, err = capsys.readouterr()
+            assert code in (0, 1, 3), (command, fmt, err)
+            assert out.strip()
+            assert _hits(out + err) == [], (command, fmt)
