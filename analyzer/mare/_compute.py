@@ -143,7 +143,7 @@ def _region(search: CertifiedSearch, opts: BoundsOptions, rho: float, request: R
     labels, certified = search.region(values, unstable)
     names = tuple(p.name or f"sensor {i}" for i, p in enumerate(opts.packets))
     try:
-        exact = exact_region_grid(request, K, budget=budget).to_dict()
+        exact = exact_region_grid(request, K, budget=budget)
     except AssumptionViolation:
         exact = None
     return RegionMap(

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -20,6 +20,9 @@ from ._options import Packet
 from ._phat import PHat
 from ._riccati import VBarIteration
 from ._search import UpperBound
+
+if TYPE_CHECKING:  # the exact grid is computed by kfio.stability, which imports no bounds
+    from ..stability._regions import RegionGrid
 
 #: Relative agreement required between the V_bar iteration and the SDP.
 SDP_AGREEMENT = 1e-6
@@ -201,7 +204,7 @@ class RegionMap:
     labels: tuple[tuple[str, ...], ...]
     certified_cells: int
     lmi_solves: int
-    exact: dict[str, Any] | None = None  # kfio.stability._regions.exact_region_grid(...).to_dict()
+    exact: RegionGrid | None = None  # kfio.stability._regions.exact_region_grid(...), an extension
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -217,7 +220,7 @@ class RegionMap:
             },
             "certified_cells": self.certified_cells,
             "lmi_solves": self.lmi_solves,
-            "exact": self.exact,
+            "exact": None if self.exact is None else self.exact.to_dict(),
         }
 
 

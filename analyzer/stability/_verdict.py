@@ -91,7 +91,9 @@ class StabilityReport:
     #: Short forms of long exact texts for :meth:`summary` (never in the JSON).
     display: Mapping[str, str] = field(default_factory=dict, repr=False, compare=False)
 
-    def _short(self, text: str, value: complex | float) -> str:
+    def _short(self, text: str, value: complex | float | None) -> str:
+        if value is None:
+            return text
         return self.display.get(text) or short_text(text, value)
 
     def to_dict(self) -> dict[str, Any]:
