@@ -18,7 +18,7 @@ from typing import Any, Mapping
 from ..errors import InvalidInput, LimitExceeded
 from ..model._exact import parse_number
 from ..model._request import option_group
-from ..model._types import MarkovChannel, PerSensorChannel, Request
+from ..model._types import MarkovChannel, Packet, Request, packets_of
 from ._phat import max_horizon
 
 DEFAULT_TOLERANCE = 1e-6
@@ -30,14 +30,6 @@ MAX_LMI_ROWS = 200
 
 _KEYS = ("tolerance", "horizon", "grid", "arrival_probability")
 _WHERE = "/options/bounds"
-
-
-@dataclass(frozen=True)
-class Packet:
-    """One measurement packet: its name (``None`` for a request without sensors) and rows of ``C``."""
-
-    name: str | None
-    rows: tuple[int, ...]
 
 
 @dataclass(frozen=True)
@@ -87,16 +79,8 @@ def _iid(channel: MarkovChannel, where: str) -> Fraction:
 
 
 def _packets(request: Request) -> tuple[tuple[Packet, ...], tuple[Fraction, ...]]:
-    system, channel = request.system, request.channel
-    if isinstance(channel, PerSensorChannel):
-        assert system.sensors is not None  # guaranteed by parse_channel
-        lams = tuple(_iid(channel.for_sensor(s.name), f"/channel/channels/{s.name}") for s in system.sensors)
-        return tuple(Packet(s.name, s.rows) for s in system.sensors), lams
-    lam = _iid(channel, "/channel")
-    if system.sensors is not None:  # a single sensor carrying every row
-        s = system.sensors[0]
-        return (Packet(s.name, s.rows),), (lam,)
-    return (Packet(None, tuple(range(system.p))),), (lam,)
+    packets = packets_of(request)
+    return packets, tuple(_iid(p.channel, p.where) for p in packets)
 
 
 def _arrival_overrides(raw: Any, packets: tuple[Packet, ...], lams: tuple[Fraction, ...]) -> tuple[Fraction, ...]:

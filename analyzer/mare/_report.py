@@ -13,10 +13,11 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .._json import json_float as num  # the one JSON-safe float of kfio
 from ..model._exact import fraction_text
+from ..model._types import Packet
 from ._certificate import StabilityCertificate
 from ._lmi import SDPSolution
-from ._options import Packet
 from ._phat import PHat
 from ._riccati import VBarIteration
 from ._search import UpperBound
@@ -26,11 +27,6 @@ if TYPE_CHECKING:  # the exact grid is computed by kfio.stability, which imports
 
 #: Relative agreement required between the V_bar iteration and the SDP.
 SDP_AGREEMENT = 1e-6
-
-
-def num(x: float | None) -> float | None:
-    """A JSON-safe float: ``None`` for missing, NaN or infinite values."""
-    return float(x) if x is not None and np.isfinite(x) else None
 
 
 def mat(M: np.ndarray | None) -> list[list[float | None]] | None:

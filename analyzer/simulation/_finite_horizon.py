@@ -41,6 +41,7 @@ from typing import Any
 import numpy as np
 
 from .._budget import Budget
+from .._json import json_float
 from ..errors import InvalidInput, LimitExceeded
 from ..model._types import Request
 from ._channel import JointChannel
@@ -51,7 +52,6 @@ from ._setup import (
     SimSystem,
     SimulationLimits,
     check_exact_steps,
-    finite_or_none,
     matrix_or_none,
     parse_options,
     sim_system,
@@ -119,12 +119,12 @@ class FiniteHorizonReport:
             "steps": self.steps,
             "sequences": self.sequences,
             "initial_channel": self.initial_channel,
-            "mean_trace": [finite_or_none(x) for x in self.mean_trace],
+            "mean_trace": [json_float(x) for x in self.mean_trace],
             "final_mean_covariance": matrix_or_none(last_ok),
             "diverged": self.diverged_at is not None,
             "diverged_at": self.diverged_at,
-            "imprecise_probability": finite_or_none(self.imprecise_probability[-1]),
-            "growth_per_step": None if growth is None else finite_or_none(growth),
+            "imprecise_probability": json_float(self.imprecise_probability[-1]),
+            "growth_per_step": None if growth is None else json_float(growth),
         }
 
     def summary(self) -> str:

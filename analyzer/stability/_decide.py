@@ -26,6 +26,9 @@ from sympy.polys.matrices import DomainMatrix
 from ..structure._algebraic import AlgebraicReal
 from ..structure._eigen import X
 
+#: Verdict names by the sign of ``rate - 1``: ``VERDICTS[sign + 1]``.
+VERDICTS = ("stable", "boundary", "unstable")
+
 
 def bernoulli_factor(exponents: Sequence[Fraction], lambdas: Sequence[Fraction], N: int) -> Fraction:
     """``sigma^N = prod_g (1 - lambda_g)^{z_g}`` with ``z_g = N * exponents[g]``."""

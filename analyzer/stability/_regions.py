@@ -48,8 +48,9 @@ from .._budget import Budget
 from ..errors import InvalidInput
 from ..model._exact import fraction_text
 from ..model._request import require_assumption_1
-from ..model._types import MarkovChannel, PerSensorChannel, Request
+from ..model._types import PerSensorChannel, Request, packets_of
 from ..structure._fmo import FmoBlock
+from ._decide import VERDICTS
 from ._regions_constraints import (
     DIGITS,
     SEPARATION,
@@ -66,7 +67,6 @@ from ._regions_constraints import (
 from ._regions_curve import DEFAULT_SAMPLES, BoundaryCurve, boundary_curve
 from ._sigma import SigmaResult
 
-VERDICTS = ("stable", "boundary", "unstable")
 BASIS = "extension"
 STATEMENT = (
     "the FMO construction of Rohr, Marelli and Fu 2014 applied to separately lost Bernoulli packets "
@@ -82,15 +82,7 @@ def bernoulli_packets(request: Request) -> tuple[tuple[str, ...], tuple[Fraction
     InvalidInput
         A channel with memory (field ``/channel/...``).
     """
-    ch = request.channel
-    sensors = request.system.sensors
-    if isinstance(ch, PerSensorChannel):
-        pairs: list[tuple[str, MarkovChannel, str]] = [
-            (name, c, f"/channel/channels/{name}") for name, c in ch.channels
-        ]
-    else:
-        name = sensors[0].name if sensors else "packet"
-        pairs = [(name, ch, "/channel")]
+    pairs = [(p.name if p.name is not None else "packet", p.channel, p.where) for p in packets_of(request)]
     for name, c, where in pairs:
         if c.order != 0:
             raise InvalidInput(

@@ -48,12 +48,11 @@ from .._budget import Budget
 from ..errors import NumericalFailure
 from ..model._types import MarkovChannel, System
 from ..structure._algebraic import AlgebraicReal
+from ..structure._eigen import DIGITS  # working precision of the numerical side of exact comparisons
 from ..structure._fmo import FmoBlock, fmo_blocks
 from ._decide import compare_rate_bernoulli
 from ._sigma import SigmaResult, compute_sigma
 
-#: Working precision (decimal digits) of the numerical side of exact comparisons.
-DIGITS = 60
 #: Two values whose logs differ by more than this are ordered numerically
 #: (the error at :data:`DIGITS` digits is below ``1e-55``); closer values are
 #: compared in exact arithmetic.

@@ -21,14 +21,13 @@ import sympy
 from .._budget import Budget
 from ..errors import InvalidInput
 from ..model._request import require_assumption_1
-from ..model._types import MarkovChannel, PerSensorChannel, Request, System, to_domain
+from ..model._types import MarkovChannel, PerSensorChannel, Request, System, packets_of, to_domain
 from ..structure._display import SHORT_TEXT_CHARS, algebraic_degree, short_text
 from ..structure._fmo import FmoBlock, fmo_blocks
-from ._decide import bernoulli_factor, compare_rate_bernoulli, compare_rate_markov
+from ._decide import VERDICTS, bernoulli_factor, compare_rate_bernoulli, compare_rate_markov
 from ._regions import region_report
 from ._sigma import SigmaResult, compute_sigma, period_transfer_matrix
 
-VERDICTS = ("stable", "boundary", "unstable")
 #: Default wall-clock budget (s) of one analysis when the request sets none.
 DEFAULT_BUDGET_S = 120.0
 
@@ -150,10 +149,7 @@ class StabilityReport:
 
 
 def _channels_of(request: Request) -> list[MarkovChannel]:
-    ch = request.channel
-    if isinstance(ch, PerSensorChannel):
-        return [ch.for_sensor(s.name) for s in (request.system.sensors or ())]
-    return [ch]
+    return [p.channel for p in packets_of(request)]
 
 
 def _controllable(system: System) -> bool | None:
