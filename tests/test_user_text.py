@@ -66,3 +66,13 @@ def test_cli_output_of_every_example(example: Path, tmp_path: Path, capsys) -> N
             assert code in (0, 1, 3), (command, fmt, err)
             assert out.strip()
             assert _hits(out + err) == [], (command, fmt)
+
+
+PATH_IN_TEXT = re.compile(r"\b(?:analyzer|service|tests|bench|examples|docs|openapi)/[\w/.-]*\.(?:py|md|json)\b")
+
+
+@pytest.mark.parametrize("path", [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))], ids=lambda p: p.name)
+def test_paths_named_in_documents_exist(path: Path) -> None:
+    named = set(PATH_IN_TEXT.findall(path.read_text()))
+    assert named or path.name != "README.md"
+    assert sorted(p for p in named if not (ROOT / p).exists()) == []
