@@ -348,7 +348,8 @@ COMPONENTS: dict[str, dict[str, Any]] = {
         "type": "object",
         "description": (
             "The report of `kfio analyze --json`: the verdict of Rohr, Marelli and Fu 2014, Theorem 1, with its evidence per "
-            'FMO block.  Exact values are strings ("9/25"), their float approximations numbers.'
+            "finite multiplicative order (FMO) block: eigenvalues whose ratios are roots of unity.  "
+            'Exact values are strings ("9/25"), their float approximations numbers.'
         ),
         "properties": {
             "verdict": {"type": "string", "enum": ["stable", "unstable", "boundary"]},
