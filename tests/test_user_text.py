@@ -76,3 +76,35 @@ def test_paths_named_in_documents_exist(path: Path) -> None:
     named = set(PATH_IN_TEXT.findall(path.read_text()))
     assert named or path.name != "README.md"
     assert sorted(p for p in named if not (ROOT / p).exists()) == []
+
+
+# Help texts of the CLI commands are owned by another change in flight; scan them once it lands.
+NOT_YET_SCANNED = ("service/cli.py", "service/commands/")
+
+
+def _message_strings(path: Path) -> list[str]:
+    """String literals that are not docstrings: report texts, errors, OpenAPI text, plot titles."""
+    import io
+    import tokenize
+
+    out, prev = [], None
+    for tok in tokenize.generate_tokens(io.StringIO(path.read_text()).readline):
+        if tok.type == tokenize.STRING and not (
+            prev is None or prev.type in (tokenize.NEWLINE, tokenize.INDENT, tokenize.DEDENT)
+        ):
+            out.append(tok.string)
+        if tok.type not in (tokenize.COMMENT, tokenize.NL):
+            prev = tok
+    return out
+
+
+def test_message_strings_in_the_code() -> None:
+    files = [
+        p
+        for folder in ("analyzer", "service")
+        for p in sorted((ROOT / folder).rglob("*.py"))
+        if not str(p.relative_to(ROOT)).startswith(NOT_YET_SCANNED)
+    ]
+    assert len(files) > 30
+    bad = {str(p.relative_to(ROOT)): hits for p in files if (hits := _hits("\n".join(_message_strings(p))))}
+    assert bad == {}
