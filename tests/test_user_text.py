@@ -108,3 +108,12 @@ def test_message_strings_in_the_code() -> None:
     assert len(files) > 30
     bad = {str(p.relative_to(ROOT)): hits for p in files if (hits := _hits("\n".join(_message_strings(p))))}
     assert bad == {}
+
+
+def test_readme_shows_the_summary_the_cli_prints(capsys) -> None:
+    command = "$ .venv/bin/kfio analyze examples/bounds_differ_2x2.json\n"
+    readme = (ROOT / "README.md").read_text()
+    shown = readme[readme.index(command) + len(command) :].split("\n$ ")[0]
+    assert main(["analyze", str(ROOT / "examples" / "bounds_differ_2x2.json")]) == 0
+    out, _ = capsys.readouterr()
+    assert shown.strip() == out.strip()
