@@ -17,7 +17,7 @@ Three situations, all decided in exact arithmetic where the inputs allow:
 from __future__ import annotations
 
 from fractions import Fraction
-from typing import Sequence
+from typing import Callable, Sequence
 
 import mpmath
 from sympy import QQ, CRootOf, Poly, oo
@@ -38,11 +38,24 @@ def bernoulli_factor(exponents: Sequence[Fraction], lambdas: Sequence[Fraction],
     return c
 
 
-def compare_rate_bernoulli(beta: AlgebraicReal | None, beta_float: float, N: int, c: Fraction) -> tuple[int, bool]:
-    """Sign of ``beta^N c - 1`` and whether it was decided exactly."""
+def compare_rate_bernoulli(
+    beta: AlgebraicReal | None,
+    beta_float: float,
+    N: int,
+    c: Fraction,
+    enclosed: Callable[[int, Fraction], tuple[int, bool]] | None = None,
+) -> tuple[int, bool]:
+    """Sign of ``beta^N c - 1`` and whether it was decided exactly.
+
+    ``enclosed(N, q)``, when given, is the sign of ``beta^N - q`` from a
+    certified enclosure of ``beta`` (:meth:`kfio.structure.FmoBlock.compare_power`):
+    it proves every strict inequality when ``beta`` has no exact form.
+    """
     if c == 0:
         return -1, True
     if beta is None:
+        if enclosed is not None:
+            return enclosed(N, 1 / c)
         return _numeric_sign(mpmath.mpf(beta_float) ** N * (mpmath.mpf(c.numerator) / c.denominator) - 1), False
     return beta.compare_power(N, 1 / c), True
 
