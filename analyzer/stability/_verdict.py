@@ -161,7 +161,7 @@ def _controllable(system: System) -> bool | None:
 
 
 def _modulus_text(block: FmoBlock) -> str | None:
-    if block.modulus_sq is None:
+    if block.modulus_sq is None or not block.modulus_sq.writable():
         return None
     return str(sympy.sqrt(block.modulus_sq.expr()))
 

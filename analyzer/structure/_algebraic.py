@@ -45,6 +45,16 @@ class AlgebraicReal:
             return Rational(self.rational.numerator, self.rational.denominator)
         return CRootOf(self.minpoly, self.index)
 
+    def writable(self) -> bool:
+        """Whether :meth:`text` fits Python's int-to-text limit (4300 digits per integer)."""
+        if self.rational is not None:
+            return max(self.rational.numerator.bit_length(), self.rational.denominator.bit_length()) < 12000
+        assert self.minpoly is not None
+        return all(
+            max(int(c.numerator).bit_length(), int(c.denominator).bit_length()) < 12000
+            for c in self.minpoly.all_coeffs()
+        )
+
     def text(self) -> str:
         """Exact text: ``"25/16"`` or ``"CRootOf(x**2 - 3*x + 1, 1)"``."""
         if self.rational is not None:

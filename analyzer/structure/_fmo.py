@@ -34,12 +34,12 @@ from sympy.polys.matrices import DomainMatrix
 from .._budget import Budget
 from ..errors import NumericalFailure
 from ..model._exact import fraction_text
-from ..model._types import Matrix, System, to_domain
+from ..model._types import Matrix, System
+from ._adjugate import to_fmpq_mat
 from ._algebraic import AlgebraicReal
 from ._balls import MAX_PREC, START_PREC, horner, precision, sign, to_float
 from ._eigen import DIGITS, EigenFactor, X, eigen_factors
 from ._modulus import modulus_squared
-from ._adjugate import to_fmpq_mat
 from ._phases import PhaseBlock, RankOracle, Slot
 from ._unity import Root as UnityRoot
 from ._unity import ratio_relation
@@ -49,6 +49,9 @@ _Y = symbols("y")
 MAX_RESULTANT_DEGREE = 144
 #: Largest degree of a compositum field used for exact ranks.
 MAX_EXACT_FIELD_DEGREE = 48
+
+#: Coefficients longer than this (bits) are not written out: Python refuses int-to-text past 4300 digits.
+_TEXT_BITS = 12000
 
 Root = tuple[int, int]  # (factor index, index into EigenFactor.roots)
 
@@ -372,6 +375,9 @@ def _eigen_text(f: EigenFactor, index: int) -> str:
                 if abs(val - target) < mpmath.mpf(10) ** -(DIGITS // 2) * max(1, abs(target)):
                     return str(r)
     z = complex(f.roots[index])
+    bits = max(max(int(c.numerator).bit_length(), int(c.denominator).bit_length()) for c in f.poly.all_coeffs())
+    if bits > _TEXT_BITS:  # beyond Python's int-to-text limit: describe the polynomial instead
+        return f"root of a degree-{f.degree} polynomial with {bits}-bit coefficients near {z.real:.12g}{z.imag:+.12g}i"
     return f"root of {f.poly.as_expr()} near {z.real:.12g}{z.imag:+.12g}i"
 
 

@@ -23,12 +23,12 @@ from fractions import Fraction
 from functools import lru_cache
 from itertools import combinations
 
-from flint import arb, fmpz_mat, fmpz_poly
+from flint import arb, fmpq, fmpz_mat, fmpz_poly
 from sympy import QQ, Poly
 
 from ._algebraic import AlgebraicReal
 from ._balls import MAX_PREC, START_PREC, IntCoeffs, precision, root_balls
-from ._eigen import X, EigenFactor
+from ._eigen import EigenFactor, X
 
 #: Largest ``deg f`` for which ``|theta|^2`` of a non-real root is made exact
 #: (``Lambda^2`` has dimension 45 at 10).
@@ -57,8 +57,8 @@ def _square_factors(coeffs: IntCoeffs, real: bool) -> tuple[IntCoeffs, ...]:
         pairs = list(combinations(range(d), 2))
         M = fmpz_mat(len(pairs), len(pairs))
         for a, (i, j) in enumerate(pairs):
-            for b, (k, l) in enumerate(pairs):
-                v = C[i, k] * C[j, l] - C[i, l] * C[j, k]
+            for b, (k, m) in enumerate(pairs):
+                v = C[i, k] * C[j, m] - C[i, m] * C[j, k]
                 if v:
                     M[a, b] = v
         P = M.charpoly()
@@ -82,7 +82,7 @@ def modulus_squared(f: EigenFactor, index: int) -> AlgebraicReal | None:
         return AlgebraicReal.of_rational(f.rational_root**2)
     real = f.is_real_root(index)
     if not real and f.degree > MAX_MODULUS_DEGREE:
-        return None
+        return _reciprocal_modulus(f, index)
     c = f.int_coeffs
     a = c[-1]
     d = len(c) - 1
@@ -119,4 +119,36 @@ def modulus_squared(f: EigenFactor, index: int) -> AlgebraicReal | None:
             poly = Poly([QQ(x, lead) for x in reversed(hx)], X, domain=QQ)
             return AlgebraicReal(minpoly=poly, index=idx[0])
         prec *= 2
+    return None
+
+
+def _reciprocal_modulus(f: EigenFactor, index: int) -> AlgebraicReal | None:
+    """``|theta|^2 = q`` for a rational ``q``, proved when ``f`` is ``q``-reciprocal, else ``None``.
+
+    If ``x^d f(q / x)`` is proportional to ``f`` then ``q / theta`` is a root
+    of ``f``; it is ``conj(theta)`` (so ``|theta|^2 = q``) iff the two lie in
+    the same isolating ball.  This covers ``alpha`` times a cyclotomic
+    polynomial (roots ``alpha zeta``) at any degree.
+    """
+    with precision(START_PREC):
+        z = f.root_ball(index)
+        b = (z * z.conjugate()).real
+        man, exp = b.mid().man_exp()
+    q = (Fraction(int(man)) * Fraction(2) ** int(exp)).limit_denominator(1 << 40)
+    if q <= 0:
+        return None
+    c = [Fraction(x) for x in f.int_coeffs]
+    d = len(c) - 1
+    rec = [c[d - i] * q ** (d - i) for i in range(d + 1)]  # coefficients of x^d f(q / x)
+    ratio = rec[d] / c[d]
+    if ratio == 0 or any(rec[i] != ratio * c[i] for i in range(d + 1)):
+        return None
+    balls = [f.root_ball(i) for i in range(f.degree)]
+    with precision(START_PREC):
+        conj = z.conjugate()
+        image = arb(fmpq(q.numerator, q.denominator)) / z
+        a = [i for i, r in enumerate(balls) if r.overlaps(conj)]
+        bb = [i for i, r in enumerate(balls) if r.overlaps(image)]
+    if len(a) == 1 and a == bb:
+        return AlgebraicReal.of_rational(q)
     return None
