@@ -207,6 +207,7 @@ def _analyze_block(
             notes=block.notes + (() if below_certified else ("|alpha| < 1 was decided numerically, not proved",)),
             **base,
         ), None
+    assert block.phase is not None  # the zero class has |alpha| = 0 < 1
     res = compute_sigma(block.phase, channels, budget)
     N = res.period
     lambdas = [ch.bernoulli_lambda for ch in channels]

@@ -54,19 +54,19 @@ def integer_coeffs(coeffs_high_first: Sequence[Any]) -> IntCoeffs:
         den = den * c.denominator // math.gcd(den, c.denominator)
     ints = [int(c * den) for c in fr]
     g = 0
-    for c in ints:
-        g = math.gcd(g, c)
+    for k in ints:
+        g = math.gcd(g, k)
     g = g or 1
     if ints and ints[0] < 0:
         g = -g
-    return tuple(c // g for c in reversed(ints))
+    return tuple(k // g for k in reversed(ints))
 
 
 @lru_cache(maxsize=512)
 def _isolate(coeffs: IntCoeffs, prec: int) -> tuple[tuple[acb, ...], int]:
     with precision(prec):
-        roots = fmpz_poly(list(coeffs)).complex_roots()
-    balls = tuple(r for r, _ in roots)
+        roots: list[Any] = fmpz_poly(list(coeffs)).complex_roots()
+    balls: tuple[acb, ...] = tuple(pair[0] for pair in roots)
     n_real = sum(1 for r in balls if r.imag.is_exact() and r.imag.is_zero())
     return balls, n_real
 
