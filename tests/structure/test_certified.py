@@ -305,3 +305,20 @@ def test_stable_block_certified_from_an_enclosure():
         assert b.certified
         if b.rate is None:
             assert b.modulus < 1
+
+
+def test_budget_is_checked_inside_the_eigenstructure_steps():
+    """Issue 10 item 2: the eigenstructure steps check the budget (counted in steps, not seconds)."""
+    from kfio._budget import Budget
+    from kfio.errors import BudgetExceeded
+
+    rng = random.Random(40)
+    A = random_matrix(rng, 40)
+    system = System(A=A, C=((F(1),) + (F(0),) * 39,))
+    with pytest.raises(BudgetExceeded, match="eigenstructure"):
+        fmo_blocks(system, Budget(max_steps=100))
+    spent = Budget()
+    fmo_blocks(system, spent)
+    assert spent.steps > 100  # the whole computation checks in many times
+    with pytest.raises(BudgetExceeded):
+        fmo_blocks(system, Budget(max_steps=spent.steps - 1))
