@@ -322,3 +322,23 @@ def test_budget_is_checked_inside_the_eigenstructure_steps():
     assert spent.steps > 100  # the whole computation checks in many times
     with pytest.raises(BudgetExceeded):
         fmo_blocks(system, Budget(max_steps=spent.steps - 1))
+
+
+@pytest.mark.parametrize("p,q", [("1/10", "3/10"), ("1/2", "1/2"), ("9/10", "1/20")])
+def test_markov_rate_with_irrational_modulus_is_certified(p, q):
+    """Gilbert-Elliott channel, ``|alpha|^2`` irrational: enclosures of ``beta`` and of the Perron root decide ``rate`` vs 1."""
+    req = load_request(
+        json.dumps(
+            {
+                "system": {"A": [[1, 1], [1, 0]], "C": [[1, 0]]},
+                "channel": {"model": "gilbert_elliott", "failure_rate": p, "recovery_rate": q},
+            }
+        )
+    )
+    r = analyze(req)
+    (b,) = [b for b in r.blocks if b.rate is not None]
+    assert b.certified and b.modulus_exact is not None
+    # the golden ratio: rate = phi^2 sigma, compared with 1 in floats far from the boundary
+    phi2 = ((1 + 5**0.5) / 2) ** 2
+    assert abs(b.rate - phi2 * b.sigma) < 1e-9 and abs(b.rate - 1) > 1e-6
+    assert b.verdict == ("unstable" if b.rate > 1 else "stable")
