@@ -155,7 +155,7 @@ class EigenFactor:
             if K == QQ:
                 rows.append([QQ(c[0].numerator, c[0].denominator) for c in vec])
             else:
-                rows.append([K.from_list([QQ(x.numerator, x.denominator) for x in reversed(c)]) for c in vec])
+                rows.append([K.new([QQ(x.numerator, x.denominator) for x in reversed(c)]) for c in vec])
         n = len(self.eigvec_coeffs[0]) if self.eigvec_coeffs else 0
         return DomainMatrix(rows, (len(rows), n), K)
 

@@ -408,7 +408,7 @@ class _SingleRows:
             entries = [[QQ(col[i][0].numerator, col[i][0].denominator) for col in self.columns] for i in sorted(rows)]
         else:
             entries = [
-                [K.from_list([QQ(c.numerator, c.denominator) for c in reversed(col[i])]) for col in self.columns]
+                [K.new([QQ(c.numerator, c.denominator) for c in reversed(col[i])]) for col in self.columns]
                 for i in sorted(rows)
             ]
         return int(DomainMatrix(entries, (len(entries), len(self.columns)), K).rank())

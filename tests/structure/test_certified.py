@@ -342,3 +342,16 @@ def test_markov_rate_with_irrational_modulus_is_certified(p, q):
     phi2 = ((1 + 5**0.5) / 2) ** 2
     assert abs(b.rate - phi2 * b.sigma) < 1e-9 and abs(b.rate - 1) > 1e-6
     assert b.verdict == ("unstable" if b.rate > 1 else "stable")
+
+
+def test_single_eigenvalue_class_with_two_chains_has_exact_ranks():
+    # 1 +- 2i twice: each root is its own class (the conjugate ratio is not a root of unity), L = 2
+    R = [[1, -2], [2, 1]]
+    A = similar(block_diag(R, R), seed=4)
+    two = fmo_blocks(System(A=A, C=((F(1), F(0), F(0), F(0)), (F(0), F(1), F(2), F(0)))))
+    one = fmo_blocks(System(A=A, C=((F(1), F(0), F(0), F(0)),)))
+    for blocks, rank in ((two, 2), (one, 1)):
+        assert len(blocks) == 2
+        for b in blocks:
+            assert b.phase.n_columns == 2 and b.modulus_sq.rational == 5
+            assert b.phase.exact_rank([(0, 0)]) == rank == b.phase.numeric_rank([(0, 0)])
