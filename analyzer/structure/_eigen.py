@@ -44,16 +44,6 @@ X = symbols("x")
 DIGITS = 60
 
 
-def _poly_at_matrix(coeffs: list[Any], A: DomainMatrix) -> DomainMatrix:
-    """``f(A)`` by Horner's rule over ``QQ`` (``coeffs`` highest degree first)."""
-    n = A.shape[0]
-    result = DomainMatrix.zeros((n, n), QQ)
-    eye = DomainMatrix.eye(n, QQ)
-    for c in coeffs:
-        result = result * A + eye * c
-    return result
-
-
 @dataclass(frozen=True)
 class EigenFactor:
     """One irreducible factor ``f`` of the characteristic polynomial.
@@ -183,18 +173,6 @@ def _mpf(x: Any) -> mpmath.mpf:
     """An exact flint ``arb`` midpoint as an mpmath number (no text, no rounding)."""
     man, exp = x.man_exp()
     return mpmath.mpf((int(man), int(exp)))
-
-
-def irreducible_factors(A: Matrix) -> tuple[list[tuple[Poly, int]], DomainMatrix]:
-    """Irreducible monic factors of ``det(x I - A)`` over ``Q`` with multiplicities (flint).
-
-    Sorted by degree, then coefficients compared as rationals (never as
-    text: a 200-digit matrix has coefficients beyond Python's int-to-text
-    limit).
-    """
-    Ad = to_domain(A)
-    cp = to_fmpq_mat(A).charpoly()
-    return _factor(cp), Ad
 
 
 def _factor(cp: fmpq_poly) -> list[tuple[Poly, int]]:
