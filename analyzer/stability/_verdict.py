@@ -166,7 +166,7 @@ def _controllable(system: System) -> bool | None:
 
 
 def _modulus_text(block: FmoBlock) -> str | None:
-    if block.modulus_sq is None:
+    if block.modulus_sq is None or not block.modulus_sq.writable():
         return None
     return str(sympy.sqrt(block.modulus_sq.expr()))
 
@@ -193,16 +193,14 @@ def _analyze_block(
         basis=basis,
         modulus_sq_expr=block.modulus_sq.expr() if block.modulus_sq else None,
     )
-    if (
-        block.phase is None
-        or block.modulus_sq_float < 1
-        and (block.modulus_sq is None or block.modulus_sq.compare_power(1, Fraction(1)) < 0)
-    ):
+    below_one, below_certified = (-1, True) if block.phase is None else block.compare_power(1, Fraction(1))
+    if below_one < 0:
         degenerate = None
         if block.phase is not None:
             degenerate = (
                 block.phase.numeric_rank([(0, g) for g in range(len(block.phase.row_groups))]) < block.phase.n_columns
             )
+        # certified iff |alpha| < 1 was proved (exactly or from a certified enclosure)
         return BlockReport(
             period=None,
             degenerate=degenerate,
@@ -210,23 +208,24 @@ def _analyze_block(
             sigma_exact=None,
             rate=None,
             verdict="stable",
-            certified=True,
-            notes=block.notes,
+            certified=below_certified,
+            notes=block.notes + (() if below_certified else ("|alpha| < 1 was decided numerically, not proved",)),
             **base,
         ), None
+    assert block.phase is not None  # the zero class has |alpha| = 0 < 1
     res = compute_sigma(block.phase, channels, budget)
     N = res.period
     lambdas = [ch.bernoulli_lambda for ch in channels]
     all_bernoulli = all(lam is not None and ch.model == "bernoulli" for lam, ch in zip(lambdas, channels))
     notes = list(block.notes) + list(res.notes)
     if res.fully_blind:
-        s, exact = compare_rate_bernoulli(block.modulus_sq, block.modulus_sq_float, 1, Fraction(1))
+        s, exact = block.compare_power(1, Fraction(1))
         notes.append("no arrival pattern observes this block (sigma = 1): an unobservable mode")
     elif all_bernoulli and res.bernoulli_exponents is not None:
         lam_f = [lam for lam in lambdas if lam is not None]
         sets = res.maximal_blind_sets or (res.worst_blind_set,)
         c = max(bernoulli_factor(_bernoulli_exponents(F, N, len(channels)), lam_f, N) for F in sets)
-        s, exact = compare_rate_bernoulli(block.modulus_sq, block.modulus_sq_float, N, c)
+        s, exact = compare_rate_bernoulli(block.modulus_sq, block.modulus_sq_float, N, c, block.compare_power)
     else:
         sets = res.maximal_blind_sets or (res.worst_blind_set,)
         signs = []
@@ -234,7 +233,11 @@ def _analyze_block(
         for F in sets:
             budget.tick("exact transfer matrices")
             si, ex = compare_rate_markov(
-                block.modulus_sq, block.modulus_sq_float, N, period_transfer_matrix(N, F, channels)
+                block.modulus_sq,
+                block.modulus_sq_float,
+                N,
+                period_transfer_matrix(N, F, channels),
+                block.modulus_sq_ball,
             )
             signs.append(si)
             exact = exact and ex
