@@ -25,6 +25,7 @@ from ..model._types import MarkovChannel, PerSensorChannel, Request, System, to_
 from ..structure._fmo import FmoBlock, fmo_blocks
 from ._decide import bernoulli_factor, compare_rate_bernoulli, compare_rate_markov
 from ._regions import region_report
+from ._radicals import RealRadical
 from ._sigma import SigmaResult, compute_sigma, period_transfer_matrix
 
 VERDICTS = ("stable", "boundary", "unstable")
@@ -166,14 +167,13 @@ def _modulus_text(block: FmoBlock) -> str | None:
     return str(sympy.sqrt(block.modulus_sq.expr()))
 
 
-def _sigma_exact_text(res: SigmaResult, lambdas: Sequence[Fraction]) -> str | None:
-    if res.bernoulli_exponents is None:
+def _sigma_exact(res: SigmaResult, c: Fraction | None) -> RealRadical | None:
+    """``sigma = c^(1/N)`` with ``c = sigma^N`` the exact rational of Corollary 2 (Bernoulli channels)."""
+    if res.fully_blind:
+        return RealRadical.of(Fraction(1), 1)
+    if c is None or c == 0:
         return None
-    expr = sympy.Integer(1)
-    for e, lam in zip(res.bernoulli_exponents, lambdas):
-        base = 1 - sympy.Rational(lam.numerator, lam.denominator)
-        expr *= base ** sympy.Rational(e.numerator, e.denominator)
-    return str(sympy.nsimplify(expr))
+    return RealRadical.of(c, res.period)
 
 
 def _analyze_block(
@@ -214,6 +214,7 @@ def _analyze_block(
     lambdas = [ch.bernoulli_lambda for ch in channels]
     all_bernoulli = all(lam is not None and ch.model == "bernoulli" for lam, ch in zip(lambdas, channels))
     notes = list(block.notes) + list(res.notes)
+    c: Fraction | None = None
     if res.fully_blind:
         s, exact = compare_rate_bernoulli(block.modulus_sq, block.modulus_sq_float, 1, Fraction(1))
         notes.append("no arrival pattern observes this block (sigma = 1): an unobservable mode")
@@ -235,15 +236,17 @@ def _analyze_block(
             exact = exact and ex
         s = max(signs)
     certified = exact and res.certified and block.certified
+    sigma_exact = _sigma_exact(res, c) if all_bernoulli else None
+    sigma = float(sigma_exact.approx(20)) if sigma_exact is not None else res.sigma
     verdict = {1: "unstable", 0: "boundary", -1: "stable"}[s]
     if not exact:
         notes.append("rate compared with 1 numerically (50 digits), not exactly")
     report = BlockReport(
         period=N,
         degenerate=res.degenerate,
-        sigma=res.sigma,
-        sigma_exact=_sigma_exact_text(res, [lam for lam in lambdas if lam is not None]) if all_bernoulli else None,
-        rate=block.modulus_sq_float * res.sigma,
+        sigma=sigma,
+        sigma_exact=sigma_exact.text() if sigma_exact is not None else None,
+        rate=block.modulus_sq_float * sigma,
         verdict=verdict,
         certified=certified,
         blind_set=sorted([list(s) for s in res.worst_blind_set]),
@@ -260,9 +263,16 @@ def _bernoulli_exponents(F: frozenset, N: int, groups: int) -> tuple[Fraction, .
 
 
 def _critical_probability(blocks: Sequence[BlockReport]) -> tuple[float | None, str | None, list[str]]:
-    """Seed 001, Corollary 2 + Theorem 1: ``lambda_c = max_k 1 - beta_k^(-N_k / z_k)``."""
+    """Seed 001, Corollary 2 + Theorem 1: ``lambda_c = max_k 1 - beta_k^(-N_k / z_k)``.
+
+    Exact arithmetic only: for a rational ``beta_k`` the term is ``1 - r`` with
+    ``r = beta_k^(-N_k/z_k)`` a :class:`RealRadical` (a rational when it is one,
+    e.g. ``1 - 1/alpha^2`` for a rational real ``alpha``), compared exactly
+    between blocks; for an algebraic ``beta_k`` it is the SymPy expression
+    ``1 - CRootOf(h, i)**(-N/z)``, compared at 40 digits.
+    """
     warnings: list[str] = []
-    best: tuple[mpmath.mpf, Any] | None = None
+    candidates: list[tuple[mpmath.mpf, RealRadical | None, Any]] = []
     for b in blocks:
         if b.rate is None:
             continue
@@ -274,17 +284,33 @@ def _critical_probability(blocks: Sequence[BlockReport]) -> tuple[float | None, 
                 "no arrival probability makes the filter stable"
             )
             return None, None, warnings
-        beta = b.modulus_sq_expr if b.modulus_sq_expr is not None else sympy.Float(b.modulus**2, 30)
+        beta = b.modulus_sq_expr
+        if isinstance(beta, sympy.Rational):
+            r = RealRadical.power(1 / Fraction(int(beta.p), int(beta.q)), 1 / share)
+            with mpmath.workdps(50):
+                candidates.append((1 - r.approx(40), r, None))
+            continue
+        if beta is None:
+            beta = sympy.Float(b.modulus_sq_float, 30)
         expr = 1 - beta ** (-1 / sympy.Rational(share.numerator, share.denominator))
-        expr = sympy.nsimplify(expr) if beta.is_Rational else expr
-        val = mpmath.mpf(str(sympy.N(expr, 40)))
-        if best is None or val > best[0]:
-            best = (val, expr)
-    if best is None:
+        candidates.append((mpmath.mpf(str(sympy.N(expr, 40))), None, expr))
+    if not candidates:
         return 0.0, "0", warnings
-    if best[0] < 0:
+    radicals = [r for _, r, _ in candidates if r is not None]
+    if len(radicals) == len(candidates):  # all exact: the largest 1 - r has the smallest r
+        smallest = radicals[0]
+        for r in radicals[1:]:
+            if r.compare(smallest) < 0:
+                smallest = r
+        if smallest.compare(RealRadical.of(Fraction(1), 1)) >= 0:
+            return 0.0, "0", warnings
+        with mpmath.workdps(50):
+            value = 1 - smallest.approx(40)
+        return float(value), smallest.one_minus_text(), warnings
+    val, r, expr = max(candidates, key=lambda t: t[0])
+    if val <= 0:
         return 0.0, "0", warnings
-    return float(best[0]), str(best[1]), warnings
+    return float(val), (r.one_minus_text() if r is not None else str(expr)), warnings
 
 
 def _parse_options(request: Request) -> None:
