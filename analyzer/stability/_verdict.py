@@ -24,8 +24,8 @@ from ..model._request import require_assumption_1
 from ..model._types import MarkovChannel, PerSensorChannel, Request, System, to_domain
 from ..structure._fmo import FmoBlock, fmo_blocks
 from ._decide import bernoulli_factor, compare_rate_bernoulli, compare_rate_markov
-from ._regions import region_report
 from ._radicals import RealRadical
+from ._regions import region_report
 from ._sigma import SigmaResult, compute_sigma, period_transfer_matrix
 
 VERDICTS = ("stable", "boundary", "unstable")
@@ -291,7 +291,7 @@ def _critical_probability(blocks: Sequence[BlockReport]) -> tuple[float | None, 
                 candidates.append((1 - r.approx(40), r, None))
             continue
         if beta is None:
-            beta = sympy.Float(b.modulus_sq_float, 30)
+            beta = sympy.Float(b.modulus**2, 30)
         expr = 1 - beta ** (-1 / sympy.Rational(share.numerator, share.denominator))
         candidates.append((mpmath.mpf(str(sympy.N(expr, 40))), None, expr))
     if not candidates:
@@ -307,10 +307,10 @@ def _critical_probability(blocks: Sequence[BlockReport]) -> tuple[float | None, 
         with mpmath.workdps(50):
             value = 1 - smallest.approx(40)
         return float(value), smallest.one_minus_text(), warnings
-    val, r, expr = max(candidates, key=lambda t: t[0])
+    val, rad, expr = max(candidates, key=lambda t: t[0])
     if val <= 0:
         return 0.0, "0", warnings
-    return float(val), (r.one_minus_text() if r is not None else str(expr)), warnings
+    return float(val), (rad.one_minus_text() if rad is not None else str(expr)), warnings
 
 
 def _parse_options(request: Request) -> None:
