@@ -11,12 +11,11 @@ Every error names its field as a JSON pointer.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from decimal import Decimal
 from fractions import Fraction
 from typing import Any, Mapping
 
 from ..errors import InvalidInput, LimitExceeded
-from ..model._exact import parse_number
+from ..model._exact import parse_integer, parse_number
 from ..model._request import option_group
 from ..model._types import MarkovChannel, PerSensorChannel, Request
 from ._phat import max_horizon
@@ -69,10 +68,17 @@ def _source(key: str, flags: Mapping[str, Any]) -> str:
     return f" (given as --{key})" if key in flags else ""
 
 
+#: Integer options are range-checked against this before conversion (the precise
+#: limits follow); an exponent bomb such as ``1e999999999`` never becomes an ``int``.
+_COARSE_INTEGER_LIMIT = 10**6
+
+
 def _integer(value: Any, key: str, flags: Mapping[str, Any]) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, Decimal)) or int(value) != value:
-        raise InvalidInput(f"{_WHERE}/{key}", f"{key} must be an integer{_source(key, flags)}")
-    return int(value)
+    at = f"{_WHERE}/{key}"
+    try:
+        return parse_integer(value, at, -_COARSE_INTEGER_LIMIT, _COARSE_INTEGER_LIMIT, key)
+    except InvalidInput as exc:
+        raise type(exc)(at, exc.rule + _source(key, flags)) from None
 
 
 def _iid(channel: MarkovChannel, where: str) -> Fraction:

@@ -13,7 +13,7 @@ from fractions import Fraction
 from typing import Any, Iterable, Mapping, Optional
 
 from ..errors import InvalidInput, LimitExceeded
-from ._exact import load_json, parse_number
+from ._exact import load_json, parse_number, value_text
 from ._limits import DEFAULT_LIMITS, Limits
 from ._types import Channel, MarkovChannel, Matrix, PerSensorChannel, Request, Sensor, System
 
@@ -265,7 +265,7 @@ def parse_markov_channel(obj: Any, limits: Limits = DEFAULT_LIMITS, where: str =
         raise InvalidInput(
             f"{where}/model", "'per_sensor' is only allowed at the top level of channel, with system.sensors"
         )
-    raise InvalidInput(f"{where}/model", f"unknown channel model {model!r}; expected one of {allowed}")
+    raise InvalidInput(f"{where}/model", f"unknown channel model {value_text(model)}; expected one of {allowed}")
 
 
 def parse_channel(obj: Any, system: System, limits: Limits = DEFAULT_LIMITS, where: str = "/channel") -> Channel:
