@@ -394,11 +394,11 @@ def p_hat(A: np.ndarray, C: np.ndarray, Q: np.ndarray, R: np.ndarray, lam: float
     >>> bool(p_hat(A, C, Q, R, 0.4, 8)[0, 0] < p_hat(A, C, Q, R, 0.4, 1)[0, 0])
     True
     """
-    from ..errors import NumericalFailure
+    from ..errors import InvalidInput, NumericalFailure
     from ._phat import p_hat_sequence  # here, not at the top: bounds_phat builds on this module
 
     if N < 1:
-        raise ValueError("N must be at least 1")
+        raise InvalidInput("/options/bounds/horizon", "N must be at least 1")
     res = p_hat_sequence(A, C, Q, R, lam, [N])[N]
     if res.matrix is None:
         raise NumericalFailure(f"P_hat_{N}: {res.reason}")

@@ -23,6 +23,7 @@ import mpmath
 from sympy import QQ, CRootOf, Poly, oo
 from sympy.polys.matrices import DomainMatrix
 
+from ..errors import NumericalFailure
 from ..structure._algebraic import AlgebraicReal
 from ..structure._eigen import X
 
@@ -33,7 +34,7 @@ def bernoulli_factor(exponents: Sequence[Fraction], lambdas: Sequence[Fraction],
     for e, lam in zip(exponents, lambdas):
         z = e * N
         if z.denominator != 1:  # pragma: no cover - z_g counts phases
-            raise ArithmeticError("non-integer blind count")
+            raise NumericalFailure("non-integer blind count")
         c *= (1 - lam) ** int(z)
     return c
 

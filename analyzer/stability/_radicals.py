@@ -25,6 +25,8 @@ from typing import Any, Iterable
 import mpmath
 from sympy import Rational, integer_nthroot, primefactors
 
+from ..errors import NumericalFailure
+
 
 def _rational_root(s: Fraction, p: int) -> Fraction | None:
     """``s^(1/p)`` if it is rational (``s > 0``), else ``None``."""
@@ -56,7 +58,7 @@ class RealRadical:
     def of(cls, base: Fraction, index: int) -> RealRadical:
         """``base^(1/index)`` reduced: a prime ``p | index`` with ``base`` a ``p``-th power is divided out."""
         if base <= 0 or index < 1:
-            raise ValueError("a real radical needs a positive base and a positive index")
+            raise NumericalFailure("a real radical needs a positive base and a positive index")
         changed = True
         while changed and index > 1:
             changed = False

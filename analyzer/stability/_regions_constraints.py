@@ -45,7 +45,7 @@ import mpmath
 import sympy
 
 from .._budget import Budget
-from ..errors import NumericalFailure
+from ..errors import InvalidInput, NumericalFailure
 from ..model._types import MarkovChannel, System
 from ..structure._algebraic import AlgebraicReal
 from ..structure._fmo import FmoBlock, fmo_blocks
@@ -253,7 +253,7 @@ def block_constraints(
     """
     blocks = fmo if fmo is not None else fmo_blocks(system, budget)
     if sigma is not None and len(sigma) != len(blocks):
-        raise ValueError("sigma results must be aligned with the FMO blocks")
+        raise InvalidInput("/", "sigma results must be aligned with the FMO blocks (one per block, in order)")
     sensors = len(system.sensors) if system.sensors is not None else 1
     out = []
     for i, block in enumerate(blocks):

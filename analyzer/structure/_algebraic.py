@@ -17,6 +17,7 @@ from typing import Any
 import mpmath
 from sympy import QQ, CRootOf, Poly, Rational
 
+from ..errors import NumericalFailure
 from ._eigen import DIGITS, X
 
 
@@ -77,7 +78,7 @@ class AlgebraicReal:
                     return 1 if v > 0 else -1
             digits *= 2
             if digits > 4000:  # pragma: no cover - would need a pathological input
-                raise ArithmeticError("could not separate an algebraic number from a rational")
+                raise NumericalFailure("could not separate an algebraic number from a rational")
 
 
 def real_root_matching(h: Poly, value: mpmath.mpf) -> int | None:
@@ -88,6 +89,6 @@ def real_root_matching(h: Poly, value: mpmath.mpf) -> int | None:
             r = mpmath.mpf(str(CRootOf(h, i).evalf(DIGITS)))
             if abs(r - value) <= mpmath.mpf(10) ** (-(DIGITS // 2)) * max(1, abs(value)):
                 if best is not None:  # pragma: no cover - roots are separated far beyond this
-                    raise ArithmeticError("two real roots agree to 30 digits")
+                    raise NumericalFailure("two real roots agree to 30 digits")
                 best = i
     return best

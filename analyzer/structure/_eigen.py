@@ -28,6 +28,7 @@ import mpmath
 from sympy import QQ, CRootOf, Poly, symbols
 from sympy.polys.matrices import DomainMatrix
 
+from ..errors import NumericalFailure
 from ..model._types import Matrix, to_domain
 
 X = symbols("x")
@@ -180,7 +181,7 @@ def jordan_sizes(Ad: DomainMatrix, f: Poly, multiplicity: int) -> tuple[int, ...
         sizes.extend([k] * (c - nxt))
     sizes.sort(reverse=True)
     if sum(sizes) != multiplicity:  # pragma: no cover - algebraic identity
-        raise ArithmeticError("Jordan sizes do not add up to the multiplicity")
+        raise NumericalFailure("Jordan sizes do not add up to the multiplicity")
     return tuple(sizes)
 
 
@@ -213,6 +214,6 @@ def eigen_factors(A: Matrix) -> list[EigenFactor]:
         sizes = jordan_sizes(Ad, f, k)
         K, vecs = eigenspace(Ad, f)
         if vecs.shape[0] != len(sizes):  # pragma: no cover - algebraic identity
-            raise ArithmeticError("eigenspace dimension differs from the number of Jordan cells")
+            raise NumericalFailure("eigenspace dimension differs from the number of Jordan cells")
         out.append(EigenFactor(poly=f, multiplicity=k, jordan_sizes=sizes, field=K, eigvecs=vecs))
     return out

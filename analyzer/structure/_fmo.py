@@ -27,6 +27,7 @@ import mpmath
 import numpy as np
 from sympy import QQ, Poly, resultant, symbols
 from sympy.polys.matrices import DomainMatrix
+from sympy.polys.polyerrors import BasePolynomialError
 
 from .._budget import Budget
 from ..errors import NumericalFailure
@@ -468,7 +469,7 @@ def build_block(
     oracle = None
     try:
         K, member_vals = _member_field_and_values(members, factors, mod_sq)
-    except Exception:  # noqa: BLE001 - SymPy may fail to build a large compositum
+    except (BasePolynomialError, NotImplementedError):  # SymPy could not build or embed in the compositum
         K, member_vals = None, {}
     if K is not None:
         theta0 = member_vals[head]
