@@ -46,6 +46,7 @@ import sympy
 
 from .._budget import Budget
 from ..errors import InvalidInput, NumericalFailure
+from ..model._exact import finite_or_none
 from ..model._types import MarkovChannel, System
 from ..structure._algebraic import AlgebraicReal
 from ..structure._fmo import FmoBlock, fmo_blocks
@@ -138,7 +139,7 @@ class BlockConstraints:
     def to_dict(self, names: Sequence[str]) -> dict[str, Any]:
         return {
             "eigenvalues": list(self.eigenvalues),
-            "modulus_squared": self.beta_float,
+            "modulus_squared": finite_or_none(self.beta_float),
             "modulus_squared_exact": self.beta_text if self.beta is not None else None,
             "period": self.period,
             "half_spaces": "sum_s misses_s * (-log(1 - lambda_s)) > period * log(modulus_squared), one per pattern",

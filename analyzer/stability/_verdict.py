@@ -20,6 +20,7 @@ import sympy
 
 from .._budget import Budget
 from ..errors import InvalidInput
+from ..model._exact import finite_or_none
 from ..model._request import require_assumption_1
 from ..model._types import MarkovChannel, PerSensorChannel, Request, System, to_domain
 from ..structure._fmo import FmoBlock, fmo_blocks
@@ -58,15 +59,15 @@ class BlockReport:
     def to_dict(self) -> dict[str, Any]:
         return {
             "eigenvalues": list(self.eigenvalues),
-            "eigenvalues_numeric": [[z.real, z.imag] for z in self.eigenvalues_numeric],
-            "modulus": self.modulus,
+            "eigenvalues_numeric": [[finite_or_none(z.real), finite_or_none(z.imag)] for z in self.eigenvalues_numeric],
+            "modulus": finite_or_none(self.modulus),
             "modulus_exact": self.modulus_exact,
             "jordan_sizes": list(self.jordan_sizes),
             "period": self.period,
             "degenerate": self.degenerate,
-            "sigma": self.sigma,
+            "sigma": finite_or_none(self.sigma),
             "sigma_exact": self.sigma_exact,
-            "rate": self.rate,
+            "rate": finite_or_none(self.rate),
             "verdict": self.verdict,
             "certified": self.certified,
             "blind_set": self.blind_set,
@@ -95,7 +96,7 @@ class StabilityReport:
             "verdict": self.verdict,
             "theorem": "seed 001 (Rohr, Marelli, Fu), Theorem 1",
             "blocks": [b.to_dict() for b in self.blocks],
-            "critical_arrival_probability": self.critical_arrival_probability,
+            "critical_arrival_probability": finite_or_none(self.critical_arrival_probability),
             "critical_arrival_probability_exact": self.critical_arrival_probability_exact,
             "channel": self.channel,
             "system": self.system,
@@ -115,15 +116,14 @@ class StabilityReport:
         lines.append("FMO blocks (largest modulus first):")
         for b in self.blocks:
             eig = ", ".join(b.eigenvalues)
+            modulus = _shown(b.modulus, b.modulus_exact)
             if b.rate is None:
-                lines.append(
-                    f"  [{b.verdict}] eigenvalues {eig}: |alpha| = {b.modulus:.6g} < 1, stable for any channel"
-                )
+                lines.append(f"  [{b.verdict}] eigenvalues {eig}: |alpha| = {modulus} < 1, stable for any channel")
                 continue
             deg = "degenerate" if b.degenerate else "non-degenerate"
             lines.append(
-                f"  [{b.verdict}] eigenvalues {eig}: |alpha| = {b.modulus:.6g}, {deg}, period {b.period}, "
-                f"sigma = {b.sigma:.6g}, rate |alpha|^2 sigma = {b.rate:.6g}"
+                f"  [{b.verdict}] eigenvalues {eig}: |alpha| = {modulus}, {deg}, period {b.period}, "
+                f"sigma = {_shown(b.sigma, b.sigma_exact)}, rate |alpha|^2 sigma = {_shown(b.rate, None)}"
                 + ("" if b.certified else "  (not certified)")
             )
         for s in (self.regions or {}).get("sensors", []):
@@ -139,6 +139,13 @@ class StabilityReport:
         for w in self.warnings:
             lines.append(f"warning: {w}")
         return "\n".join(lines)
+
+
+def _shown(x: float | None, exact: str | None) -> str:
+    """A float for the terminal, or its exact text when it is outside float64's range."""
+    if finite_or_none(x) is not None:
+        return f"{x:.6g}"
+    return exact if exact is not None else "beyond floating-point range"
 
 
 def _channels_of(request: Request) -> list[MarkovChannel]:
@@ -167,6 +174,14 @@ def _modulus_text(block: FmoBlock) -> str | None:
     return str(sympy.sqrt(block.modulus_sq.expr()))
 
 
+def _modulus_float(block: FmoBlock) -> float:
+    """``|alpha|`` from the exact ``|alpha|^2`` when there is one (``10^160`` is a float, its square is not)."""
+    if block.modulus_sq is None:
+        return block.modulus
+    with mpmath.workdps(30):
+        return float(mpmath.sqrt(block.modulus_sq.approx(20)))
+
+
 def _sigma_exact(res: SigmaResult, c: Fraction | None) -> RealRadical | None:
     """``sigma = c^(1/N)`` with ``c = sigma^N`` the exact rational of Corollary 2 (Bernoulli channels)."""
     if res.fully_blind:
@@ -182,7 +197,7 @@ def _analyze_block(
     base: dict[str, Any] = dict(
         eigenvalues=block.eigenvalue_texts,
         eigenvalues_numeric=block.eigenvalue_values,
-        modulus=block.modulus,
+        modulus=_modulus_float(block),
         modulus_exact=_modulus_text(block),
         jordan_sizes=block.jordan_sizes,
         basis=basis,
