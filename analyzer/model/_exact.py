@@ -231,7 +231,7 @@ def load_json(text: str | bytes) -> Any:
         except UnicodeDecodeError as exc:
             raise InvalidInput("/", f"request is not UTF-8 text ({exc.reason})") from None
     try:
-        return json.loads(
+        tree = json.loads(
             text,
             parse_float=_json_decimal,
             parse_constant=_reject_constant,
@@ -245,6 +245,67 @@ def load_json(text: str | bytes) -> Any:
         if isinstance(exc, InvalidInput):
             raise
         raise InvalidInput("/", f"not valid JSON: {exc}") from None
+    _reject_lone_surrogates(tree)
+    return tree
+
+
+def escaped(text: str) -> str:
+    """``text`` with lone surrogates written as backslash escapes (safe to encode, print and send).
+
+    Examples
+    --------
+    >>> print(escaped("s" + chr(0xD800)))
+    s\\ud800
+    """
+    if text.isascii():
+        return text
+    return text.encode("utf-8", "backslashreplace").decode("utf-8")
+
+
+def _has_lone_surrogate(text: str) -> bool:
+    if text.isascii():
+        return False
+    try:
+        text.encode("utf-8")
+    except UnicodeEncodeError:
+        return True
+    return False
+
+
+def _reject_lone_surrogates(tree: Any) -> None:
+    """Refuse strings (keys or values) that are not Unicode text.
+
+    JSON's ``\\ud800`` escape can denote a lone surrogate, which is no
+    character at all (RFC 8259, section 8.2); I-JSON (RFC 7493, section 2.1)
+    forbids it.  Such a string cannot be encoded as UTF-8, so it could not be
+    echoed in a report or an error message; it is refused here, once, for
+    every field name, sensor name, channel key, history key and option key.
+    """
+    stack: list[tuple[Any, tuple[str, ...]]] = [(tree, ())]  # depth first, in document order
+    while stack:
+        node, path = stack.pop()
+        if isinstance(node, str):
+            if _has_lone_surrogate(node):
+                raise InvalidInput(_path_pointer(path), _SURROGATE_RULE)
+        elif isinstance(node, dict):
+            children = []
+            for key, val in node.items():
+                if _has_lone_surrogate(key):
+                    raise InvalidInput(_path_pointer((*path, key)), _SURROGATE_RULE)
+                children.append((val, (*path, key)))
+            stack.extend(reversed(children))
+        elif isinstance(node, list):
+            stack.extend((node[i], (*path, str(i))) for i in reversed(range(len(node))))
+
+
+_SURROGATE_RULE = (
+    "strings must be Unicode text: a lone surrogate escape such as \\ud800 is not a character "
+    "(RFC 8259 section 8.2, RFC 7493 section 2.1)"
+)
+
+
+def _path_pointer(path: tuple[str, ...]) -> str:
+    return "".join("/" + escaped(p).replace("~", "~0").replace("/", "~1") for p in path) or "/"
 
 
 def fraction_text(x: Fraction) -> str:
