@@ -64,8 +64,11 @@ def parse_matrix(obj: Any, where: str, name: str, limits: Limits, max_rows: int,
     return tuple(rows)
 
 
-#: Wall-clock allowance (s) for the exact fallback of :func:`is_psd`.
-EXACT_PSD_SECONDS = 10.0
+#: Largest Hadamard bound (bits) of the integer-scaled matrix for which :func:`is_psd` runs its
+#: exact route.  Every intermediate of the fraction-free elimination is a minor of that matrix, so
+#: this bounds the work by size, not by time: at the limit a 40 x 40 matrix takes about 0.4 s of CPU
+#: (docs/hardening.md).
+MAX_EXACT_PSD_BITS = 1 << 15
 
 
 def _float_filter(m: Matrix) -> Optional[int]:
@@ -90,50 +93,88 @@ def _float_filter(m: Matrix) -> Optional[int]:
     return None
 
 
+def _integer_scaled(m: Matrix) -> list[list[int]]:
+    """``D m D`` with ``d_i`` the lcm of the denominators in row ``i``: integer, same inertia."""
+    import math
+
+    d = [math.lcm(*(x.denominator for x in row)) for row in m]
+    return [[int(x * d[i] * d[j]) for j, x in enumerate(row)] for i, row in enumerate(m)]
+
+
+def hadamard_bits(m: Matrix) -> int:
+    """Bits of Hadamard's bound ``prod_i ||row_i||`` of :func:`_integer_scaled` ``m``.
+
+    Computed from bit lengths only (no big products): every minor of the
+    scaled matrix, hence every intermediate of :func:`is_psd`'s exact route,
+    has at most this many bits.  Rows of ``m`` with large coprime
+    denominators make it grow fastest (the lcm multiplies them).
+    """
+    import math
+
+    total = 0
+    for row in m:
+        d = math.lcm(*(x.denominator for x in row))
+        # entry i, j of D m D is x d_i d_j with d_j <= lcm of all denominators: bound by bit lengths
+        biggest = max((abs(x.numerator) * (d // x.denominator)).bit_length() for x in row)
+        total += biggest + (len(row).bit_length() + 1) // 2
+    dmax = max(math.lcm(*(x.denominator for x in row)).bit_length() for row in m)
+    return total + len(m) * dmax
+
+
 def is_psd(m: Matrix, strict: bool, where: str = "/", exact: bool = False) -> bool:
-    """Exact (semi)definiteness of a symmetric rational matrix.
+    """Exact (semi)definiteness of a symmetric rational matrix, decided deterministically.
 
     A floating-point filter (:func:`_float_filter`) decides clear cases.
-    Near-singular matrices go to a symmetric-pivoted ``L D L^T`` in exact
-    rationals (python-flint ``fmpq``): pivot on the largest remaining diagonal
-    entry; a negative one means indefinite; when every remaining diagonal
-    entry is zero, the matrix is semidefinite iff the remaining block is zero
-    (``m_ij^2 <= m_ii m_jj``).  The exact route has :data:`EXACT_PSD_SECONDS`;
-    past it, :class:`LimitExceeded` names ``where`` instead of hanging.
-    ``exact=True`` (certificates) skips the filter and the time allowance.
-    """
-    import time
+    Near-singular matrices take the exact route: the congruence ``D m D``
+    (:func:`_integer_scaled`, positive diagonal ``D``, so the same inertia)
+    is an integer matrix, eliminated fraction-free (Bareiss) with symmetric
+    pivoting on the largest remaining diagonal entry.  Each remaining
+    diagonal entry is a principal minor divided by the previous (positive)
+    pivot, so a negative one means indefinite; when every remaining diagonal
+    entry is zero the matrix is semidefinite iff the remaining block is zero
+    (``m_ij^2 <= m_ii m_jj``).  Every intermediate is a minor of ``D m D``,
+    so the work is bounded by the matrix's size: when Hadamard's bound
+    exceeds :data:`MAX_EXACT_PSD_BITS` the request is refused
+    (:class:`LimitExceeded` naming ``where``), whatever the machine's load.
+    ``exact=True`` (certificates the analyzer built itself) skips the filter
+    and the size limit.
 
+    Examples
+    --------
+    >>> from fractions import Fraction as F
+    >>> is_psd(((F(1), F(1)), (F(1), F(1))), strict=False), is_psd(((F(1), F(1)), (F(1), F(1))), strict=True)
+    (True, False)
+    """
     import flint
 
     sign = None if exact else _float_filter(m)
     if sign is not None:
         return sign > 0 or (sign == 0 and not strict)
-    start = time.monotonic()
-    n = len(m)
-    M = [[flint.fmpq(x.numerator, x.denominator) for x in row] for row in m]
-    rest = list(range(n))
+    if not exact and hadamard_bits(m) > MAX_EXACT_PSD_BITS:
+        raise LimitExceeded(
+            where,
+            "the matrix is too close to singular for floating point to decide its definiteness, and deciding "
+            f"it exactly would need numbers of more than {MAX_EXACT_PSD_BITS} bits (Hadamard's bound); "
+            "use entries with fewer digits or smaller denominators",
+        )
+    A = [[flint.fmpz(x) for x in row] for row in _integer_scaled(m)]
+    rest = list(range(len(A)))
+    prev = flint.fmpz(1)
     while rest:
-        if not exact and time.monotonic() - start > EXACT_PSD_SECONDS:
-            raise LimitExceeded(
-                where,
-                f"the matrix is too close to singular to decide its definiteness exactly within "
-                f"{EXACT_PSD_SECONDS:g} s; use entries with fewer digits",
-            )
-        k = max(rest, key=lambda i: M[i][i])
-        d = M[k][k]
-        if d < 0:
+        k = max(rest, key=lambda i: A[i][i])
+        p = A[k][k]
+        if p < 0:
             return False
-        if d == 0:
-            return not strict and all(M[i][j] == 0 for i in rest for j in rest)
+        if p == 0:
+            return not strict and all(A[i][j] == 0 for i in rest for j in rest)
         rest.remove(k)
+        Ak = A[k]
         for i in rest:
-            if M[i][k] == 0:
-                continue
-            f = M[i][k] / d
+            Ai, aik = A[i], A[i][k]
             for j in rest:
-                if M[k][j] != 0:
-                    M[i][j] -= f * M[k][j]
+                # symmetric: the lower triangle was updated earlier in this step (rows j < i)
+                Ai[j] = A[j][i] if j < i else (p * Ai[j] - aik * Ak[j]) // prev
+        prev = p
     return True
 
 
