@@ -64,11 +64,11 @@ def parse_matrix(obj: Any, where: str, name: str, limits: Limits, max_rows: int,
     return tuple(rows)
 
 
-#: Largest Hadamard bound (bits) of the integer-scaled matrix for which :func:`is_psd` runs its
-#: exact route.  Every intermediate of the fraction-free elimination is a minor of that matrix, so
-#: this bounds the work by size, not by time: at the limit a 40 x 40 matrix takes about 0.4 s of CPU
-#: (docs/hardening.md).
-MAX_EXACT_PSD_BITS = 1 << 15
+#: Largest Hadamard bound (bits) of the integer congruence ``D m D`` for which :func:`is_psd` runs
+#: its exact route.  Every intermediate of the elimination is a ratio of minors of that matrix, so
+#: this bounds the work by size, not by time: at the limit a near-singular 40 x 40 matrix takes
+#: about 2 s of CPU on a loaded 2-core machine (bench/bench_validation.py, docs/hardening.md).
+MAX_EXACT_PSD_BITS = 1 << 14
 
 
 def _float_filter(m: Matrix) -> Optional[int]:
@@ -93,16 +93,12 @@ def _float_filter(m: Matrix) -> Optional[int]:
     return None
 
 
-def _integer_scaled(m: Matrix) -> list[list[int]]:
-    """``D m D`` with ``d_i`` the lcm of the denominators in row ``i``: integer, same inertia."""
-    import math
-
-    d = [math.lcm(*(x.denominator for x in row)) for row in m]
-    return [[int(x * d[i] * d[j]) for j, x in enumerate(row)] for i, row in enumerate(m)]
-
-
 def hadamard_bits(m: Matrix) -> int:
-    """Bits of Hadamard's bound ``prod_i ||row_i||`` of :func:`_integer_scaled` ``m``.
+    """Bits of Hadamard's bound ``prod_i ||row_i||`` of the integer congruence ``D m D``.
+
+    ``d_i`` is the lcm of the denominators in row ``i`` of ``m``; ``D m D``
+    has the same inertia as ``m`` (``D`` is positive diagonal) and integer
+    entries ``m_ij d_i d_j``.
 
     Computed from bit lengths only (no big products): every minor of the
     scaled matrix, hence every intermediate of :func:`is_psd`'s exact route,
@@ -125,16 +121,15 @@ def is_psd(m: Matrix, strict: bool, where: str = "/", exact: bool = False) -> bo
     """Exact (semi)definiteness of a symmetric rational matrix, decided deterministically.
 
     A floating-point filter (:func:`_float_filter`) decides clear cases.
-    Near-singular matrices take the exact route: the congruence ``D m D``
-    (:func:`_integer_scaled`, positive diagonal ``D``, so the same inertia)
-    is an integer matrix, eliminated fraction-free (Bareiss) with symmetric
-    pivoting on the largest remaining diagonal entry.  Each remaining
-    diagonal entry is a principal minor divided by the previous (positive)
-    pivot, so a negative one means indefinite; when every remaining diagonal
-    entry is zero the matrix is semidefinite iff the remaining block is zero
-    (``m_ij^2 <= m_ii m_jj``).  Every intermediate is a minor of ``D m D``,
-    so the work is bounded by the matrix's size: when Hadamard's bound
-    exceeds :data:`MAX_EXACT_PSD_BITS` the request is refused
+    Near-singular matrices take the exact route: a symmetric-pivoted
+    ``L D L^T`` in exact rationals (python-flint ``fmpq``), pivoting on the
+    largest remaining diagonal entry; a negative one means indefinite; when
+    every remaining diagonal entry is zero the matrix is semidefinite iff the
+    remaining block is zero (``m_ij^2 <= m_ii m_jj``).  Every intermediate
+    is a ratio of two minors of ``m``, i.e. of minors of the integer
+    congruence ``D m D`` (see :func:`hadamard_bits`),
+    so the work is bounded by the matrix's size: when Hadamard's bound of
+    ``D m D`` exceeds :data:`MAX_EXACT_PSD_BITS` the request is refused
     (:class:`LimitExceeded` naming ``where``), whatever the machine's load.
     ``exact=True`` (certificates the analyzer built itself) skips the filter
     and the size limit.
@@ -157,24 +152,23 @@ def is_psd(m: Matrix, strict: bool, where: str = "/", exact: bool = False) -> bo
             f"it exactly would need numbers of more than {MAX_EXACT_PSD_BITS} bits (Hadamard's bound); "
             "use entries with fewer digits or smaller denominators",
         )
-    A = [[flint.fmpz(x) for x in row] for row in _integer_scaled(m)]
-    rest = list(range(len(A)))
-    prev = flint.fmpz(1)
+    M = [[flint.fmpq(x.numerator, x.denominator) for x in row] for row in m]
+    rest = list(range(len(M)))
     while rest:
-        k = max(rest, key=lambda i: A[i][i])
-        p = A[k][k]
-        if p < 0:
+        k = max(rest, key=lambda i: M[i][i])
+        d = M[k][k]
+        if d < 0:
             return False
-        if p == 0:
-            return not strict and all(A[i][j] == 0 for i in rest for j in rest)
+        if d == 0:
+            return not strict and all(M[i][j] == 0 for i in rest for j in rest)
         rest.remove(k)
-        Ak = A[k]
         for i in rest:
-            Ai, aik = A[i], A[i][k]
+            if M[i][k] == 0:
+                continue
+            f = M[i][k] / d
             for j in rest:
-                # symmetric: the lower triangle was updated earlier in this step (rows j < i)
-                Ai[j] = A[j][i] if j < i else (p * Ai[j] - aik * Ak[j]) // prev
-        prev = p
+                if M[k][j] != 0:
+                    M[i][j] -= f * M[k][j]
     return True
 
 
