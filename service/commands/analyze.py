@@ -7,7 +7,7 @@ import argparse
 from kfio import analyze, load_request
 
 from .. import exitcodes
-from ..io import add_request_arguments, dump_json, emit, read_request_text, run_guarded
+from ..io import add_request_arguments, dump_json, read_request_text, run_guarded
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -24,7 +24,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 def _run(args: argparse.Namespace) -> int:
     def body() -> int:
         report = analyze(load_request(read_request_text(args.file)))
-        emit(dump_json(report.to_dict()) if args.json else report.summary())
+        print(dump_json(report.to_dict()) if args.json else report.summary())
         return exitcodes.BY_VERDICT[report.verdict]
 
     return run_guarded(body)

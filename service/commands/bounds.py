@@ -13,7 +13,7 @@ from kfio import load_request
 from kfio.mare._compute import compute_bounds
 
 from .. import exitcodes
-from ..io import add_request_arguments, dump_json, emit, read_request_text, run_guarded
+from ..io import add_request_arguments, dump_json, read_request_text, run_guarded
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -36,7 +36,7 @@ def _run(args: argparse.Namespace) -> int:
         request = load_request(read_request_text(args.file))
         flags = {k: getattr(args, k) for k in ("grid", "horizon", "tolerance") if getattr(args, k) is not None}
         report = compute_bounds(request, flags=flags)
-        emit(dump_json(report.to_dict()) if args.json else report.summary())
+        print(dump_json(report.to_dict()) if args.json else report.summary())
         return exitcodes.STABLE
 
     return run_guarded(body)

@@ -19,7 +19,7 @@ from kfio.simulation._setup import packets_of
 from kfio.simulation._simulate import simulate
 
 from .. import exitcodes
-from ..io import add_request_arguments, dump_json, emit, read_request_text, run_guarded
+from ..io import add_request_arguments, dump_json, read_request_text, run_guarded
 
 #: ``--exact`` without ``options.simulate.exact_steps`` enumerates at most 2^16 sequences.
 DEFAULT_EXACT_SEQUENCES_LOG2 = 16
@@ -66,7 +66,7 @@ def _run(args: argparse.Namespace) -> int:
     def body() -> int:
         request = with_overrides(load_request(read_request_text(args.file)), args)
         report = simulate(request)
-        emit(dump_json(report.to_dict()) if args.json else report.summary())
+        print(dump_json(report.to_dict()) if args.json else report.summary())
         return exitcodes.STABLE
 
     return run_guarded(body)
