@@ -245,7 +245,8 @@ def load_json(text: str | bytes) -> Any:
         if isinstance(exc, InvalidInput):
             raise
         raise InvalidInput("/", f"not valid JSON: {exc}") from None
-    _reject_lone_surrogates(tree)
+    if _may_hold_surrogates(text):
+        _reject_lone_surrogates(tree)
     return tree
 
 
@@ -260,6 +261,19 @@ def escaped(text: str) -> str:
     if text.isascii():
         return text
     return text.encode("utf-8", "backslashreplace").decode("utf-8")
+
+
+#: A JSON escape of a surrogate code point (U+D800 to U+DFFF), in either case.
+_SURROGATE_ESCAPE = re.compile(r"\\u[dD][89abcdefABCDEF]")
+
+
+def _may_hold_surrogates(text: str) -> bool:
+    """Whether the parsed tree can hold a surrogate: the text has one, raw or as an escape.
+
+    A scan of the text at C speed; the tree walk runs only when this is true
+    (a 1 MiB request of plain numbers costs no walk).
+    """
+    return _has_lone_surrogate(text) or _SURROGATE_ESCAPE.search(text) is not None
 
 
 def _has_lone_surrogate(text: str) -> bool:

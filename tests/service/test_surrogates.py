@@ -101,3 +101,17 @@ def test_http_answers_422_problem_json(client: TestClient, case: str) -> None:
     assert "lone surrogate" in doc["rule"]
     if field is not None:
         assert doc["field"] == field
+
+
+def test_plain_requests_cost_no_tree_walk(monkeypatch: pytest.MonkeyPatch) -> None:
+    # the walk runs only when the text holds a surrogate escape: a 1 MiB body of numbers is not walked
+    from kfio.model import _exact
+
+    walks = []
+    real = _exact._reject_lone_surrogates
+    monkeypatch.setattr(_exact, "_reject_lone_surrogates", lambda tree: walks.append(1) or real(tree))
+    _exact.load_json(json.dumps({"system": {"A": [[1] * 100_000]}, "name": "\u00e9\U0001f600"}))
+    assert walks == []
+    with pytest.raises(InvalidInput, match="lone surrogate"):
+        _exact.load_json('{"a": ["x", "\\uDBFF"]}')
+    assert walks == [1]
