@@ -110,7 +110,7 @@ def test_plain_requests_cost_no_tree_walk(monkeypatch: pytest.MonkeyPatch) -> No
     walks = []
     real = _exact._reject_lone_surrogates
     monkeypatch.setattr(_exact, "_reject_lone_surrogates", lambda tree: walks.append(1) or real(tree))
-    _exact.load_json(json.dumps({"system": {"A": [[1] * 100_000]}, "name": "\u00e9\U0001f600"}))
+    _exact.load_json(json.dumps({"system": {"A": [[1] * 100_000]}, "name": "\u00e9\U0001f600"}, ensure_ascii=False))
     assert walks == []
     with pytest.raises(InvalidInput, match="lone surrogate"):
         _exact.load_json('{"a": ["x", "\\uDBFF"]}')
