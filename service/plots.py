@@ -240,8 +240,9 @@ def _draw_region(
     handles.append(ax.scatter([point[0]], [point[1]], marker="*", s=140, c="blue", label="request"))
     ax.set_xlim(extent[0], extent[1])
     ax.set_ylim(extent[2], extent[3])
-    ax.set_xlabel(f"lambda_1 ({axes[0]})")
-    ax.set_ylabel(f"lambda_2 ({axes[1]})")
+    # sensor names are user text: drawn as plain text, never through mathtext or TeX
+    ax.set_xlabel(f"lambda_1 ({axes[0]})", parse_math=False, usetex=False)
+    ax.set_ylabel(f"lambda_2 ({axes[1]})", parse_math=False, usetex=False)
     ax.set_title(
         "Stability region for two sensors: bounds (colours, Liu and Goldsmith 2004)\n"
         "and exact verdict (markers, line: kfio extension of Rohr, Marelli and Fu 2014)",

@@ -11,12 +11,11 @@ Every error names its field as a JSON pointer.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from decimal import Decimal
 from fractions import Fraction
 from typing import Any, Mapping
 
 from ..errors import InvalidInput, LimitExceeded
-from ..model._exact import parse_number
+from ..model._exact import parse_integer, parse_number
 from ..model._request import option_group
 from ..model._types import MarkovChannel, Packet, Request, packets_of
 from ._phat import max_horizon
@@ -27,6 +26,10 @@ DEFAULT_HORIZON = 8
 MIN_GRID, MAX_GRID = 2, 41
 #: The stability LMI has ``n (2^m + 1)`` rows for ``n`` states and ``m`` packets.
 MAX_LMI_ROWS = 200
+
+#: Largest entry magnitude (``10^MAX_FLOAT_EXPONENT``) of A, C, Q, R for the floating-point bounds.
+MAX_FLOAT_EXPONENT = 30
+MAX_FLOAT_ENTRY = Fraction(10) ** MAX_FLOAT_EXPONENT
 
 _KEYS = ("tolerance", "horizon", "grid", "arrival_probability")
 _WHERE = "/options/bounds"
@@ -61,10 +64,35 @@ def _source(key: str, flags: Mapping[str, Any]) -> str:
     return f" (given as --{key})" if key in flags else ""
 
 
+#: Integer options are range-checked against this before conversion (the precise
+#: limits follow); an exponent bomb such as ``1e999999999`` never becomes an ``int``.
+_COARSE_INTEGER_LIMIT = 10**6
+
+
 def _integer(value: Any, key: str, flags: Mapping[str, Any]) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, Decimal)) or int(value) != value:
-        raise InvalidInput(f"{_WHERE}/{key}", f"{key} must be an integer{_source(key, flags)}")
-    return int(value)
+    at = f"{_WHERE}/{key}"
+    try:
+        return parse_integer(value, at, -_COARSE_INTEGER_LIMIT, _COARSE_INTEGER_LIMIT, key)
+    except InvalidInput as exc:
+        raise type(exc)(at, exc.rule + _source(key, flags)) from None
+
+
+def _check_float_range(request: Request) -> None:
+    """The bounds are floating-point computations: entries beyond :data:`MAX_FLOAT_ENTRY` are refused.
+
+    ``rho(A)^2``, ``A P A'`` and the LMI blocks square the entries; at
+    ``|a| = 10^160`` (a valid exact input) they overflow float64.  The exact
+    verdict (``kfio analyze``) has no such limit.
+    """
+    for name, M in (("A", request.system.A), ("C", request.system.C), ("Q", request.system.Q), ("R", request.system.R)):
+        for i, row in enumerate(M or ()):
+            for j, x in enumerate(row):
+                if abs(x) > MAX_FLOAT_ENTRY:
+                    raise LimitExceeded(
+                        f"/system/{name}/{i}/{j}",
+                        f"the bounds are computed in floating point; entries of {name} must have magnitude at most "
+                        f"1e{MAX_FLOAT_EXPONENT} (kfio analyze decides the exact verdict without this limit)",
+                    )
 
 
 def _iid(channel: MarkovChannel, where: str) -> Fraction:
@@ -127,6 +155,7 @@ def parse_bounds_options(request: Request, flags: Mapping[str, Any] | None = Non
         raise InvalidInput("/system/Q", "the bounds need the process noise covariance Q")
     if system.R is None:
         raise InvalidInput("/system/R", "the bounds need the measurement noise covariance R")
+    _check_float_range(request)
     packets, lams = _packets(request)
     n, m = system.n, len(packets)
     if n * ((1 << m) + 1) > MAX_LMI_ROWS:

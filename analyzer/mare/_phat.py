@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._budget import Budget
-from ..errors import NumericalFailure
+from ..errors import InvalidInput, NumericalFailure
 from ._riccati import DIVERGENCE_RATIO, v_bar
 from ._vech import congruence_matrix, unvech, vech, vech_layout
 
@@ -97,7 +97,7 @@ class BatchedMare:
     def g_n(self, h: np.ndarray, N: int) -> np.ndarray:
         """``vech(g_N(X))`` for one ``h = vech(X)`` (seed 002, eq. 11)."""
         if N < 1:
-            raise ValueError("N must be at least 1")
+            raise InvalidInput("/options/bounds/horizon", "N must be at least 1")
         return self._descend(h[None, :], np.ones(1), N)
 
     def _descend(self, level: np.ndarray, w: np.ndarray, depth: int) -> np.ndarray:
@@ -246,7 +246,7 @@ def p_hat(A: np.ndarray, C: np.ndarray, Q: np.ndarray, R: np.ndarray, lam: float
     True
     """
     if N < 1:
-        raise ValueError("N must be at least 1")
+        raise InvalidInput("/options/bounds/horizon", "N must be at least 1")
     res = p_hat_sequence(A, C, Q, R, lam, [N])[N]
     if res.matrix is None:
         raise NumericalFailure(f"P_hat_{N}: {res.reason}")

@@ -43,6 +43,7 @@ import numpy as np
 from .._budget import Budget
 from .._json import json_float
 from ..errors import InvalidInput, LimitExceeded
+from ..model._exact import value_text
 from ..model._types import Request
 from ._channel import JointChannel
 from ._kernel import PRECISION_RATIO, RiccatiStep
@@ -329,7 +330,9 @@ def expected_covariance(
     4.0
     """
     if isinstance(steps, bool) or not isinstance(steps, int) or steps < 0:
-        raise InvalidInput(f"{OPTIONS_FIELD}/exact_steps", f"the horizon must be a non-negative integer; got {steps!r}")
+        raise InvalidInput(
+            f"{OPTIONS_FIELD}/exact_steps", f"the horizon must be a non-negative integer; got {value_text(steps)}"
+        )
     sim = sim_system(request)
     opts = parse_options(request, limits)
     _check_enumeration_size(sim, steps, opts.initial_channel, limits)

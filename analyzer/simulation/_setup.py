@@ -47,6 +47,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from ..errors import InvalidInput, LimitExceeded
+from ..model._exact import parse_integer
 from ..model._limits import DEFAULT_LIMITS
 from ..model._request import check_symmetric, is_psd, option_group, parse_matrix
 from ..model._types import Matrix, Packet, Request, packets_of, to_float
@@ -158,14 +159,7 @@ def sim_system(request: Request) -> SimSystem:
 def _int_option(raw: Mapping[str, Any], key: str, default: int | None, lo: int, hi: int | None) -> int | None:
     if key not in raw:
         return default
-    val = raw[key]
-    if isinstance(val, bool) or not isinstance(val, int):
-        raise InvalidInput(f"{OPTIONS_FIELD}/{key}", f"{key} must be an integer; got {val!r}")
-    if val < lo:
-        raise InvalidInput(f"{OPTIONS_FIELD}/{key}", f"{key} must be at least {lo}; got {val}")
-    if hi is not None and val > hi:
-        raise LimitExceeded(f"{OPTIONS_FIELD}/{key}", f"{key} must be at most {hi}; got {val}")
-    return val
+    return parse_integer(raw[key], f"{OPTIONS_FIELD}/{key}", lo, hi, key)
 
 
 def _parse_p0(raw: Any, n: int) -> Matrix:

@@ -46,7 +46,7 @@ import sympy
 
 from .._budget import Budget
 from ..errors import InvalidInput
-from ..model._exact import fraction_text
+from ..model._exact import finite_or_none, fraction_text, value_text
 from ..model._request import require_assumption_1
 from ..model._types import PerSensorChannel, Request, packets_of
 from ..structure._fmo import FmoBlock
@@ -161,7 +161,7 @@ class SensorThresholds:
             "certified": self.certified,
             "consistent_with_analyze": self.consistent_with_analyze,
             "blocks": [
-                {**b.to_dict(self.sensors), "verdict": v, "rate": r}
+                {**b.to_dict(self.sensors), "verdict": v, "rate": finite_or_none(r)}
                 for b, v, r in zip(self.blocks, self.block_verdicts, self.block_rates)
             ],
             "sensors": [t.to_dict(self.sensors) for t in self.thresholds],
@@ -441,7 +441,7 @@ def exact_region_grid(
     """
     names = _two_sensors(request)
     if isinstance(K, bool) or not isinstance(K, int) or K < 2:
-        raise InvalidInput("/options/regions/grid", f"the grid side must be an integer >= 2; got {K!r}")
+        raise InvalidInput("/options/regions/grid", f"the grid side must be an integer >= 2; got {value_text(K)}")
     grid = tuple(Fraction(i, K - 1) for i in range(K)) if values is None else tuple(Fraction(v) for v in values)
     if len(grid) != K:
         raise InvalidInput("/options/regions/grid", f"{len(grid)} values given for a grid of side {K}")

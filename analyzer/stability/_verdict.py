@@ -20,11 +20,13 @@ import sympy
 
 from .._budget import Budget
 from ..errors import InvalidInput
+from ..model._exact import finite_or_none
 from ..model._request import require_assumption_1
 from ..model._types import MarkovChannel, PerSensorChannel, Request, System, packets_of, to_domain
 from ..structure._display import SHORT_TEXT_CHARS, algebraic_degree, short_text
 from ..structure._fmo import FmoBlock, fmo_blocks
 from ._decide import VERDICTS, bernoulli_factor, compare_rate_bernoulli, compare_rate_markov
+from ._radicals import RealRadical
 from ._regions import region_report
 from ._sigma import SigmaResult, compute_sigma, period_transfer_matrix
 
@@ -57,15 +59,15 @@ class BlockReport:
     def to_dict(self) -> dict[str, Any]:
         return {
             "eigenvalues": list(self.eigenvalues),
-            "eigenvalues_numeric": [[z.real, z.imag] for z in self.eigenvalues_numeric],
-            "modulus": self.modulus,
+            "eigenvalues_numeric": [[finite_or_none(z.real), finite_or_none(z.imag)] for z in self.eigenvalues_numeric],
+            "modulus": finite_or_none(self.modulus),
             "modulus_exact": self.modulus_exact,
             "jordan_sizes": list(self.jordan_sizes),
             "period": self.period,
             "degenerate": self.degenerate,
-            "sigma": self.sigma,
+            "sigma": finite_or_none(self.sigma),
             "sigma_exact": self.sigma_exact,
-            "rate": self.rate,
+            "rate": finite_or_none(self.rate),
             "verdict": self.verdict,
             "certified": self.certified,
             "blind_set": self.blind_set,
@@ -101,7 +103,7 @@ class StabilityReport:
             "verdict": self.verdict,
             "theorem": "Rohr, Marelli and Fu 2014, Theorem 1",
             "blocks": [b.to_dict() for b in self.blocks],
-            "critical_arrival_probability": self.critical_arrival_probability,
+            "critical_arrival_probability": finite_or_none(self.critical_arrival_probability),
             "critical_arrival_probability_exact": self.critical_arrival_probability_exact,
             "channel": self.channel,
             "system": self.system,
@@ -121,15 +123,14 @@ class StabilityReport:
         lines.append("finite multiplicative order (FMO) blocks, largest modulus first:")
         for b in self.blocks:
             eig = ", ".join(self._short(t, z) for t, z in zip(b.eigenvalues, b.eigenvalues_numeric))
+            modulus = _shown(b.modulus, b.modulus_exact)
             if b.rate is None:
-                lines.append(
-                    f"  [{b.verdict}] eigenvalues {eig}: |alpha| = {b.modulus:.6g} < 1, stable for any channel"
-                )
+                lines.append(f"  [{b.verdict}] eigenvalues {eig}: |alpha| = {modulus} < 1, stable for any channel")
                 continue
             deg = "degenerate" if b.degenerate else "non-degenerate"
             lines.append(
-                f"  [{b.verdict}] eigenvalues {eig}: |alpha| = {b.modulus:.6g}, {deg}, period {b.period}, "
-                f"sigma = {b.sigma:.6g}, rate |alpha|^2 sigma = {b.rate:.6g}"
+                f"  [{b.verdict}] eigenvalues {eig}: |alpha| = {modulus}, {deg}, period {b.period}, "
+                f"sigma = {_shown(b.sigma, b.sigma_exact)}, rate |alpha|^2 sigma = {_shown(b.rate, None)}"
                 + ("" if b.certified else "  (not certified)")
             )
         for s in (self.regions or {}).get("sensors", []):
@@ -146,6 +147,13 @@ class StabilityReport:
         for w in self.warnings:
             lines.append(f"warning: {w}")
         return "\n".join(lines)
+
+
+def _shown(x: float | None, exact: str | None) -> str:
+    """A float for the terminal, or its exact text when it is outside float64's range."""
+    if finite_or_none(x) is not None:
+        return f"{x:.6g}"
+    return exact if exact is not None else "beyond floating-point range"
 
 
 def _channels_of(request: Request) -> list[MarkovChannel]:
@@ -171,14 +179,21 @@ def _modulus_text(block: FmoBlock) -> str | None:
     return str(sympy.sqrt(block.modulus_sq.expr()))
 
 
-def _sigma_exact_text(res: SigmaResult, lambdas: Sequence[Fraction]) -> str | None:
-    if res.bernoulli_exponents is None:
+def _modulus_float(block: FmoBlock) -> float:
+    """``|alpha|`` from the exact ``|alpha|^2`` when there is one (``10^160`` is a float, its square is not)."""
+    if block.modulus_sq is None:
+        return block.modulus
+    with mpmath.workdps(30):
+        return float(mpmath.sqrt(block.modulus_sq.approx(20)))
+
+
+def _sigma_exact(res: SigmaResult, c: Fraction | None) -> RealRadical | None:
+    """``sigma = c^(1/N)`` with ``c = sigma^N`` the exact rational of Corollary 2 (Bernoulli channels)."""
+    if res.fully_blind:
+        return RealRadical.of(Fraction(1), 1)
+    if c is None or c == 0:
         return None
-    expr = sympy.Integer(1)
-    for e, lam in zip(res.bernoulli_exponents, lambdas):
-        base = 1 - sympy.Rational(lam.numerator, lam.denominator)
-        expr *= base ** sympy.Rational(e.numerator, e.denominator)
-    return str(sympy.nsimplify(expr))
+    return RealRadical.of(c, res.period)
 
 
 def _analyze_block(
@@ -187,7 +202,7 @@ def _analyze_block(
     base: dict[str, Any] = dict(
         eigenvalues=block.eigenvalue_texts,
         eigenvalues_numeric=block.eigenvalue_values,
-        modulus=block.modulus,
+        modulus=_modulus_float(block),
         modulus_exact=_modulus_text(block),
         jordan_sizes=block.jordan_sizes,
         basis=basis,
@@ -218,6 +233,7 @@ def _analyze_block(
     lambdas = [ch.bernoulli_lambda for ch in channels]
     all_bernoulli = all(lam is not None and ch.model == "bernoulli" for lam, ch in zip(lambdas, channels))
     notes = list(block.notes) + list(res.notes)
+    c: Fraction | None = None
     if res.fully_blind:
         s, exact = block.compare_power(1, Fraction(1))
         notes.append("no arrival pattern observes this block (sigma = 1): an unobservable mode")
@@ -243,15 +259,17 @@ def _analyze_block(
             exact = exact and ex
         s = max(signs)
     certified = exact and res.certified and block.certified
+    sigma_exact = _sigma_exact(res, c) if all_bernoulli else None
+    sigma = float(sigma_exact.approx(20)) if sigma_exact is not None else res.sigma
     verdict = {1: "unstable", 0: "boundary", -1: "stable"}[s]
     if not exact:
         notes.append("rate compared with 1 numerically (50 digits), not exactly")
     report = BlockReport(
         period=N,
         degenerate=res.degenerate,
-        sigma=res.sigma,
-        sigma_exact=_sigma_exact_text(res, [lam for lam in lambdas if lam is not None]) if all_bernoulli else None,
-        rate=block.modulus_sq_float * res.sigma,
+        sigma=sigma,
+        sigma_exact=sigma_exact.text() if sigma_exact is not None else None,
+        rate=block.modulus_sq_float * sigma,
         verdict=verdict,
         certified=certified,
         blind_set=sorted([list(s) for s in res.worst_blind_set]),
@@ -270,9 +288,17 @@ def _bernoulli_exponents(F: frozenset, N: int, groups: int) -> tuple[Fraction, .
 def _critical_probability(
     blocks: Sequence[BlockReport], display: dict[str, str]
 ) -> tuple[float | None, str | None, list[str]]:
-    """Seed 001, Corollary 2 + Theorem 1: ``lambda_c = max_k 1 - beta_k^(-N_k / z_k)``."""
+    """Seed 001, Corollary 2 + Theorem 1: ``lambda_c = max_k 1 - beta_k^(-N_k / z_k)``.
+
+    Exact arithmetic only: for a rational ``beta_k`` the term is ``1 - r`` with
+    ``r = beta_k^(-N_k/z_k)`` a :class:`RealRadical` (a rational when it is one,
+    e.g. ``1 - 1/alpha^2`` for a rational real ``alpha``), compared exactly
+    between blocks; for an algebraic ``beta_k`` it is the SymPy expression
+    ``1 - CRootOf(h, i)**(-N/z)``, compared at 40 digits.  Long exact texts get
+    a short form for the terminal in ``display`` (the JSON keeps the text).
+    """
     warnings: list[str] = []
-    best: tuple[mpmath.mpf, Any] | None = None
+    candidates: list[tuple[mpmath.mpf, RealRadical | None, Any]] = []
     for b in blocks:
         if b.rate is None:
             continue
@@ -284,20 +310,36 @@ def _critical_probability(
                 "no arrival probability makes the filter stable"
             )
             return None, None, warnings
-        beta = b.modulus_sq_expr if b.modulus_sq_expr is not None else sympy.Float(b.modulus**2, 30)
+        beta = b.modulus_sq_expr
+        if isinstance(beta, sympy.Rational):
+            r = RealRadical.power(1 / Fraction(int(beta.p), int(beta.q)), 1 / share)
+            with mpmath.workdps(50):
+                candidates.append((1 - r.approx(40), r, None))
+            continue
+        if beta is None:
+            beta = sympy.Float(b.modulus**2, 30)
         expr = 1 - beta ** (-1 / sympy.Rational(share.numerator, share.denominator))
-        expr = sympy.nsimplify(expr) if beta.is_Rational else expr
-        val = mpmath.mpf(str(sympy.N(expr, 40)))
-        if best is None or val > best[0]:
-            best = (val, expr)
-    if best is None:
+        candidates.append((mpmath.mpf(str(sympy.N(expr, 40))), None, expr))
+    if not candidates:
         return 0.0, "0", warnings
-    if best[0] < 0:
+    radicals = [r for _, r, _ in candidates if r is not None]
+    if len(radicals) == len(candidates):  # all exact: the largest 1 - r has the smallest r
+        smallest = radicals[0]
+        for r in radicals[1:]:
+            if r.compare(smallest) < 0:
+                smallest = r
+        if smallest.compare(RealRadical.of(Fraction(1), 1)) >= 0:
+            return 0.0, "0", warnings
+        with mpmath.workdps(50):
+            value = 1 - smallest.approx(40)
+        return float(value), smallest.one_minus_text(), warnings
+    val, rad, expr = max(candidates, key=lambda t: t[0])
+    if val <= 0:
         return 0.0, "0", warnings
-    text = str(best[1])
+    text = rad.one_minus_text() if rad is not None else str(expr)
     if len(text) > SHORT_TEXT_CHARS:
-        display[text] = short_text(text, float(best[0]), algebraic_degree(best[1]))
-    return float(best[0]), text, warnings
+        display[text] = short_text(text, float(val), algebraic_degree(expr) if expr is not None else None)
+    return float(val), text, warnings
 
 
 def _parse_options(request: Request) -> None:

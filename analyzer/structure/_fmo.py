@@ -30,6 +30,7 @@ import numpy as np
 from flint import arb, fmpq, fmpq_mat
 from sympy import QQ, Poly, resultant, symbols
 from sympy.polys.matrices import DomainMatrix
+from sympy.polys.polyerrors import BasePolynomialError
 
 from .._budget import Budget
 from ..errors import NumericalFailure
@@ -591,7 +592,7 @@ def build_block(
     oracle = None
     try:
         K, member_vals = _member_field_and_values(members, factors, mod_sq)
-    except (ArithmeticError, NotImplementedError, ValueError):  # SymPy may fail to build a large compositum
+    except (BasePolynomialError, ArithmeticError, NotImplementedError, ValueError):  # SymPy could not build or embed in the compositum
         K, member_vals = None, {}
     if K is not None:
         theta0 = member_vals[head]
