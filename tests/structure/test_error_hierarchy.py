@@ -18,8 +18,7 @@ import pytest
 
 from kfio import load_request
 from kfio.errors import AnalyzerError, InvalidInput, NumericalFailure
-from kfio.mare._phat import BatchedMare
-from kfio.mare._riccati import p_hat
+from kfio.mare._phat import BatchedMare, p_hat
 from kfio.service.cli import main
 from kfio.stability._decide import bernoulli_factor
 from kfio.stability._regions_constraints import block_constraints
