@@ -1,7 +1,9 @@
 """The ``kfio`` command line: ``kfio analyze FILE [--json]`` and friends.
 
 Sub-commands live in :mod:`kfio.service.commands`, one module each, discovered at
-start-up.  Exit codes are listed in :mod:`kfio.service.exitcodes`.
+start-up.  Exit codes are listed in :mod:`kfio.service.exitcodes`.  A command
+module imports the analyzer only when its command runs, so ``kfio --help`` and
+``kfio --version`` load neither SymPy nor CVXPY.
 """
 
 from __future__ import annotations
@@ -13,6 +15,7 @@ import sys
 import traceback
 from typing import Sequence
 
+from .._version import __version__
 from . import commands, exitcodes
 
 
@@ -23,6 +26,7 @@ def build_parser() -> argparse.ArgumentParser:
         epilog="Exit codes: 0 stable/ok, 1 unstable, 2 invalid input, 3 boundary, 4 budget exceeded, "
         "5 numerical failure, 70 internal error.",
     )
+    parser.add_argument("--version", action="version", version=f"kfio {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     sub.required = True
     for info in sorted(pkgutil.iter_modules(commands.__path__), key=lambda m: m.name):

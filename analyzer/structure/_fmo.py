@@ -32,7 +32,7 @@ from .._budget import Budget
 from ..errors import NumericalFailure
 from ..model._exact import fraction_text
 from ..model._types import Matrix, System, to_domain
-from ._algebraic import AlgebraicReal, real_root_matching
+from ._algebraic import AlgebraicReal, power_minus, real_root_matching
 from ._eigen import DIGITS, EigenFactor, X, eigen_factors
 from ._phases import PhaseBlock, Slot
 
@@ -374,7 +374,7 @@ def _cyclotomic_form(
             if rel is None:
                 return None
             m, k = rel
-            target = Poly(X ** (2 * m) - QQ(b.numerator**m, b.denominator**m), X, domain=QQ)
+            target = power_minus(2 * m, QQ(b.numerator**m, b.denominator**m))
             if not target.rem(f.poly).is_zero:
                 return None
             orders.append((m, k))

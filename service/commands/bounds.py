@@ -9,9 +9,6 @@ from __future__ import annotations
 
 import argparse
 
-from kfio import load_request
-from kfio.mare._compute import compute_bounds
-
 from .. import exitcodes
 from ..io import add_request_arguments, dump_json, read_request_text, run_guarded
 
@@ -32,6 +29,9 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
+    from kfio import load_request  # here, not at import: CVXPY takes seconds to load
+    from kfio.mare._compute import compute_bounds
+
     def body() -> int:
         request = load_request(read_request_text(args.file))
         flags = {k: getattr(args, k) for k in ("grid", "horizon", "tolerance") if getattr(args, k) is not None}
