@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from .._reporting import Report, stamped
 from ..model._exact import fraction_text
 from ._certificate import StabilityCertificate
 from ._lmi import SDPSolution
@@ -221,8 +222,8 @@ class RegionMap:
         }
 
 
-@dataclass(frozen=True)
-class BoundsReport:
+@dataclass(frozen=True, repr=False)
+class BoundsReport(Report):
     """Everything ``kfio bounds`` reports; :meth:`to_dict` is the JSON, :meth:`summary` the text."""
 
     packets: tuple[Packet, ...]
@@ -242,6 +243,15 @@ class BoundsReport:
     def one_packet(self) -> bool:
         return len(self.packets) == 1
 
+    def _repr_items(self) -> list[tuple[str, Any]]:
+        intervals = tuple((c.lower, None if c.upper.value is None else float(c.upper.value)) for c in self.critical)
+        return [
+            ("verdict", self.verdict),
+            ("critical_intervals", intervals),
+            ("trace_S_bar", _trace(self.covariance.s_bar)),
+            ("trace_V_bar", _trace(self.covariance.v_bar.matrix)),
+        ]
+
     def to_dict(self) -> dict[str, Any]:
         one = self.one_packet
         packets = [
@@ -256,7 +266,7 @@ class BoundsReport:
         sensors = None
         if not one:
             sensors = [{"name": p.name, "critical_interval": c.to_dict()} for p, c in zip(self.packets, self.critical)]
-        return {
+        return stamped({
             "command": "bounds",
             "packets": packets,
             "spectral_radius_A": num(self.rho),
@@ -279,7 +289,7 @@ class BoundsReport:
             "p_hat": None if self.p_hat is None else self.p_hat.to_dict(),
             "region": None if self.region is None else self.region.to_dict(),
             "notes": self._notes(),
-        }
+        })
 
     def _notes(self) -> list[str]:
         notes = []

@@ -41,6 +41,7 @@ from typing import Any
 import numpy as np
 
 from .._budget import Budget
+from .._reporting import Report, stamped
 from ..errors import InvalidInput, LimitExceeded
 from ..model._types import Request
 from ._channel import JointChannel
@@ -61,8 +62,8 @@ from ._setup import (
 _CHUNK_FLOATS = 1 << 22
 
 
-@dataclass(frozen=True, eq=False)
-class FiniteHorizonReport:
+@dataclass(frozen=True, eq=False, repr=False)
+class FiniteHorizonReport(Report):
     """``E[P_t]`` for ``t = 0..steps``, exactly up to float rounding.
 
     Attributes
@@ -112,10 +113,18 @@ class FiniteHorizonReport:
         """
         return log_slope_growth(self.mean_trace, window)
 
+    def _repr_items(self) -> list[tuple[str, Any]]:
+        return [
+            ("steps", self.steps),
+            ("sequences", self.sequences),
+            ("final_mean_trace", float(self.mean_trace[-1])),
+            ("diverged_at", self.diverged_at),
+        ]
+
     def to_dict(self) -> dict[str, Any]:
         growth = self.growth_per_step()
         last_ok = self.mean_covariance[-1]
-        return {
+        return stamped({
             "steps": self.steps,
             "sequences": self.sequences,
             "initial_channel": self.initial_channel,
@@ -125,7 +134,7 @@ class FiniteHorizonReport:
             "diverged_at": self.diverged_at,
             "imprecise_probability": finite_or_none(self.imprecise_probability[-1]),
             "growth_per_step": None if growth is None else finite_or_none(growth),
-        }
+        })
 
     def summary(self) -> str:
         lines = [

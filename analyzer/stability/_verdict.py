@@ -19,6 +19,7 @@ import mpmath
 import sympy
 
 from .._budget import Budget
+from .._reporting import Report, ShortRepr, stamped
 from ..errors import InvalidInput
 from ..model._request import require_assumption_1
 from ..model._types import MarkovChannel, PerSensorChannel, Request, System, to_domain
@@ -32,9 +33,11 @@ VERDICTS = ("stable", "boundary", "unstable")
 DEFAULT_BUDGET_S = 120.0
 
 
-@dataclass(frozen=True)
-class BlockReport:
+@dataclass(frozen=True, repr=False)
+class BlockReport(ShortRepr):
     """Theorem 1 applied to one FMO block."""
+
+    _repr_fields = ("eigenvalues", "modulus", "period", "sigma", "rate", "verdict")
 
     eigenvalues: tuple[str, ...]
     eigenvalues_numeric: tuple[complex, ...]
@@ -74,9 +77,11 @@ class BlockReport:
         }
 
 
-@dataclass(frozen=True)
-class StabilityReport:
+@dataclass(frozen=True, repr=False)
+class StabilityReport(Report):
     """The verdict of Theorem 1 for a whole request, with its evidence."""
+
+    _repr_fields = ("verdict", "critical_arrival_probability", "critical_arrival_probability_exact", "blocks")
 
     verdict: str
     blocks: tuple[BlockReport, ...]
@@ -90,7 +95,7 @@ class StabilityReport:
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON report (stable field names; see README)."""
-        return {
+        return stamped({
             "verdict": self.verdict,
             "theorem": "seed 001 (Rohr, Marelli, Fu), Theorem 1",
             "blocks": [b.to_dict() for b in self.blocks],
@@ -101,7 +106,7 @@ class StabilityReport:
             "assumptions": list(self.assumptions),
             "warnings": list(self.warnings),
             "regions": self.regions,
-        }
+        })
 
     def summary(self) -> str:
         """Readable multi-line summary for the terminal."""

@@ -1,0 +1,513 @@
+"""The Python API: ``kfio.System``, ``kfio.analyze``, ``kfio.bounds``, ``kfio.simulate``, ...
+
+One code path: every function here writes its arguments as the JSON tree of a
+request file (:mod:`kfio.model._coerce`), validates it with the same
+:func:`kfio.model._request.parse_request` as the CLI and the HTTP service, and
+calls the same function they call.  So ``kfio.analyze(sys, ch).to_dict()`` is
+the report ``kfio analyze --json`` prints for the same numbers, and an invalid
+argument gets the JSON route's message with the Python argument as the field
+(``A[0][1]``, ``channel['arrival_probability']``, ``steps``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import fields
+from typing import TYPE_CHECKING, Any
+
+from ._budget import Budget
+from .errors import InvalidInput
+from .model import _types
+from .model._channels import channel_tree
+from .model._coerce import Route, json_ready, python_tree, renamed
+from .model._exact import fraction_text
+from .model._limits import DEFAULT_LIMITS, Limits
+from .model._request import parse_request, parse_system
+from .model._types import Matrix, Request, Sensor
+
+if TYPE_CHECKING:
+    from .mare._report import BoundsReport
+    from .simulation._finite_horizon import FiniteHorizonReport
+    from .simulation._simulate import SimulationReport
+    from .stability._verdict import StabilityReport
+
+_MATRICES = ("A", "C", "Q", "R")
+
+
+def _matrix_text(m: Matrix) -> list[list[str]]:
+    return [[fraction_text(x) for x in row] for row in m]
+
+
+class System(_types.System):
+    """A linear plant observed through lossy packets: ``x[t+1] = A x[t] + w[t]``, ``y[t] = C x[t] + v[t]``.
+
+    ``w ~ N(0, Q)`` and ``v ~ N(0, R)`` are white; the measurement ``y[t]``
+    reaches the Kalman filter only when its packet arrives (Sinopoli et al.
+    2004, eq. (1)-(2)).  The constructor validates everything with the same
+    rules as a request file: ``A`` square, ``C`` with ``n`` columns, ``Q``
+    symmetric positive semidefinite, ``R`` symmetric positive definite, exactly.
+
+    Parameters
+    ----------
+    A, C:
+        Matrices: nested lists or tuples, numpy arrays of any real dtype, with
+        entries that are ints, floats, numpy scalars, ``Fraction`` or exact
+        strings (``"11/10"``, ``"1.1e-3"``).  A float means its shortest
+        decimal text: ``1.1`` is ``11/10``, never the nearest double.
+    Q, R:
+        Process and measurement noise covariances (optional: the verdict of
+        ``kfio.analyze`` does not depend on them; bounds and simulation need them).
+    sensors:
+        Packets, when rows of ``C`` travel separately: ``{"gps": [0], "imu": [1, 2]}``
+        (or a sequence of ``{"name": ..., "rows": [...]}``); the rows must
+        partition those of ``C``.
+    limits:
+        Size limits (default :data:`kfio.DEFAULT_LIMITS`).
+
+    Attributes
+    ----------
+    A, C, Q, R:
+        Exact matrices, tuples of tuples of :class:`fractions.Fraction`.
+    sensors:
+        Tuple of :class:`kfio.Sensor`, or ``None``.
+
+    Raises
+    ------
+    InvalidInput
+        Naming the argument and the rule, e.g. ``A[0][1]: expected a number,
+        got a complex`` or ``R: R must be positive definite``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> sys = System(A=np.array([[1.25, 0], [1, 1.1]]), C=[[1, 1]], Q=20 * np.eye(2), R=[[2.5]])
+    >>> sys.A[1][1], sys.n, sys.p
+    (Fraction(11, 10), 2, 1)
+    >>> sys
+    System(A=[['5/4', '0'], ['1', '11/10']], C=[['1', '1']], Q=[['20', '0'], ['0', '20']], R=[['5/2']])
+    >>> System(A=[[1, 2j]], C=[[1]])
+    Traceback (most recent call last):
+    ...
+    kfio.errors.InvalidInput: A[0][1]: expected a number, got a complex
+    """
+
+    def __init__(
+        self,
+        A: Any,
+        C: Any,
+        Q: Any = None,
+        R: Any = None,
+        sensors: Any = None,
+        *,
+        limits: Limits = DEFAULT_LIMITS,
+    ) -> None:
+        tree: dict[str, Any] = {"A": python_tree(A), "C": python_tree(C)}
+        if Q is not None:
+            tree["Q"] = python_tree(Q)
+        if R is not None:
+            tree["R"] = python_tree(R)
+        routes: list[Route] = []
+        if sensors is not None:
+            tree["sensors"], routes = _sensors_tree(sensors)
+        routes.append(("/system", "", tree, True))
+        try:
+            system = parse_system(tree, limits)
+        except InvalidInput as exc:
+            raise renamed(exc, routes) from None
+        for f in fields(_types.System):
+            object.__setattr__(self, f.name, getattr(system, f.name))
+
+    @classmethod
+    def from_statespace(cls, ss: Any, Q: Any = None, R: Any = None, *, sensors: Any = None) -> System:
+        """The plant of a discrete-time python-control ``StateSpace``.
+
+        Takes ``A`` and ``C`` of ``x[t+1] = A x[t] + B u[t] + w[t]``,
+        ``y[t] = C x[t] + D u[t] + v[t]``.  ``B`` and ``D`` are left out: a
+        known input shifts the estimate but not the error covariance, so
+        stability of the filter (Sinopoli et al. 2004) does not depend on them.
+        Needs the optional extra ``kfio[control]``; kfio itself never imports
+        python-control.
+
+        Parameters
+        ----------
+        ss:
+            ``control.StateSpace`` with a discrete time base (``dt > 0`` or
+            ``dt=True``).  A continuous-time system is refused: discretize it
+            first (``control.c2d(ss, Ts)`` or ``ss.sample(Ts)``).
+        Q, R, sensors:
+            As in :class:`System`.
+
+        Raises
+        ------
+        InvalidInput
+            Field ``ss``: not a state-space system, continuous time, or an
+            unspecified time base.
+
+        Examples
+        --------
+        >>> import control  # doctest: +SKIP
+        >>> System.from_statespace(control.ss([[1.1]], [[1]], [[1]], [[0]], 0.1), Q=[[1]], R=[[1]])  # doctest: +SKIP
+        System(A=[['11/10']], C=[['1']], Q=[['1']], R=[['1']])
+        """
+        if not all(hasattr(ss, a) for a in ("A", "C", "dt")):
+            kind = type(ss).__name__
+            raise InvalidInput(
+                "ss",
+                f"expected a python-control StateSpace; got a {kind} (convert a transfer function with control.ss)",
+            )
+        dt = ss.dt
+        if dt is None:
+            raise InvalidInput(
+                "ss",
+                "the StateSpace has an unspecified time base (dt=None); kfio needs a discrete-time system, "
+                "e.g. control.ss(A, B, C, D, dt) with the sampling period dt",
+            )
+        if dt is False or (dt is not True and dt == 0):
+            raise InvalidInput(
+                "ss",
+                "the StateSpace is continuous-time (dt=0); kfio analyzes discrete-time systems "
+                "x[t+1] = A x[t] + w[t]: discretize it first, e.g. control.c2d(ss, Ts) or ss.sample(Ts)",
+            )
+        return cls(A=ss.A, C=ss.C, Q=Q, R=R, sensors=sensors)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The ``system`` object of a request file (exact values as fraction text)."""
+        out: dict[str, Any] = {}
+        for name in _MATRICES:
+            m = getattr(self, name)
+            if m is not None:
+                out[name] = _matrix_text(m)
+        if self.sensors is not None:
+            out["sensors"] = [{"name": s.name, "rows": list(s.rows)} for s in self.sensors]
+        return out
+
+    def __repr__(self) -> str:
+        parts = [f"{k}={v!r}" for k, v in self.to_dict().items() if k != "sensors"]
+        if self.sensors is not None:
+            parts.append(f"sensors={ {s.name: list(s.rows) for s in self.sensors}!r}")
+        return f"System({', '.join(parts)})"
+
+
+def _sensors_tree(sensors: Any) -> tuple[list[Any], list[Route]]:
+    """Sensors as the request's list of ``{name, rows}``, and routes naming them as the user wrote them."""
+    if isinstance(sensors, Mapping):
+        tree = [{"name": name, "rows": python_tree(rows)} for name, rows in sensors.items()]
+        routes: list[Route] = []
+        for i, name in enumerate(sensors):
+            label = f"sensors[{name!r}]"
+            routes.append((f"/system/sensors/{i}/rows", label, tree[i]["rows"], False))
+            routes.append((f"/system/sensors/{i}", label, tree[i], False))
+        return tree, routes
+    if isinstance(sensors, Sequence) and not isinstance(sensors, (str, bytes)):
+        items = [{"name": s.name, "rows": list(s.rows)} if isinstance(s, Sensor) else s for s in sensors]
+        return python_tree(items), []
+    return sensors, []  # the validator says what it expected
+
+
+def _budget_of(budget: Any) -> tuple[Budget | None, Any]:
+    """``(Budget object, seconds for options.time_budget_s)``: one of them, or neither."""
+    if budget is None or isinstance(budget, Budget):
+        return budget, None
+    return None, python_tree(budget)
+
+
+def request_dict(
+    system: System,
+    channel: Any,
+    *,
+    command: str | None = None,
+    options: Mapping[str, Any] | None = None,
+    budget: Any = None,
+) -> dict[str, Any]:
+    """The request file for ``system`` and ``channel``, as a JSON-ready dict.
+
+    ``json.dump`` it and ``kfio <command> FILE`` (or ``POST /v1/<command>``)
+    answers exactly what :func:`analyze`, :func:`bounds` or :func:`simulate`
+    return for the same arguments.
+
+    Examples
+    --------
+    >>> from kfio import bernoulli
+    >>> request_dict(System(A=[[1.1]], C=[[1]]), bernoulli(0.5), command="analyze", budget=10)
+    {'system': {'A': [['11/10']], 'C': [['1']]}, 'channel': {'model': 'bernoulli', 'arrival_probability': '1/2'}, \
+'options': {'time_budget_s': 10}}
+    """
+    tree, _ = _tree(system, channel, command, options, budget)
+    return json_ready(tree)
+
+
+def _tree(
+    system: Any, channel: Any, command: str | None, options: Any, budget: Any, keywords: Mapping[str, Any] = {}
+) -> tuple[dict[str, Any], list[Route]]:
+    if not isinstance(system, _types.System):
+        raise InvalidInput("system", f"expected a kfio.System; got a {type(system).__name__}")
+    if not isinstance(system, System):
+        system = System(system.A, system.C, system.Q, system.R, system.sensors)
+    ch = channel_tree(channel)
+    tree: dict[str, Any] = {"system": system.to_dict(), "channel": ch}
+    routes: list[Route] = []
+    opts: dict[str, Any] = {}
+    if options is not None or keywords:
+        if command is None:
+            raise InvalidInput("options", "options need a command")
+        if options is not None and not isinstance(options, Mapping):
+            raise InvalidInput(
+                "options", f"expected a mapping of option names to values; got a {type(options).__name__}"
+            )
+        group = {**python_tree(dict(options or {})), **{k: python_tree(v) for k, v in keywords.items()}}
+        opts[command] = group
+        routes += [(f"/options/{command}/{k}", k, group[k], False) for k in keywords]
+        routes.append((f"/options/{command}", "options", group, False))
+    _, seconds = _budget_of(budget)
+    if seconds is not None:
+        opts["time_budget_s"] = seconds
+        routes.append(("/options/time_budget_s", "budget", seconds, False))
+    if opts:
+        tree["options"] = opts
+    if isinstance(ch, dict) and ch.get("model") == "per_sensor" and isinstance(ch.get("channels"), dict):
+        routes.append(("/channel/channels", "channel", ch["channels"], False))
+    routes += [("/options", "options", opts, False), ("/channel", "channel", ch, False)]
+    routes.append(("/system", "system", tree["system"], True))
+    return tree, routes
+
+
+def build_request(
+    system: System | Request,
+    channel: Any = None,
+    *,
+    command: str | None = None,
+    options: Mapping[str, Any] | None = None,
+    budget: Any = None,
+    limits: Limits = DEFAULT_LIMITS,
+    keywords: Mapping[str, Any] | None = None,
+) -> tuple[Request, Budget | None, list[Route]]:
+    """The validated :class:`~kfio.model._types.Request` that the JSON route builds from the same values.
+
+    A :class:`Request` passes through unchanged (the entry of the CLI and the
+    service).  Returns the request, the :class:`~kfio.Budget` object if one
+    was given, and the routes that rename later errors to Python arguments.
+    """
+    if isinstance(system, Request):
+        if channel is not None or options is not None or keywords:
+            raise InvalidInput("channel", "a validated Request already holds its channel and options")
+        work, seconds = _budget_of(budget)
+        if seconds is not None:
+            work = Budget(seconds=float(python_tree(seconds)))
+        return system, work, []
+    if channel is None:
+        raise InvalidInput("channel", "a channel is required, e.g. kfio.bernoulli(0.5)")
+    tree, routes = _tree(system, channel, command, options, budget, keywords or {})
+    work, _ = _budget_of(budget)
+    try:
+        return parse_request(tree, limits), work, routes
+    except InvalidInput as exc:
+        raise renamed(exc, routes) from None
+
+
+def _run(fn: Any, routes: Sequence[Route], *args: Any, **kwargs: Any) -> Any:
+    try:
+        return fn(*args, **kwargs)
+    except InvalidInput as exc:
+        raise renamed(exc, routes) from None
+
+
+def analyze(
+    system: System | Request, channel: Any = None, *, options: Mapping[str, Any] | None = None, budget: Any = None
+) -> StabilityReport:
+    """Decide whether the Kalman filter's expected error covariance stays bounded.
+
+    The exact verdict of Rohr, Marelli and Fu (2010), Theorem 1: bounded iff
+    ``|alpha_k|^2 sigma_k < 1`` for every FMO block ``k`` (groups of
+    eigenvalues of ``A`` of one modulus whose ratios are roots of unity),
+    where ``sigma_k`` is the per-step rate at which the probability of
+    staying blind to block ``k`` decays; unbounded if ``> 1`` for some block;
+    ``boundary`` at equality.  For a Bernoulli channel the report also gives
+    the exact critical arrival probability.
+
+    Parameters
+    ----------
+    system:
+        A :class:`System`, or a validated request (the CLI's and the
+        service's entry: ``analyze(load_request(text))``).
+    channel:
+        :func:`kfio.bernoulli`, :func:`kfio.gilbert_elliott`,
+        :func:`kfio.markov`, :func:`kfio.per_sensor`, or a channel's JSON object.
+    options:
+        ``options.analyze`` of a request (analyze takes none today).
+    budget:
+        Seconds (as ``options.time_budget_s``, in ``(0, 3600]``) or a
+        :class:`kfio.Budget`; default 120 s.
+
+    Returns
+    -------
+    StabilityReport
+        ``verdict``, ``critical_arrival_probability``, ``blocks[k].sigma``, ...;
+        ``to_dict()`` is the JSON of ``kfio analyze --json``.
+
+    Raises
+    ------
+    InvalidInput, AssumptionViolation
+        A bad argument (named), or a channel probability of 0 or 1 (Rohr,
+        Marelli and Fu 2010, Assumption 1).
+    BudgetExceeded
+        The computation did not fit the budget.
+
+    Examples
+    --------
+    >>> import kfio, numpy as np
+    >>> sys = kfio.System(A=np.array([[1.25, 0], [1, 1.1]]), C=[[1, 1]], Q=20 * np.eye(2), R=[[2.5]])
+    >>> r = kfio.analyze(sys, kfio.bernoulli(0.5))
+    >>> r.verdict, r.critical_arrival_probability_exact, r.blocks[0].sigma
+    ('stable', '9/25', 0.5)
+    """
+    from .stability._verdict import analyze as _analyze
+
+    request, work, routes = build_request(system, channel, command="analyze", options=options, budget=budget)
+    return _run(_analyze, routes, request, budget=work)
+
+
+def bounds(
+    system: System | Request, channel: Any = None, *, options: Mapping[str, Any] | None = None, budget: Any = None
+) -> BoundsReport:
+    """Bounds on the critical arrival probability and on ``lim E[P_t]``.
+
+    Sinopoli et al. (2004), Theorems 3-5 (``S_bar <= lim E[P_t] <= V_bar``,
+    ``lambda_lower <= lambda_c <= lambda_upper`` from an LMI whose certificate
+    is re-checked exactly), Liu and Goldsmith (2004) for several sensors, and
+    the ``P_hat_N`` sequence of Rohr, Marelli and Fu (2010) for one packet.
+    Needs ``Q`` and ``R`` and i.i.d. (Bernoulli) channels.  Imports CVXPY.
+
+    Parameters
+    ----------
+    system, channel, budget:
+        As in :func:`analyze`.
+    options:
+        ``options.bounds`` of a request: ``tolerance``, ``horizon``, ``grid``,
+        ``arrival_probability``.
+
+    Returns
+    -------
+    BoundsReport
+        ``to_dict()`` is the JSON of ``kfio bounds --json``.
+
+    Examples
+    --------
+    >>> import kfio
+    >>> b = kfio.bounds(kfio.System(A=[[-1.25]], C=[[1]], Q=[[1]], R=[[2.5]]), kfio.bernoulli(0.4))
+    >>> round(b.critical[0].lower, 9), b.verdict
+    (0.36, 'stable')
+    """
+    from .mare._compute import compute_bounds
+
+    request, work, routes = build_request(system, channel, command="bounds", options=options, budget=budget)
+    return _run(compute_bounds, routes, request, work)
+
+
+def simulate(
+    system: System | Request,
+    channel: Any = None,
+    *,
+    steps: int | None = None,
+    trajectories: int | None = None,
+    seed: int | None = None,
+    exact_steps: int | None = None,
+    P0: Any = None,
+    initial_channel: str | None = None,
+    options: Mapping[str, Any] | None = None,
+    budget: Any = None,
+) -> SimulationReport:
+    """Monte Carlo of the error covariance ``P_t`` of the intermittent Kalman filter.
+
+    Runs the stochastic Riccati recursion of Sinopoli et al. (2004), eq. (5)
+    along random arrival sequences and reports ``trace(P_t)``: mean with a
+    95% band, median, 90% and 99% percentiles; with ``exact_steps`` also the
+    exact ``E[P_t]`` (see :func:`expected_covariance`) to compare with.
+
+    Parameters
+    ----------
+    system, channel, budget:
+        As in :func:`analyze`; ``Q`` and ``R`` are needed.
+    steps, trajectories, seed, exact_steps, P0, initial_channel:
+        The keys of ``options.simulate`` (defaults: 200 steps, as many
+        trajectories as the work cap allows, seed 0, ``P0 = Q``, stationary
+        channel); a keyword wins over the same key in ``options``, as the
+        CLI's flags do.
+
+    Returns
+    -------
+    SimulationReport
+        ``to_dict()`` is the JSON of ``kfio simulate --json``.
+
+    Examples
+    --------
+    >>> import kfio
+    >>> sys = kfio.System(A=[[1.2]], C=[[1]], Q=[[1]], R=[[1]])
+    >>> rep = kfio.simulate(sys, kfio.bernoulli(0.5), steps=20, trajectories=1000, seed=1)
+    >>> rep.mean_trace.shape, rep.mean_diverged_at
+    ((21,), None)
+    """
+    from .simulation._simulate import simulate as _simulate
+
+    given = dict(
+        steps=steps,
+        trajectories=trajectories,
+        seed=seed,
+        exact_steps=exact_steps,
+        P0=P0,
+        initial_channel=initial_channel,
+    )
+    keywords = {k: v for k, v in given.items() if v is not None}
+    request, work, routes = build_request(
+        system, channel, command="simulate", options=options, budget=budget, keywords=keywords
+    )
+    return _run(_simulate, routes, request, work)
+
+
+def expected_covariance(
+    system: System | Request,
+    channel: Any = None,
+    steps: Any = None,
+    *,
+    P0: Any = None,
+    initial_channel: str | None = None,
+    budget: Any = None,
+) -> FiniteHorizonReport:
+    """The exact ``E[P_t]``, ``t = 0..steps``, by summing over every arrival sequence.
+
+    ``E[P_t] = sum_g P(g) P_t(g)`` over the ``2^(m t)`` arrival sequences
+    ``g`` of ``m`` packets (Rohr, Marelli and Fu 2010, eq. (7)), with the
+    Markov channel's probabilities; exact up to float rounding of the
+    Riccati steps.  For short horizons: ``2^(m steps)`` is limited.
+
+    Parameters
+    ----------
+    system, channel, budget:
+        As in :func:`analyze`; ``Q`` and ``R`` are needed.  With a validated
+        request, pass the horizon by keyword: ``expected_covariance(request, steps=4)``.
+    steps:
+        Horizon ``T >= 0`` (required).
+    P0, initial_channel:
+        Initial covariance (default ``Q``) and channel history before
+        ``t = 0`` (``"stationary"``, ``"all_lost"`` or ``"all_arrived"``).
+
+    Examples
+    --------
+    Scalar ``a = 2``, ``lambda = 1/2``, ``P_0 = Q = R = 1``:
+    ``E[P_1] = (1/2)(4 + 1) + (1/2)(4 - 4/2 + 1) = 4``.
+
+    >>> import kfio
+    >>> rep = kfio.expected_covariance(kfio.System(A=[[2]], C=[[1]], Q=[[1]], R=[[1]]), kfio.bernoulli(0.5), 1)
+    >>> float(rep.mean_trace[1])
+    4.0
+    """
+    from .simulation._finite_horizon import expected_covariance as _expected
+
+    if steps is None:
+        raise InvalidInput("steps", "the horizon is required: expected_covariance(system, channel, steps)")
+    keywords = {k: v for k, v in dict(P0=P0, initial_channel=initial_channel).items() if v is not None}
+    request, work, routes = build_request(system, channel, command="simulate", budget=budget, keywords=keywords)
+    routes = [("/options/simulate/exact_steps", "steps", steps, False), *routes]
+    return _run(_expected, routes, request, python_tree(steps), work)
+
+
+__all__ = ["System", "analyze", "bounds", "build_request", "expected_covariance", "request_dict", "simulate"]
