@@ -1,7 +1,7 @@
 """What every report shares: the version stamp, the JSON text and a short repr.
 
-The JSON of each report is built by its ``to_dict``; :func:`stamped` puts
-``kfio_version`` first in every one, and :func:`json_text` is the one way that
+The JSON of each report is built by its ``to_dict``, which starts with
+``**stamp()``: ``kfio_version`` comes first in every one, and :func:`json_text` is the one way that
 JSON becomes text (the CLI's ``--json``, the HTTP body and ``to_json()``).
 """
 
@@ -13,9 +13,9 @@ from typing import Any, ClassVar
 from ._version import __version__
 
 
-def stamped(report: dict[str, Any]) -> dict[str, Any]:
-    """``report`` with ``kfio_version`` as its first key."""
-    return {"kfio_version": __version__, **report}
+def stamp() -> dict[str, Any]:
+    """The fields every report's JSON starts with: ``{"kfio_version": ...}``."""
+    return {"kfio_version": __version__}
 
 
 def json_text(report: dict[str, Any]) -> str:

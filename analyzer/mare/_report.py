@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from .._reporting import Report, stamped
+from .._reporting import Report, stamp
 from ..model._exact import fraction_text
 from ._certificate import StabilityCertificate
 from ._lmi import SDPSolution
@@ -266,7 +266,8 @@ class BoundsReport(Report):
         sensors = None
         if not one:
             sensors = [{"name": p.name, "critical_interval": c.to_dict()} for p, c in zip(self.packets, self.critical)]
-        return stamped({
+        return {
+            **stamp(),
             "command": "bounds",
             "packets": packets,
             "spectral_radius_A": num(self.rho),
@@ -289,7 +290,7 @@ class BoundsReport(Report):
             "p_hat": None if self.p_hat is None else self.p_hat.to_dict(),
             "region": None if self.region is None else self.region.to_dict(),
             "notes": self._notes(),
-        })
+        }
 
     def _notes(self) -> list[str]:
         notes = []

@@ -41,7 +41,7 @@ from typing import Any
 import numpy as np
 
 from .._budget import Budget
-from .._reporting import Report, stamped
+from .._reporting import Report, stamp
 from ..errors import InvalidInput, LimitExceeded
 from ..model._types import Request
 from ._channel import JointChannel
@@ -124,7 +124,8 @@ class FiniteHorizonReport(Report):
     def to_dict(self) -> dict[str, Any]:
         growth = self.growth_per_step()
         last_ok = self.mean_covariance[-1]
-        return stamped({
+        return {
+            **stamp(),
             "steps": self.steps,
             "sequences": self.sequences,
             "initial_channel": self.initial_channel,
@@ -134,7 +135,7 @@ class FiniteHorizonReport(Report):
             "diverged_at": self.diverged_at,
             "imprecise_probability": finite_or_none(self.imprecise_probability[-1]),
             "growth_per_step": None if growth is None else finite_or_none(growth),
-        })
+        }
 
     def summary(self) -> str:
         lines = [

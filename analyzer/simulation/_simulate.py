@@ -42,7 +42,7 @@ from typing import Any
 import numpy as np
 
 from .._budget import Budget
-from .._reporting import Report, stamped
+from .._reporting import Report, stamp
 from ..model._types import Request
 from ._channel import JointChannel
 from ._finite_horizon import FiniteHorizonReport, expected_covariance
@@ -174,7 +174,8 @@ class SimulationReport(Report):
     def to_dict(self) -> dict[str, Any]:
         low, high = self.ci95
         o = self.options
-        return stamped({
+        return {
+            **stamp(),
             "steps": o.steps,
             "trajectories": o.trajectories,
             "seed": o.seed,
@@ -197,7 +198,7 @@ class SimulationReport(Report):
                 "exact_agreement": self.exact_agreement(),
             },
             "exact": None if self.exact is None else self.exact.to_dict(),
-        })
+        }
 
     def summary(self) -> str:
         o = self.options

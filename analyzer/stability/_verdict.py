@@ -19,7 +19,7 @@ import mpmath
 import sympy
 
 from .._budget import Budget
-from .._reporting import Report, ShortRepr, stamped
+from .._reporting import Report, ShortRepr, stamp
 from ..errors import InvalidInput
 from ..model._request import require_assumption_1
 from ..model._types import MarkovChannel, PerSensorChannel, Request, System, to_domain
@@ -95,7 +95,8 @@ class StabilityReport(Report):
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON report (stable field names; see README)."""
-        return stamped({
+        return {
+            **stamp(),
             "verdict": self.verdict,
             "theorem": "seed 001 (Rohr, Marelli, Fu), Theorem 1",
             "blocks": [b.to_dict() for b in self.blocks],
@@ -106,7 +107,7 @@ class StabilityReport(Report):
             "assumptions": list(self.assumptions),
             "warnings": list(self.warnings),
             "regions": self.regions,
-        })
+        }
 
     def summary(self) -> str:
         """Readable multi-line summary for the terminal."""
