@@ -43,7 +43,7 @@ class System(_types.System):
 
     ``w ~ N(0, Q)`` and ``v ~ N(0, R)`` are white; the measurement ``y[t]``
     reaches the Kalman filter only when its packet arrives (Sinopoli et al.
-    2004, eq. (1)-(2)).  The constructor validates everything with the same
+    2004; Rohr, Marelli and Fu 2014, eq. (1)).  The constructor validates everything with the same
     rules as a request file: ``A`` square, ``C`` with ``n`` columns, ``Q``
     symmetric positive semidefinite, ``R`` symmetric positive definite, exactly.
 
@@ -316,7 +316,7 @@ def analyze(
 ) -> StabilityReport:
     """Decide whether the Kalman filter's expected error covariance stays bounded.
 
-    The exact verdict of Rohr, Marelli and Fu (2010), Theorem 1: bounded iff
+    The exact verdict of Rohr, Marelli and Fu (2014), Theorem 1: bounded iff
     ``|alpha_k|^2 sigma_k < 1`` for every FMO block ``k`` (groups of
     eigenvalues of ``A`` of one modulus whose ratios are roots of unity),
     where ``sigma_k`` is the per-step rate at which the probability of
@@ -348,7 +348,7 @@ def analyze(
     ------
     InvalidInput, AssumptionViolation
         A bad argument (named), or a channel probability of 0 or 1 (Rohr,
-        Marelli and Fu 2010, Assumption 1).
+        Marelli and Fu 2014, Assumption 1).
     BudgetExceeded
         The computation did not fit the budget.
 
@@ -418,7 +418,7 @@ def simulate(
 ) -> SimulationReport:
     """Monte Carlo of the error covariance ``P_t`` of the intermittent Kalman filter.
 
-    Runs the stochastic Riccati recursion of Sinopoli et al. (2004), eq. (5)
+    Runs the random Riccati recursion (Rohr, Marelli and Fu 2014, eq. (2))
     along random arrival sequences and reports ``trace(P_t)``: mean with a
     95% band, median, 90% and 99% percentiles; with ``exact_steps`` also the
     exact ``E[P_t]`` (see :func:`expected_covariance`) to compare with.
@@ -475,7 +475,7 @@ def expected_covariance(
     """The exact ``E[P_t]``, ``t = 0..steps``, by summing over every arrival sequence.
 
     ``E[P_t] = sum_g P(g) P_t(g)`` over the ``2^(m t)`` arrival sequences
-    ``g`` of ``m`` packets (Rohr, Marelli and Fu 2010, eq. (7)), with the
+    ``g`` of ``m`` packets (Rohr, Marelli and Fu 2014, eq. (7)), with the
     Markov channel's probabilities; exact up to float rounding of the
     Riccati steps.  For short horizons: ``2^(m steps)`` is limited.
 

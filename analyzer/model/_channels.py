@@ -60,7 +60,7 @@ def bernoulli(p: Any, *, limits: Limits = DEFAULT_LIMITS) -> MarkovChannel:
 
 
 def gilbert_elliott(*, failure_rate: Any, recovery_rate: Any, limits: Limits = DEFAULT_LIMITS) -> MarkovChannel:
-    """Bursty losses: a two-state Gilbert-Elliott chain (Rohr, Marelli and Fu 2010, order 1).
+    """Bursty losses: a two-state Gilbert-Elliott chain (Rohr, Marelli and Fu 2014, order 1).
 
     ``P(lost | arrived before) = failure_rate`` and
     ``P(arrived | lost before) = recovery_rate``: a Markov channel of order 1
@@ -81,7 +81,7 @@ def gilbert_elliott(*, failure_rate: Any, recovery_rate: Any, limits: Limits = D
 def markov(
     arrival_probability: Mapping[str, Any], *, order: int | None = None, limits: Limits = DEFAULT_LIMITS
 ) -> MarkovChannel:
-    """A Markov packet channel of order ``nu`` (Rohr, Marelli and Fu 2010, Definition 2).
+    """A Markov packet channel of order ``nu`` (Rohr, Marelli and Fu 2014, Definition 2).
 
     Parameters
     ----------
