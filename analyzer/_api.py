@@ -62,7 +62,8 @@ class System(_types.System):
         (or a sequence of ``{"name": ..., "rows": [...]}``); the rows must
         partition those of ``C``.
     limits:
-        Size limits (default :data:`kfio.DEFAULT_LIMITS`).
+        Size limits (default :data:`kfio.DEFAULT_LIMITS`); the requests that
+        ``kfio.analyze`` and friends build from this system use them too.
 
     Attributes
     ----------
@@ -116,6 +117,7 @@ class System(_types.System):
             raise renamed(exc, routes) from None
         for f in fields(_types.System):
             object.__setattr__(self, f.name, getattr(system, f.name))
+        object.__setattr__(self, "_limits", limits)  # not a field: the requests built from it use them too
 
     @classmethod
     def from_statespace(cls, ss: Any, Q: Any = None, R: Any = None, *, sensors: Any = None) -> System:
@@ -237,12 +239,18 @@ def request_dict(
 
 
 def _tree(
-    system: Any, channel: Any, command: str | None, options: Any, budget: Any, keywords: Mapping[str, Any] = {}
+    system: Any,
+    channel: Any,
+    command: str | None,
+    options: Any,
+    budget: Any,
+    keywords: Mapping[str, Any] = {},
+    limits: Limits = DEFAULT_LIMITS,
 ) -> tuple[dict[str, Any], list[Route]]:
     if not isinstance(system, _types.System):
         raise InvalidInput("system", f"expected a kfio.System; got a {type(system).__name__}")
     if not isinstance(system, System):
-        system = System(system.A, system.C, system.Q, system.R, system.sensors)
+        system = System(system.A, system.C, system.Q, system.R, system.sensors, limits=limits)
     ch = channel_tree(channel)
     tree: dict[str, Any] = {"system": system.to_dict(), "channel": ch}
     routes: list[Route] = []
@@ -278,7 +286,7 @@ def build_request(
     command: str | None = None,
     options: Mapping[str, Any] | None = None,
     budget: Any = None,
-    limits: Limits = DEFAULT_LIMITS,
+    limits: Limits | None = None,
     keywords: Mapping[str, Any] | None = None,
 ) -> tuple[Request, Budget | None, list[Route]]:
     """The validated :class:`~kfio.model._types.Request` that the JSON route builds from the same values.
@@ -286,6 +294,7 @@ def build_request(
     A :class:`Request` passes through unchanged (the entry of the CLI and the
     service).  Returns the request, the :class:`~kfio.Budget` object if one
     was given, and the routes that rename later errors to Python arguments.
+    ``limits`` default to those the :class:`System` was built with.
     """
     if isinstance(system, Request):
         if channel is not None or options is not None or keywords:
@@ -296,7 +305,9 @@ def build_request(
         return system, work, []
     if channel is None:
         raise InvalidInput("channel", "a channel is required, e.g. kfio.bernoulli(0.5)")
-    tree, routes = _tree(system, channel, command, options, budget, keywords or {})
+    if limits is None:
+        limits = getattr(system, "_limits", DEFAULT_LIMITS)
+    tree, routes = _tree(system, channel, command, options, budget, keywords or {}, limits)
     work, _ = _budget_of(budget)
     try:
         return parse_request(tree, limits), work, routes

@@ -81,6 +81,14 @@ def test_too_large_is_a_limit():
         kfio.System(A=np.eye(41), C=np.ones((1, 41)))
 
 
+def test_a_system_built_with_larger_limits_is_analyzed_with_them():
+    huge = "1" + "0" * 299 + "/" + "3" * 300  # 300 digits, beyond the default 200
+    with pytest.raises(LimitExceeded, match=r"^A\[0\]\[0\]: numbers may have at most 200 digits$"):
+        kfio.System(A=[[huge]], C=[[1]])
+    system = kfio.System(A=[[huge]], C=[[1]], limits=kfio.Limits(max_digits=400))
+    assert kfio.analyze(system, kfio.bernoulli(0.5)).verdict == "stable"  # |a| = 0.3..., below 1
+
+
 def test_sensor_errors_name_the_sensor_as_written():
     with pytest.raises(InvalidInput, match=r"^sensors\['b'\]\[0\]: row 0 of C is already carried by sensor 'a'"):
         kfio.System(A=np.eye(2), C=np.eye(2), sensors={"a": [0], "b": [0]})
