@@ -147,8 +147,8 @@ class System(_types.System):
 
         Examples
         --------
-        >>> import control  # doctest: +SKIP
-        >>> System.from_statespace(control.ss([[1.1]], [[1]], [[1]], [[0]], 0.1), Q=[[1]], R=[[1]])  # doctest: +SKIP
+        >>> import control
+        >>> System.from_statespace(control.ss([[1.1]], [[1]], [[1]], [[0]], 0.1), Q=[[1]], R=[[1]])
         System(A=[['11/10']], C=[['1']], Q=[['1']], R=[['1']])
         """
         if not all(hasattr(ss, a) for a in ("A", "C", "dt")):
