@@ -16,7 +16,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "Exit 0 stable, 1 unstable, 3 boundary, 2 invalid input.",
     )
     add_request_arguments(p)
-    p.set_defaults(func=_run)
+    p.set_defaults(func=_run, quick_exit=True)
 
 
 def _run(args: argparse.Namespace) -> int:

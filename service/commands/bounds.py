@@ -25,7 +25,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--grid", type=int, metavar="K", help="K x K region map of two sensors' probabilities (2..41)")
     p.add_argument("--horizon", type=int, metavar="N", help="largest N of P_hat_N (one packet; default 8)")
     p.add_argument("--tolerance", type=float, metavar="T", help="bisection tolerance of lambda_upper (default 1e-6)")
-    p.set_defaults(func=_run)
+    p.set_defaults(func=_run, quick_exit=True)
 
 
 def _run(args: argparse.Namespace) -> int:

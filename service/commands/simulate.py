@@ -43,7 +43,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="also compute the exact E[P_t] by enumerating arrival sequences "
         f"(options.simulate.exact_steps, or up to 2^{DEFAULT_EXACT_SEQUENCES_LOG2} sequences)",
     )
-    p.set_defaults(func=_run)
+    p.set_defaults(func=_run, quick_exit=True)
 
 
 def with_overrides(request: Request, args: argparse.Namespace) -> Request:
