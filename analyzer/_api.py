@@ -252,6 +252,12 @@ def _tree(
     if not isinstance(system, System):
         system = System(system.A, system.C, system.Q, system.R, system.sensors, limits=limits)
     ch = channel_tree(channel)
+    if not isinstance(ch, dict):
+        raise InvalidInput(
+            "channel",
+            "expected a channel: kfio.bernoulli(p), kfio.gilbert_elliott(...), kfio.markov({...}), "
+            f"kfio.per_sensor({{...}}) or a channel's JSON object; got a {type(channel).__name__}",
+        )
     tree: dict[str, Any] = {"system": system.to_dict(), "channel": ch}
     routes: list[Route] = []
     opts: dict[str, Any] = {}
