@@ -27,7 +27,7 @@ from ._version import __version__
 #: Public name -> the module (relative to kfio) that defines it.
 _LAZY = {
     # the Python API
-    "System": "._api",
+    "System": "._system",
     "analyze": "._api",
     "bounds": "._api",
     "simulate": "._api",
@@ -69,8 +69,9 @@ _LAZY = {
 }
 
 if TYPE_CHECKING:  # what the lazy names are, for type checkers and editors
-    from ._api import System, analyze, bounds, build_request, expected_covariance, request_dict, simulate
+    from ._api import analyze, bounds, build_request, expected_covariance, request_dict, simulate
     from ._budget import Budget
+    from ._system import System
     from .errors import (
         AnalyzerError,
         AssumptionViolation,

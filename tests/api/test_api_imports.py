@@ -48,4 +48,4 @@ def test_every_public_name_resolves():
     for name in kfio.__all__:
         assert getattr(kfio, name) is not None, name
     assert set(kfio.__all__) <= set(dir(kfio))
-    assert kfio.System.__module__ == "kfio._api" and kfio.analyze.__module__ == "kfio._api"
+    assert kfio.System.__module__ == "kfio._system" and kfio.analyze.__module__ == "kfio._api"
