@@ -16,6 +16,7 @@ from fastapi.exceptions import RequestValidationError
 from fastapi.openapi.utils import get_openapi
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
+from kfio._version import __version__
 from kfio.errors import AnalyzerError
 
 from .api import api_router
@@ -24,7 +25,8 @@ from .dispatch import Dispatcher
 from .problems import ProblemError, problem_handler
 from .settings import Settings, get_settings
 
-API_VERSION = "1.0.0"
+#: OpenAPI ``info.version``: the package's version (the HTTP contract ships with the package).
+API_VERSION = __version__
 
 DESCRIPTION = """\
 Stability analysis of Kalman filters whose measurements travel over lossy packet channels.

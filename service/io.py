@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from typing import Any, Callable, TextIO
 
+from kfio._reporting import json_text
 from kfio.errors import BudgetExceeded, InvalidInput, NumericalFailure
 from kfio.model._exact import escaped
 
@@ -37,8 +37,8 @@ def add_request_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def dump_json(report: dict[str, Any]) -> str:
-    """Stable JSON text: fixed key order as built, two-space indent."""
-    return json.dumps(report, indent=2, allow_nan=False)
+    """Stable JSON text: fixed key order as built, two-space indent (the text of ``report.to_json()``)."""
+    return json_text(report)
 
 
 def emit(text: str, stream: TextIO | None = None) -> None:

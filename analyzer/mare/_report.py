@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .._json import json_float as num  # the one JSON-safe float of kfio
+from .._reporting import Report, stamp
 from ..model._exact import fraction_text
 from ..model._types import Packet
 from ._certificate import StabilityCertificate
@@ -220,8 +221,8 @@ class RegionMap:
         }
 
 
-@dataclass(frozen=True)
-class BoundsReport:
+@dataclass(frozen=True, repr=False)
+class BoundsReport(Report):
     """Everything ``kfio bounds`` reports; :meth:`to_dict` is the JSON, :meth:`summary` the text."""
 
     packets: tuple[Packet, ...]
@@ -241,6 +242,15 @@ class BoundsReport:
     def one_packet(self) -> bool:
         return len(self.packets) == 1
 
+    def _repr_items(self) -> list[tuple[str, Any]]:
+        intervals = tuple((c.lower, None if c.upper.value is None else float(c.upper.value)) for c in self.critical)
+        return [
+            ("verdict", self.verdict),
+            ("critical_intervals", intervals),
+            ("trace_S_bar", _trace(self.covariance.s_bar)),
+            ("trace_V_bar", _trace(self.covariance.v_bar.matrix)),
+        ]
+
     def to_dict(self) -> dict[str, Any]:
         one = self.one_packet
         packets = [
@@ -256,6 +266,7 @@ class BoundsReport:
         if not one:
             sensors = [{"name": p.name, "critical_interval": c.to_dict()} for p, c in zip(self.packets, self.critical)]
         return {
+            **stamp(),
             "command": "bounds",
             "packets": packets,
             "spectral_radius_A": num(self.rho),

@@ -88,7 +88,7 @@ def parse_number(value: Any, field: str, max_digits: int = 200) -> Fraction:
             raise LimitExceeded(field, f"numbers may have at most {max_digits} digits")
         return Fraction(value)
     if isinstance(value, float):
-        value = repr(value)
+        value = repr(float(value))  # numpy.float64 is a float whose repr is "np.float64(0.5)"
     if isinstance(value, Decimal):
         if not value.is_finite():
             raise InvalidInput(field, "NaN and infinities are not numbers")

@@ -42,6 +42,7 @@ import numpy as np
 
 from .._budget import Budget
 from .._json import json_float
+from .._reporting import Report, stamp
 from ..errors import InvalidInput, LimitExceeded
 from ..model._exact import value_text
 from ..model._types import Request
@@ -62,8 +63,8 @@ from ._setup import (
 _CHUNK_FLOATS = 1 << 22
 
 
-@dataclass(frozen=True, eq=False)
-class FiniteHorizonReport:
+@dataclass(frozen=True, eq=False, repr=False)
+class FiniteHorizonReport(Report):
     """``E[P_t]`` for ``t = 0..steps``, exactly up to float rounding.
 
     Attributes
@@ -113,10 +114,19 @@ class FiniteHorizonReport:
         """
         return log_slope_growth(self.mean_trace, window)
 
+    def _repr_items(self) -> list[tuple[str, Any]]:
+        return [
+            ("steps", self.steps),
+            ("sequences", self.sequences),
+            ("final_mean_trace", float(self.mean_trace[-1])),
+            ("diverged_at", self.diverged_at),
+        ]
+
     def to_dict(self) -> dict[str, Any]:
         growth = self.growth_per_step()
         last_ok = self.mean_covariance[-1]
         return {
+            **stamp(),
             "steps": self.steps,
             "sequences": self.sequences,
             "initial_channel": self.initial_channel,

@@ -43,6 +43,7 @@ import numpy as np
 
 from .._budget import Budget
 from .._json import json_float
+from .._reporting import Report, stamp
 from ..model._types import Request
 from ._channel import JointChannel
 from ._finite_horizon import FiniteHorizonReport, expected_covariance
@@ -87,8 +88,8 @@ class MonteCarloRun:
     arrival_rate: np.ndarray  # empirical, per packet
 
 
-@dataclass(frozen=True, eq=False)
-class SimulationReport:
+@dataclass(frozen=True, eq=False, repr=False)
+class SimulationReport(Report):
     """What ``kfio simulate`` reports.
 
     Attributes
@@ -160,10 +161,21 @@ class SimulationReport:
             "max_abs_z": json_float(z.max()) if z.size else None,
         }
 
+    def _repr_items(self) -> list[tuple[str, Any]]:
+        o = self.options
+        return [
+            ("steps", o.steps),
+            ("trajectories", o.trajectories),
+            ("seed", o.seed),
+            ("final_mean_trace", float(self.stats.mean[-1])),
+            ("mean_diverged_at", self.mean_diverged_at),
+        ]
+
     def to_dict(self) -> dict[str, Any]:
         low, high = self.ci95
         o = self.options
         return {
+            **stamp(),
             "steps": o.steps,
             "trajectories": o.trajectories,
             "seed": o.seed,

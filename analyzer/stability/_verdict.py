@@ -19,6 +19,7 @@ import mpmath
 import sympy
 
 from .._budget import Budget
+from .._reporting import Report, ShortRepr, stamp
 from ..errors import InvalidInput
 from ..model._exact import finite_or_none
 from ..model._request import require_assumption_1
@@ -34,9 +35,11 @@ from ._sigma import SigmaResult, compute_sigma, period_transfer_matrix
 DEFAULT_BUDGET_S = 120.0
 
 
-@dataclass(frozen=True)
-class BlockReport:
+@dataclass(frozen=True, repr=False)
+class BlockReport(ShortRepr):
     """Theorem 1 applied to one FMO block."""
+
+    _repr_fields = ("eigenvalues", "modulus", "period", "sigma", "rate", "verdict")
 
     eigenvalues: tuple[str, ...]
     eigenvalues_numeric: tuple[complex, ...]
@@ -76,9 +79,11 @@ class BlockReport:
         }
 
 
-@dataclass(frozen=True)
-class StabilityReport:
+@dataclass(frozen=True, repr=False)
+class StabilityReport(Report):
     """The verdict of Theorem 1 for a whole request, with its evidence."""
+
+    _repr_fields = ("verdict", "critical_arrival_probability", "critical_arrival_probability_exact", "blocks")
 
     verdict: str
     blocks: tuple[BlockReport, ...]
@@ -100,6 +105,7 @@ class StabilityReport:
     def to_dict(self) -> dict[str, Any]:
         """The JSON report (stable field names; see README)."""
         return {
+            **stamp(),
             "verdict": self.verdict,
             "theorem": "Rohr, Marelli and Fu 2014, Theorem 1",
             "blocks": [b.to_dict() for b in self.blocks],

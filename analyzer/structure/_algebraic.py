@@ -23,6 +23,22 @@ from ._balls import MAX_PREC, START_PREC, integer_coeffs, precision, rational_ba
 from ._eigen import DIGITS, X
 
 
+def power_minus(N: int, c: Any) -> Poly:
+    """``x**N - c`` over ``QQ``, built from its coefficients.
+
+    Building it as the expression ``X**N - c`` costs the first call about
+    0.1 s of SymPy sub-imports (combinatorics, tensor); the coefficient list
+    does not.
+
+    Examples
+    --------
+    >>> power_minus(3, QQ(1, 2)).all_coeffs()
+    [1, 0, 0, -1/2]
+    """
+    coeffs = [QQ(1)] + [QQ(0)] * (N - 1) + [-QQ(c)] if N > 0 else [QQ(1) - QQ(c)]
+    return Poly.from_list(coeffs, X, domain=QQ)
+
+
 @dataclass(frozen=True)
 class AlgebraicReal:
     """A positive real algebraic number: ``CRootOf(minpoly, index)`` or a rational."""
@@ -96,7 +112,7 @@ class AlgebraicReal:
             v = self.rational**N - c
             return (v > 0) - (v < 0)
         assert self.minpoly is not None
-        target = Poly(X**N - QQ(c.numerator, c.denominator), X, domain=QQ)
+        target = power_minus(N, QQ(c.numerator, c.denominator))
         if target.rem(self.minpoly).is_zero:
             return 0
         prec = START_PREC

@@ -37,7 +37,7 @@ from ..errors import NumericalFailure
 from ..model._exact import fraction_text
 from ..model._types import Matrix, System
 from ._adjugate import to_fmpq_mat
-from ._algebraic import AlgebraicReal
+from ._algebraic import AlgebraicReal, power_minus
 from ._balls import MAX_PREC, START_PREC, horner, precision, sign, to_float
 from ._eigen import DIGITS, EigenFactor, X, eigen_factors
 from ._modulus import modulus_squared
@@ -477,7 +477,7 @@ def _cyclotomic_form(
             if rel is None:
                 return None
             m, k = rel
-            target = Poly(X ** (2 * m) - QQ(b.numerator**m, b.denominator**m), X, domain=QQ)
+            target = power_minus(2 * m, QQ(b.numerator**m, b.denominator**m))
             if not target.rem(f.poly).is_zero:
                 return None
             orders.append((m, k))

@@ -11,7 +11,12 @@ from __future__ import annotations
 
 from typing import Any
 
+from kfio._version import __version__
+
 _NUMBER_PATTERN = r"^\s*[+-]?(\d+(\.\d*)?|\.\d+)([eE][+-]?\d+)?\s*(/\s*[+-]?(\d+(\.\d*)?|\.\d+)([eE][+-]?\d+)?\s*)?$"
+
+
+_KFIO_VERSION = {"type": "string", "description": "The version of kfio that made the report", "examples": [__version__]}
 
 
 def _ref(name: str) -> dict[str, str]:
@@ -92,6 +97,7 @@ _SEED000_TWO_SENSORS = {
 
 #: ``kfio analyze --json`` on ``_SEED004_SCALAR`` (lambda_c = 9/25, as seed 004 finds).
 _SEED004_SCALAR_REPORT = {
+    "kfio_version": __version__,
     "verdict": "stable",
     "theorem": "Rohr, Marelli and Fu 2014, Theorem 1",
     "blocks": [
@@ -123,6 +129,7 @@ _SEED004_SCALAR_REPORT = {
 
 #: ``kfio bounds --json`` on ``_SEED004_SCALAR`` (abbreviated: P_hat_N for N = 1 and 8 only).
 _SEED004_SCALAR_BOUNDS = {
+    "kfio_version": __version__,
     "command": "bounds",
     "packets": [{"name": None, "rows": [0], "arrival_probability": 0.5, "arrival_probability_exact": "1/2"}],
     "spectral_radius_A": 1.25,
@@ -162,6 +169,7 @@ _SEED004_SCALAR_BOUNDS = {
 
 #: ``kfio simulate --json`` on ``_SEED004_SCALAR`` with steps 4, 1000 trajectories, seed 1 (rounded).
 _SEED004_SCALAR_SIMULATION = {
+    "kfio_version": __version__,
     "steps": 4,
     "trajectories": 1000,
     "seed": 1,
@@ -352,6 +360,7 @@ COMPONENTS: dict[str, dict[str, Any]] = {
             'Exact values are strings ("9/25"), their float approximations numbers.'
         ),
         "properties": {
+            "kfio_version": _KFIO_VERSION,
             "verdict": {"type": "string", "enum": ["stable", "unstable", "boundary"]},
             "theorem": {"type": "string"},
             "blocks": {"type": "array", "items": {"type": "object"}},
@@ -362,7 +371,7 @@ COMPONENTS: dict[str, dict[str, Any]] = {
             "assumptions": {"type": "array", "items": {"type": "string"}},
             "warnings": {"type": "array", "items": {"type": "string"}},
         },
-        "required": ["verdict", "blocks"],
+        "required": ["kfio_version", "verdict", "blocks"],
         "examples": [_SEED004_SCALAR_REPORT],
     },
     "BoundsReport": {
@@ -373,6 +382,7 @@ COMPONENTS: dict[str, dict[str, Any]] = {
             "one packet, and the region map for two packets when options.bounds.grid is set."
         ),
         "properties": {
+            "kfio_version": _KFIO_VERSION,
             "command": {"const": "bounds"},
             "packets": {"type": "array", "items": {"type": "object"}},
             "spectral_radius_A": {"type": ["number", "null"]},
@@ -390,7 +400,7 @@ COMPONENTS: dict[str, dict[str, Any]] = {
             "region": {"type": ["object", "null"]},
             "notes": {"type": "array", "items": {"type": "string"}},
         },
-        "required": ["command", "packets", "operating_point", "covariance"],
+        "required": ["kfio_version", "command", "packets", "operating_point", "covariance"],
         "examples": [_SEED004_SCALAR_BOUNDS],
     },
     "SimulationReport": {
@@ -400,6 +410,7 @@ COMPONENTS: dict[str, dict[str, Any]] = {
             "t = 0..steps (null where a trajectory diverged)."
         ),
         "properties": {
+            "kfio_version": _KFIO_VERSION,
             "steps": {"type": "integer"},
             "trajectories": {"type": "integer"},
             "seed": {"type": "integer"},
@@ -414,7 +425,7 @@ COMPONENTS: dict[str, dict[str, Any]] = {
             "checks": {"type": "object"},
             "exact": {"type": ["object", "null"]},
         },
-        "required": ["steps", "trajectories", "seed", "mean_trace", "percentiles", "diverged"],
+        "required": ["kfio_version", "steps", "trajectories", "seed", "mean_trace", "percentiles", "diverged"],
         "examples": [_SEED004_SCALAR_SIMULATION],
     },
     "Problem": {
