@@ -18,7 +18,7 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 
 from kfio.errors import AnalyzerError
 
-from .api import api_router
+from .api import api_router, web
 from .api.schemas import COMPONENTS
 from .dispatch import Dispatcher
 from .jobstore import JobStore
@@ -64,8 +64,11 @@ def create_app(settings: Settings | None = None) -> FastAPI:
             await asyncio.gather(*starting, return_exceptions=True)
             app.state.dispatcher = app.state.jobs = None
 
-    app = FastAPI(title="kfio", version=API_VERSION, description=DESCRIPTION, lifespan=lifespan)
+    app = FastAPI(
+        title="kfio", version=API_VERSION, description=DESCRIPTION, lifespan=lifespan, docs_url=None, redoc_url=None
+    )
     app.include_router(api_router)
+    web.install(app)  # /, /docs, /redoc: every asset from the package, none from another host
     for exc in (ProblemError, AnalyzerError, RequestValidationError, StarletteHTTPException, Exception):
         app.add_exception_handler(exc, problem_handler)
 
