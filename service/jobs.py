@@ -28,6 +28,7 @@ from typing import Any, Callable, Mapping
 from kfio import Budget, Request, load_request
 
 from .problems import Unavailable, problem_from_exception
+from .progress import budget_for
 from .settings import Settings
 
 log = logging.getLogger("kfio.service")
@@ -128,7 +129,8 @@ def run_job(name: str, body: bytes, settings: Settings, params: Mapping[str, Any
         fn = JOBS.get(name)
         if fn is None:
             raise Unavailable(f"unknown job {name!r}")
-        content, media_type = fn(body, settings, Budget(seconds=budget_s), params)
+        budget, params = budget_for(budget_s, params)  # a job's progress file, if it has one
+        content, media_type = fn(body, settings, budget, params)
         return ("ok", content, media_type)
     except Exception as exc:  # noqa: BLE001 - every failure becomes a problem document
         problem = problem_from_exception(exc)
