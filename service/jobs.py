@@ -106,6 +106,13 @@ def _plot_job(name: str) -> JobFn:
     return job
 
 
+def _sweep_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[str, Any]) -> JobOutput:
+    """``POST /v1/sweeps``: :func:`kfio.service.sweep_jobs.sweep_job` (imported when a sweep runs)."""
+    from .sweep_jobs import sweep_job
+
+    return sweep_job(body, settings, budget, params)
+
+
 JOBS: dict[str, JobFn] = {
     "analyze": analyze_job,
     "bounds": bounds_job,
@@ -113,6 +120,7 @@ JOBS: dict[str, JobFn] = {
     "plot-phase-transition": _plot_job("phase_transition"),
     "plot-region": _plot_job("region"),
     "plot-simulation": _plot_job("simulation"),
+    "sweep": _sweep_job,
 }
 
 

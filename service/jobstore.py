@@ -72,6 +72,7 @@ from .pool import PoolTimeout, WorkerPool
 from .problems import Problem, ProblemError, problem_from_exception
 from .progress import PROGRESS_KEY, read_progress
 from .settings import Settings
+from .sweep_jobs import sweep_fraction
 
 log = logging.getLogger("kfio.service")
 
@@ -423,4 +424,5 @@ BUILTIN_KINDS = (
     worker_kind("analyze"),
     worker_kind("bounds"),
     worker_kind("simulate", fraction=simulation_fraction),
+    worker_kind("sweep", fraction=sweep_fraction),
 )

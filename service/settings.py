@@ -58,6 +58,11 @@ class Settings(BaseSettings):
         answers 429.
     job_retention:
         Finished jobs kept for polling (the oldest are forgotten first).
+    dask_scheduler:
+        Address of a Dask scheduler (``tcp://HOST:PORT``) that ``POST /v1/sweeps``
+        runs its sweeps on; without it a sweep runs in its job-lane worker.
+    max_sweep_points:
+        Points one ``POST /v1/sweeps`` may have.
     """
 
     model_config = SettingsConfigDict(env_prefix="KFIO_", frozen=True, extra="ignore")
@@ -80,6 +85,8 @@ class Settings(BaseSettings):
     job_time_budget_s: float = Field(3600.0, gt=0, le=86400)
     max_jobs: int = Field(16, ge=0)
     job_retention: int = Field(64, ge=1)
+    dask_scheduler: str | None = Field(None, pattern=r"^(tcp|tls|inproc)://[^\s]+$")
+    max_sweep_points: int = Field(100_000, ge=1, le=1_000_000)
 
     def limits(self) -> Limits:
         """The request size limits of this deployment."""

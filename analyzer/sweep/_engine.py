@@ -76,6 +76,21 @@ class SweepResult:
         cols = self.columns
         return [{c: r.to_dict().get(c) for c in cols} for r in self.rows]
 
+    def to_dict(self) -> dict[str, Any]:
+        """The sweep as JSON: how it ran, its columns and one record per point (index order)."""
+        return {
+            "command": self.spec.command,
+            "points": len(self.rows),
+            "errors": sum(1 for r in self.rows if r.fields.get("error")),
+            "stopped": self.stopped,
+            "engine": self.engine,
+            "workers": self.workers,
+            "tasks": self.chunks,
+            "seconds": round(self.seconds, 3),
+            "columns": self.columns,
+            "rows": self.records(),
+        }
+
 
 def chunk_size_for(n_points: int, workers: int, requested: int | None = None) -> int:
     """Points per task: ``requested``, else enough tasks for balance, at most :data:`MAX_CHUNK`."""
