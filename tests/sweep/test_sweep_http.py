@@ -8,6 +8,7 @@ import time
 import httpx
 
 from kfio.sweep import load_sweep, run_sweep
+
 from support.live_server import LiveServer
 
 BASE = {
