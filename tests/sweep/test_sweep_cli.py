@@ -139,3 +139,12 @@ def test_unreachable_scheduler_is_invalid_input(tmp_path, capsys):
     port = _free_port()
     assert main(["sweep", write(tmp_path, SWEEP), "--scheduler", f"tcp://127.0.0.1:{port}", "--quiet"]) == 2
     assert "cannot reach the Dask scheduler" in capsys.readouterr().err
+
+
+def test_sweep_budget_gives_every_point_a_row_and_exit_4(tmp_path, capsys):
+    doc = {**SWEEP, "options": {"time_budget_s": "0.01", "chunk_size": 1}}
+    out = tmp_path / "t.csv"
+    assert main(["sweep", write(tmp_path, doc), "--serial", "--quiet", "--out", str(out)]) == 4
+    rows = list(csv.DictReader(out.open()))
+    assert [int(r["index"]) for r in rows] == list(range(13))
+    assert rows[-1]["error"].startswith("budget-exceeded")
