@@ -63,7 +63,7 @@ def _fields(command: str, report: Mapping[str, Any]) -> dict[str, Any]:
             "critical_arrival_probability": report.get("critical_arrival_probability"),
             "critical_arrival_probability_exact": report.get("critical_arrival_probability_exact"),
             "certified": all(b.get("certified", False) for b in report.get("blocks", [])),
-            "tail_exponent": _dig(tail, "exponent") if isinstance(tail, Mapping) else None,
+            "tail_exponent": _dig(tail, "kappa"),
         }
     if command == "bounds":
         return {
