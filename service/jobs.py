@@ -28,6 +28,7 @@ from kfio import Budget, Request, load_request
 
 from .loader import resolve
 from .problems import Unavailable, problem_from_exception
+from .progress import budget_for
 from .settings import Settings
 
 log = logging.getLogger("kfio.service")
@@ -91,6 +92,13 @@ def _plot_job(name: str) -> JobFn:
     return job
 
 
+def _sweep_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[str, Any]) -> JobOutput:
+    """``POST /v1/sweeps``: :func:`kfio.service.sweep_jobs.sweep_job` (imported when a sweep runs)."""
+    from .sweep_jobs import sweep_job
+
+    return sweep_job(body, settings, budget, params)
+
+
 JOBS: dict[str, JobFn] = {
     "analyze": analyze_job,
     "bounds": bounds_job,
@@ -98,6 +106,7 @@ JOBS: dict[str, JobFn] = {
     "plot-phase-transition": _plot_job("phase_transition"),
     "plot-region": _plot_job("region"),
     "plot-simulation": _plot_job("simulation"),
+    "sweep": _sweep_job,
 }
 
 
@@ -114,7 +123,8 @@ def run_job(name: str, body: bytes, settings: Settings, params: Mapping[str, Any
         fn = JOBS.get(name)
         if fn is None:
             raise Unavailable(f"unknown job {name!r}")
-        content, media_type = fn(body, settings, Budget(seconds=budget_s), params)
+        budget, params = budget_for(budget_s, params)  # a job's progress file, if it has one
+        content, media_type = fn(body, settings, budget, params)
         return ("ok", content, media_type)
     except Exception as exc:  # noqa: BLE001 - every failure becomes a problem document
         problem = problem_from_exception(exc)

@@ -354,7 +354,7 @@ def _parse_options(request: Request) -> None:
         raise InvalidInput(f"/options/analyze/{key}", "analyze takes no options")
 
 
-def analyze(request: Request, budget: Budget | None = None) -> StabilityReport:
+def analyze(request: Request, budget: Budget | None = None, *, fmo: Sequence[FmoBlock] | None = None) -> StabilityReport:
     """Decide stability of the expected error covariance (seed 001, Theorem 1).
 
     Parameters
@@ -364,6 +364,10 @@ def analyze(request: Request, budget: Budget | None = None) -> StabilityReport:
         are not needed: the verdict does not depend on them.
     budget:
         Work budget; defaults to ``request.time_budget_s`` or 120 s.
+    fmo:
+        The FMO blocks of ``request.system`` (:func:`kfio.structure.fmo_blocks`),
+        when the caller already has them (a sweep that varies only the
+        channel); they depend on ``A`` and ``C`` alone.  Computed when omitted.
 
     Returns
     -------
@@ -393,7 +397,8 @@ def analyze(request: Request, budget: Budget | None = None) -> StabilityReport:
     system = request.system
     channels = _channels_of(request)
     basis = "extension" if len(channels) > 1 else "theorem"
-    fmo = fmo_blocks(system, budget)
+    if fmo is None:
+        fmo = fmo_blocks(system, budget)
     analyzed = [_analyze_block(b, channels, basis, budget) for b in fmo]
     blocks = [rep for rep, _ in analyzed]
     verdict = max((b.verdict for b in blocks), key=VERDICTS.index, default="stable")

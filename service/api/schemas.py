@@ -465,6 +465,11 @@ COMPONENTS: dict[str, dict[str, Any]] = {
             "status": {"type": "string", "enum": ["ready"]},
             "pool": {"type": "object", "additionalProperties": {"type": "integer"}},
             "cache": {"type": "object", "additionalProperties": {"type": "integer"}},
+            "jobs": {
+                "type": "object",
+                "description": "the job lane: its workers, the queue bound, and jobs held by status",
+                "additionalProperties": {"type": "integer"},
+            },
         },
         "required": ["status", "pool", "cache"],
         "examples": [
@@ -481,8 +486,11 @@ COMPONENTS: dict[str, dict[str, Any]] = {
 def problem_responses(*statuses: int) -> dict[int | str, dict[str, Any]]:
     """OpenAPI ``responses`` entries for problem documents."""
     texts = {
+        404: "No such job (unknown, forgotten after the retention limit, or the server restarted)",
+        409: "The job is not in a state that allows this (already finished, or no result yet)",
         413: "Request body larger than the deployment's limit (1 MiB by default)",
         422: "Invalid request: the problem names the field (JSON pointer) and the rule",
+        429: "Too many jobs are queued (the deployment's `KFIO_MAX_JOBS`); retry later",
         501: "This part of the analyzer is not available in this build",
         503: "No worker became free in time, or a worker died; retry later",
         504: "The computation did not finish within its time budget",
