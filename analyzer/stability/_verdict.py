@@ -26,6 +26,7 @@ from ..structure._fmo import FmoBlock, fmo_blocks
 from ._decide import bernoulli_factor, compare_rate_bernoulli, compare_rate_markov
 from ._regions import region_report
 from ._sigma import SigmaResult, compute_sigma, period_transfer_matrix
+from ._tail import TailReport, tail_report
 
 VERDICTS = ("stable", "boundary", "unstable")
 #: Default wall-clock budget (s) of one analysis when the request sets none.
@@ -87,6 +88,7 @@ class StabilityReport:
     assumptions: tuple[str, ...] = ()
     warnings: tuple[str, ...] = ()
     regions: Optional[dict[str, Any]] = None
+    tail: Optional[TailReport] = None
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON report (stable field names; see README)."""
@@ -101,6 +103,7 @@ class StabilityReport:
             "assumptions": list(self.assumptions),
             "warnings": list(self.warnings),
             "regions": self.regions,
+            "tail": self.tail.to_dict() if self.tail is not None else None,
         }
 
     def summary(self) -> str:
@@ -133,6 +136,8 @@ class StabilityReport:
                     s.get("status"), str(s.get("status"))
                 )
             lines.append(f"sensor {s['sensor']}: critical arrival probability given the others {crit}  [extension]")
+        if self.tail is not None:
+            lines.extend(self.tail.summary_lines())
         for a in self.assumptions:
             lines.append(f"assumption: {a}")
         for w in self.warnings:
@@ -365,6 +370,7 @@ def analyze(request: Request, budget: Budget | None = None) -> StabilityReport:
         system={"n": system.n, "p": system.p, "controllable_A_Q": controllable},
         assumptions=tuple(assumptions),
         warnings=tuple(warnings),
+        tail=tail_report([(b, res) for b, (_, res) in zip(fmo, analyzed)], channels),
     )
     if basis != "extension":
         return report
