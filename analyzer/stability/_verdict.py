@@ -19,11 +19,12 @@ import mpmath
 import sympy
 
 from .._budget import Budget
-from ..errors import InvalidInput
 from ..model._request import require_assumption_1
 from ..model._types import MarkovChannel, PerSensorChannel, Request, System, to_domain
 from ..structure._fmo import FmoBlock, fmo_blocks
 from ._decide import bernoulli_factor, compare_rate_bernoulli, compare_rate_markov
+from ._design_options import analyze_options
+from ._ge_region import GeRegion, ge_region
 from ._regions import region_report
 from ._sigma import SigmaResult, compute_sigma, period_transfer_matrix
 from ._tail import TailReport, tail_report
@@ -89,6 +90,7 @@ class StabilityReport:
     warnings: tuple[str, ...] = ()
     regions: Optional[dict[str, Any]] = None
     tail: Optional[TailReport] = None
+    gilbert_elliott: Optional[GeRegion] = None
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON report (stable field names; see README)."""
@@ -104,6 +106,7 @@ class StabilityReport:
             "warnings": list(self.warnings),
             "regions": self.regions,
             "tail": self.tail.to_dict() if self.tail is not None else None,
+            "gilbert_elliott_region": self.gilbert_elliott.to_dict() if self.gilbert_elliott is not None else None,
         }
 
     def summary(self) -> str:
@@ -138,6 +141,8 @@ class StabilityReport:
             lines.append(f"sensor {s['sensor']}: critical arrival probability given the others {crit}  [extension]")
         if self.tail is not None:
             lines.extend(self.tail.summary_lines())
+        if self.gilbert_elliott is not None:
+            lines.extend(self.gilbert_elliott.summary_lines())
         for a in self.assumptions:
             lines.append(f"assumption: {a}")
         for w in self.warnings:
@@ -292,12 +297,6 @@ def _critical_probability(blocks: Sequence[BlockReport]) -> tuple[float | None, 
     return float(best[0]), str(best[1]), warnings
 
 
-def _parse_options(request: Request) -> None:
-    opts = request.options.get("analyze", {})
-    for key in opts:
-        raise InvalidInput(f"/options/analyze/{key}", "analyze takes no options")
-
-
 def analyze(request: Request, budget: Budget | None = None) -> StabilityReport:
     """Decide stability of the expected error covariance (seed 001, Theorem 1).
 
@@ -330,7 +329,7 @@ def analyze(request: Request, budget: Budget | None = None) -> StabilityReport:
     >>> analyze(req).verdict
     'boundary'
     """
-    _parse_options(request)
+    opts = analyze_options(request)
     require_assumption_1(request.channel)
     if budget is None:
         budget = Budget(seconds=request.time_budget_s or DEFAULT_BUDGET_S)
@@ -372,6 +371,9 @@ def analyze(request: Request, budget: Budget | None = None) -> StabilityReport:
         warnings=tuple(warnings),
         tail=tail_report([(b, res) for b, (_, res) in zip(fmo, analyzed)], channels),
     )
+    if len(channels) == 1 and channels[0].model == "gilbert_elliott":
+        items = [(b, res) for b, (_, res) in zip(fmo, analyzed)]
+        report = dataclasses.replace(report, gilbert_elliott=ge_region(items, channels[0], budget, opts.ge_grid))
     if basis != "extension":
         return report
     # per-sensor Bernoulli channels: exact critical probability of each sensor, and for two
