@@ -242,9 +242,15 @@ def block_tail(
         c_rational = bernoulli_factor(res.bernoulli_exponents, lambdas, N)
         c_expr = sympy.Rational(c_rational.numerator, c_rational.denominator)
     else:
-        P = period_transfer_matrix(N, _worst_set(res, channels), channels)
-        c_expr = _largest_real_root(P)
-        c_rational = Fraction(int(c_expr.p), int(c_expr.q)) if c_expr.is_Rational else None
+        worst = _worst_set(res, channels)
+        P = period_transfer_matrix(N, worst, channels)
+        if len(channels) == 1 and channels[0].order <= 1 and len(worst) < N:
+            # a loss resets an order-1 history: P_F has rank one and rho(P_F) = trace(P_F), a rational
+            c_rational, P = sum((P[i][i] for i in range(len(P))), Fraction(0)), None
+            c_expr = sympy.Rational(c_rational.numerator, c_rational.denominator)
+        else:
+            c_expr = _largest_real_root(P)
+            c_rational = Fraction(int(c_expr.p), int(c_expr.q)) if c_expr.is_Rational else None
     moments, exact = {}, True
     for name, r in MOMENTS:
         if P is None:
@@ -269,7 +275,7 @@ def block_tail(
         eigenvalues=block.eigenvalue_texts,
         kappa=kappa,
         kappa_exact=kappa_exact,
-        sigma_exact=str(sympy.nsimplify(sigma_expr) if c_expr.is_Rational else sigma_expr),
+        sigma_exact=str(sigma_expr),
         moments=moments,
         exact=exact,
         basis=basis,
