@@ -112,6 +112,7 @@ JOBS: dict[str, JobFn] = {
     "plot-phase-transition": _plot_job("phase_transition"),
     "plot-region": _plot_job("region"),
     "plot-simulation": _plot_job("simulation"),
+    "plot-ge-region": _plot_job("ge_region"),
 }
 
 

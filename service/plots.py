@@ -264,3 +264,73 @@ def _draw_region(
     )
     ax.legend(handles=handles, fontsize="x-small", loc="upper left", bbox_to_anchor=(1.01, 1.0))
     return _png(fig)
+
+
+# -- exact Gilbert-Elliott region (issue 11) ----------------------------------
+
+
+def ge_region(request: Request, budget: Budget, params: Mapping[str, Any]) -> bytes:
+    """The (recovery rate q, failure rate p) square of a Gilbert-Elliott channel, labelled exactly.
+
+    Every cell is Theorem 1's exact verdict (Rohr, Marelli and Fu, 2014) at its
+    centre; the line is the boundary ``|alpha_k|^2 sigma_k(p, q) = 1`` drawn
+    piece by piece from the closed forms of
+    :mod:`kfio.stability._ge_region`; the star is the request.
+    """
+    import dataclasses
+
+    ch = request.channel
+    if not isinstance(ch, MarkovChannel) or ch.model != "gilbert_elliott":
+        raise InvalidInput("/channel/model", "the Gilbert-Elliott region plot needs one gilbert_elliott channel")
+    points = int(params.get("points", 41))
+    opts = {**request.options.get("analyze", {}), "ge_grid": points}
+    gridded = dataclasses.replace(request, options={**request.options, "analyze": opts})
+    report = resolve("kfio.stability._verdict", "analyze")(gridded, budget)
+    region = report.gilbert_elliott
+    return _draw_ge_region(region, report.verdict, request)
+
+
+def _draw_ge_region(region: Any, verdict: str, request: Request) -> bytes:
+    from matplotlib.colors import ListedColormap
+    from matplotlib.patches import Patch
+
+    m = region.map
+    rates = np.array(m.rates)
+    step = rates[1] - rates[0] if len(rates) > 1 else 1.0
+    extent = (0.0, 1.0, 0.0, 1.0)
+    codes = np.array([[_EXACT_CODE[x] for x in row] for row in m.labels])  # codes[i][j]: p = rates[i], q = rates[j]
+    fig = _figure()
+    ax = fig.subplots()
+    cmap = ListedColormap(["#e8a0a0", "#f0f0c0", "#a0d0a0"])
+    ax.imshow(codes, origin="lower", extent=extent, cmap=cmap, vmin=-1, vmax=1, interpolation="nearest", aspect="auto")
+    handles: list[Any] = [
+        Patch(color="#a0d0a0", label="stable (exact)"),
+        Patch(color="#e8a0a0", label="unstable (exact)"),
+    ]
+    colours = ["navy", "darkorange", "purple", "teal", "brown", "black"]
+    curve = np.array(m.curve, dtype=float).reshape(-1, 3)
+    for k, piece in enumerate(m.pieces):
+        pts = curve[curve[:, 2] == k]
+        if pts.size:
+            label = f"block {', '.join(piece['eigenvalues'])}: {piece['equation']}"
+            handles.append(
+                ax.scatter(pts[:, 0], pts[:, 1], s=3, c=colours[k % len(colours)], label=_shorten(label, 70))
+            )
+    p0, q0 = 1 - float(request.channel.table[1]), float(request.channel.table[0])  # type: ignore[union-attr]
+    handles.append(ax.scatter([q0], [p0], marker="*", s=140, c="blue", label="request"))
+    ax.set_xlim(extent[0], extent[1])
+    ax.set_ylim(extent[2], extent[3])
+    ax.set_xlabel("recovery rate q = P(arrived | lost)")
+    ax.set_ylabel("failure rate p = P(lost | arrived)")
+    n = request.system.n
+    ax.set_title(
+        f"Gilbert-Elliott region, n = {n}; request (q, p) = ({q0:.3g}, {p0:.3g}): {verdict}\n"
+        f"{len(rates)} x {len(rates)} cells of {step:.3g}, exact per cell (Rohr, Marelli, Fu 2014, Thm 1)",
+        fontsize="small",
+    )
+    ax.legend(handles=handles, fontsize="xx-small", loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    return _png(fig)
+
+
+def _shorten(text: str, width: int) -> str:
+    return text if len(text) <= width else text[: width - 3] + "..."

@@ -214,6 +214,7 @@ REQUEST_EXAMPLES: dict[str, dict[str, Any]] = {
 #: Example bodies for the plot endpoints (a subset that suits each plot).
 PHASE_TRANSITION_EXAMPLES = {k: REQUEST_EXAMPLES[k] for k in ("seed004-3x3", "seed002-2x2", "seed004-scalar")}
 REGION_EXAMPLES = {k: REQUEST_EXAMPLES[k] for k in ("seed000-two-sensors",)}
+GE_REGION_EXAMPLES = {k: REQUEST_EXAMPLES[k] for k in ("seed001-degenerate-gilbert-elliott",)}
 
 
 # -- component schemas ------------------------------------------------------
@@ -329,7 +330,22 @@ COMPONENTS: dict[str, dict[str, Any]] = {
                 **_ref("ExactNumber"),
                 "description": "Seconds this request may take, in (0, 3600]; the deployment's budget caps it.",
             },
-            "analyze": {"type": "object", "description": "Options of the analyze command."},
+            "analyze": {
+                "type": "object",
+                "description": "Options of the analyze command.",
+                "properties": {
+                    "ge_grid": {
+                        "type": "integer",
+                        "minimum": 2,
+                        "maximum": 101,
+                        "description": (
+                            "Gilbert-Elliott channel only: cells per axis of the exact (failure rate, recovery "
+                            "rate) stability map added to the report (gilbert_elliott_region.map)."
+                        ),
+                    },
+                },
+                "additionalProperties": False,
+            },
             "bounds": {"type": "object", "description": "Options of the bounds command."},
             "simulate": {"type": "object", "description": "Options of the simulate command."},
         },
@@ -360,6 +376,24 @@ COMPONENTS: dict[str, dict[str, Any]] = {
             "system": {"type": "object"},
             "assumptions": {"type": "array", "items": {"type": "string"}},
             "warnings": {"type": "array", "items": {"type": "string"}},
+            "tail": {
+                "type": ["object", "null"],
+                "description": (
+                    "Tail exponent kappa of the stationary error: P(trace P > M) ~ M^(-kappa), the moment of "
+                    "order r finite iff kappa > r; per block kappa_k = log(1/sigma_k) / (2 log|alpha_k|), exact "
+                    "text where sigma is.  basis 'theorem' (Mo and Sinopoli, 2012) for non-degenerate blocks, "
+                    "'extension' otherwise."
+                ),
+            },
+            "gilbert_elliott_region": {
+                "type": ["object", "null"],
+                "description": (
+                    "Gilbert-Elliott channel only: the critical recovery rate q*(p) at the request's p and the "
+                    "critical failure rate p*(q) at its q, exact and as floats, with the deciding block and blind "
+                    "pattern; every boundary equation; and, with options.analyze.ge_grid, the exactly labelled "
+                    "(p, q) map and its boundary curve (Theorem 1 of Rohr, Marelli and Fu, 2014, on the family)."
+                ),
+            },
         },
         "required": ["verdict", "blocks"],
         "examples": [_SEED004_SCALAR_REPORT],
