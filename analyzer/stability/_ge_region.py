@@ -43,6 +43,7 @@ from .._budget import Budget
 from ..model._types import MarkovChannel
 from ..structure._fmo import FmoBlock
 from ._blind import Margins, SlotSpace, search
+from ._line import Candidate, add_candidates, roots_in_unit, scan
 from ._sigma import SigmaResult
 
 P_SYM, Q_SYM = sympy.symbols("p q")
@@ -318,22 +319,6 @@ class LineResult:
         }
 
 
-def _roots_in_unit(poly: Any, var: Any) -> list[Any]:
-    P = sympy.Poly(poly, var, domain=sympy.QQ)
-    if P.degree() <= 0:
-        return []
-    out = []
-    for r in P.real_roots():
-        if r > 0 and r < 1:
-            out.append(r)
-    return out
-
-
-def _midpoint(a: mpmath.mpf, b: mpmath.mpf) -> Fraction:
-    with mpmath.workdps(60):
-        return Fraction(mpmath.nstr((a + b) / 2, 55, strip_zeros=False))
-
-
 def _numeric_roots(structure: GeStructure, pt: GePattern, var: str, fixed: Fraction) -> list[mpmath.mpf]:
     """Sign changes of ``beta^N rho - 1`` on a fine grid, refined by bisection (irrational ``beta``)."""
     xs = np.linspace(1e-9, 1 - 1e-9, 4001)
@@ -380,47 +365,21 @@ def critical_on_line(structure: GeStructure, var: str, fixed: Fraction) -> LineR
     x = Q_SYM if var == "q" else P_SYM
     other = P_SYM if var == "q" else Q_SYM
     exact = structure.exact
-    candidates: list[tuple[mpmath.mpf, Any, list[GePattern]]] = []
-    with mpmath.workdps(60):
-        for pt in structure.patterns:
-            if exact:
-                poly = pt.boundary_poly().subs(other, sympy.Rational(fixed.numerator, fixed.denominator))
-                roots = [(mpmath.mpf(str(sympy.N(r, 55))), r) for r in _roots_in_unit(poly, x)]
-            else:
-                roots = [(r, None) for r in _numeric_roots(structure, pt, var, fixed)]
-            for val, r in roots:
-                for entry in candidates:
-                    if (r is not None and entry[1] == r) or (r is None and abs(entry[0] - val) < 1e-12):
-                        entry[2].append(pt)
-                        break
-                else:
-                    candidates.append((val, r, [pt]))
-        candidates.sort(key=lambda e: e[0])
-        edges = [mpmath.mpf(0)] + [c[0] for c in candidates] + [mpmath.mpf(1)]
-        labels = []
-        for a, b in zip(edges[:-1], edges[1:]):
-            mid = _midpoint(a, b)
-            pq = (fixed, mid) if var == "q" else (mid, fixed)
-            labels.append(structure.label(*pq))
-    intervals = tuple((float(a), float(b), lab) for (a, b), (lab, _) in zip(zip(edges[:-1], edges[1:]), labels))
-    crossings = []
-    for i, (val, r, pts) in enumerate(candidates):
-        left, right = labels[i][0], labels[i + 1][0]
-        if left == right:
-            continue
-        unstable_side = labels[i + 1] if right == "unstable" else labels[i]
-        deciding = unstable_side[1] if unstable_side[1] in pts else pts[0]
-        text = str(sympy.nsimplify(r) if r.is_Rational else _radical(r)) if r is not None else None
-        crossings.append(Crossing(float(val), text, left, right, deciding))
+    candidates: list[Candidate[GePattern]] = []
+    for pt in structure.patterns:
+        if exact:
+            poly = pt.boundary_poly().subs(other, sympy.Rational(fixed.numerator, fixed.denominator))
+            add_candidates(candidates, roots_in_unit(poly, x), pt)
+        else:
+            candidates.extend(Candidate(r, None, [pt]) for r in _numeric_roots(structure, pt, var, fixed))
+
+    def label_at(v: Fraction) -> tuple[str, GePattern | None]:
+        return structure.label(fixed, v) if var == "q" else structure.label(v, fixed)
+
+    intervals, changes = scan(candidates, label_at)
+    crossings = tuple(Crossing(c.value, c.exact_text, c.left, c.right, c.tag) for c in changes)
     name = "recovery_rate" if var == "q" else "failure_rate"
-    return LineResult(name, _frac_text(fixed), intervals, tuple(crossings), exact)
-
-
-def _radical(r: Any) -> Any:
-    """A radical form of a quadratic ``CRootOf`` when SymPy finds one; else the ``CRootOf`` itself."""
-    if isinstance(r, sympy.CRootOf) and sympy.degree(r.poly) <= 2:
-        return sympy.nsimplify(sympy.simplify(r.expand(func=True)))
-    return r
+    return LineResult(name, _frac_text(fixed), intervals, crossings, exact)
 
 
 def _frac_text(x: Fraction) -> str:

@@ -22,6 +22,7 @@ from .._budget import Budget
 from ..model._request import require_assumption_1
 from ..model._types import MarkovChannel, PerSensorChannel, Request, System, to_domain
 from ..structure._fmo import FmoBlock, fmo_blocks
+from ._critical_parameter import CriticalParameter, critical_parameter
 from ._decide import bernoulli_factor, compare_rate_bernoulli, compare_rate_markov
 from ._design_options import analyze_options
 from ._ge_region import GeRegion, ge_region
@@ -91,6 +92,7 @@ class StabilityReport:
     regions: Optional[dict[str, Any]] = None
     tail: Optional[TailReport] = None
     gilbert_elliott: Optional[GeRegion] = None
+    critical_parameter: Optional[CriticalParameter] = None
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON report (stable field names; see README)."""
@@ -107,6 +109,7 @@ class StabilityReport:
             "regions": self.regions,
             "tail": self.tail.to_dict() if self.tail is not None else None,
             "gilbert_elliott_region": self.gilbert_elliott.to_dict() if self.gilbert_elliott is not None else None,
+            "critical_parameter": self.critical_parameter.to_dict() if self.critical_parameter is not None else None,
         }
 
     def summary(self) -> str:
@@ -143,6 +146,8 @@ class StabilityReport:
             lines.extend(self.tail.summary_lines())
         if self.gilbert_elliott is not None:
             lines.extend(self.gilbert_elliott.summary_lines())
+        if self.critical_parameter is not None:
+            lines.extend(self.critical_parameter.summary_lines())
         for a in self.assumptions:
             lines.append(f"assumption: {a}")
         for w in self.warnings:
@@ -374,6 +379,10 @@ def analyze(request: Request, budget: Budget | None = None) -> StabilityReport:
     if len(channels) == 1 and channels[0].model == "gilbert_elliott":
         items = [(b, res) for b, (_, res) in zip(fmo, analyzed)]
         report = dataclasses.replace(report, gilbert_elliott=ge_region(items, channels[0], budget, opts.ge_grid))
+    if opts.critical_parameter is not None:
+        items = [(b, res) for b, (_, res) in zip(fmo, analyzed)]
+        found = critical_parameter(request, opts.critical_parameter, items, channels, budget)
+        report = dataclasses.replace(report, critical_parameter=found)
     if basis != "extension":
         return report
     # per-sensor Bernoulli channels: exact critical probability of each sensor, and for two

@@ -343,6 +343,15 @@ COMPONENTS: dict[str, dict[str, Any]] = {
                             "rate) stability map added to the report (gilbert_elliott_region.map)."
                         ),
                     },
+                    "critical_parameter": {
+                        "type": "string",
+                        "description": (
+                            "A JSON pointer into channel naming one conditional arrival probability "
+                            "(/channel/recovery_rate, /channel/failure_rate, /channel/arrival_probability/01, "
+                            "/channel/channels/<sensor>/...); the report's critical_parameter gives its exact "
+                            "critical value(s) with the other parameters fixed."
+                        ),
+                    },
                 },
                 "additionalProperties": False,
             },
@@ -383,6 +392,13 @@ COMPONENTS: dict[str, dict[str, Any]] = {
                     "order r finite iff kappa > r; per block kappa_k = log(1/sigma_k) / (2 log|alpha_k|), exact "
                     "text where sigma is.  basis 'theorem' (Mo and Sinopoli, 2012) for non-degenerate blocks, "
                     "'extension' otherwise."
+                ),
+            },
+            "critical_parameter": {
+                "type": ["object", "null"],
+                "description": (
+                    "With options.analyze.critical_parameter: the exact verdict on every interval of that one "
+                    "parameter in (0, 1) and the critical values between them, with the deciding block and blind set."
                 ),
             },
             "gilbert_elliott_region": {
