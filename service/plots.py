@@ -57,36 +57,72 @@ def _require_noise(request: Request, what: str) -> None:
 
 
 def simulation(request: Request, budget: Budget, params: Mapping[str, Any]) -> bytes:
-    """``trace(P_t)`` against ``t``: mean with its 95% band, and the 50/90/99th percentiles.
+    """``trace(P_t)`` against ``t``: percentiles, the mean with its 95% band, exact ``E[P_t]`` if asked.
 
-    Draws :func:`kfio.simulation._simulate.simulate`'s report, and the exact
-    ``E[P_t]`` when ``options.simulate.exact_steps`` asked for it.
+    Draws :func:`kfio.simulation._simulate.simulate`'s report.  Where the
+    exact tail exponent is ``kappa <= 2`` (Mo and Sinopoli, 2012) the mean is
+    unreliable: the percentiles come first, the mean is drawn thin, and the
+    exact per-step growth of ``E[P_t]`` (Theorem 1's rate) is drawn as a slope
+    beside it.  On a log axis the band is drawn only where its lower end is
+    positive; elsewhere only its upper edge (a log axis cannot show 0).
     """
     report = resolve("kfio.simulation._simulate", "simulate")(request, budget=budget).to_dict()
     t = np.arange(report["steps"] + 1)
+    stationary = report.get("stationary") or {}
+    unreliable = bool(stationary.get("mean_unreliable"))
     fig = _figure()
     ax = fig.subplots()
     mean = _nan(report["mean_trace"])
-    ax.fill_between(t, _nan(report["ci95_low"]), _nan(report["ci95_high"]), alpha=0.3, label="95% band of the mean")
-    ax.plot(t, mean, lw=1.5, label="mean")
-    for q, style in zip(("50", "90", "99"), (":", "--", "-.")):
+    low, high = _nan(report["ci95_low"]), _nan(report["ci95_high"])
+    for q, style in zip(("50", "90", "99"), ("-", "--", "-.")):
         if q in report["percentiles"]:
-            ax.plot(t, _nan(report["percentiles"][q]), style, lw=1, label=f"{q}th percentile")
+            ax.plot(t, _nan(report["percentiles"][q]), style, lw=1.6 if unreliable else 1, label=f"{q}th percentile")
+    finite = np.concatenate([mean[np.isfinite(mean)], _nan(report["percentiles"].get("99", []))])
+    finite = finite[np.isfinite(finite) & (finite > 0)]
+    log_axis = bool(finite.size and finite.max() / finite.min() > 50)
+    band_ok = low > 0 if log_axis else np.isfinite(low)
+    ax.fill_between(t, low, high, where=band_ok, alpha=0.25, color="C0", label="95% band of the mean")
+    if log_axis and (~band_ok & np.isfinite(high)).any():
+        ax.plot(t, np.where(band_ok, np.nan, high), ":", color="C0", lw=1, label="band upper edge (lower end <= 0)")
+    ax.plot(t, mean, lw=0.8 if unreliable else 1.5, color="grey" if unreliable else "C0", label="sample mean")
+    growth = stationary.get("exact_mean_growth_per_step")
+    if unreliable and growth is not None and growth > 1:
+        t0 = max(1, len(t) // 4)
+        if math.isfinite(mean[t0]) and mean[t0] > 0:
+            slope = mean[t0] * growth ** (t[t0:] - t0)
+            ax.plot(t[t0:], slope, color="red", lw=1, label=f"exact growth of E[P_t]: x{growth:.4g} per step")
     exact = report.get("exact")
     if exact:
         te = np.arange(len(exact["mean_trace"]))
         ax.plot(te, _nan(exact["mean_trace"]), "k.", ms=4, label="exact E[P_t]")
     if report.get("mean_diverged_at") is not None:
         ax.axvline(report["mean_diverged_at"], color="red", lw=1, label="first divergence")
-    finite = mean[np.isfinite(mean)]
-    if finite.size and finite.min() > 0 and finite.max() / finite.min() > 50:
+    if log_axis:
         ax.set_yscale("log")
+        top = np.nanmax(np.where(np.isfinite(finite), finite, np.nan)) if finite.size else None
+        if top is not None:
+            ax.set_ylim(top=top * 10)
     ax.set_xlabel("t")
     ax.set_ylabel("trace(P_t)")
-    ax.set_title(f"Simulated error covariance: {report['trajectories']} trajectories, seed {report['seed']}")
-    ax.legend(fontsize="small")
+    title = f"Simulated trace(P_t): n = {request.system.n}, {_channel_text(request)}"
+    if stationary.get("verdict"):
+        title += f", verdict {stationary['verdict']} (Theorem 1)"
+    sub = f"{report['trajectories']} trajectories, seed {report['seed']}"
+    if unreliable:
+        sub += f"; kappa = {stationary['tail_exponent_exact']:.3g} <= 2: sample mean unreliable, read the percentiles"
+    ax.set_title(title + "\n" + sub, fontsize="small")
+    ax.legend(fontsize="x-small")
     ax.grid(alpha=0.3)
     return _png(fig)
+
+
+def _channel_text(request: Request) -> str:
+    ch = request.channel
+    if isinstance(ch, PerSensorChannel):
+        return f"{len(ch.channels)} sensors"
+    d = ch.describe()
+    params = ", ".join(f"{k} {v}" for k, v in d.items() if k not in ("model", "order"))
+    return f"{ch.model} ({params})" if ch.model != "markov" else f"Markov order {ch.order}"
 
 
 # -- phase transition (seed 004, Figs. 1-3) -----------------------------------

@@ -356,7 +356,13 @@ COMPONENTS: dict[str, dict[str, Any]] = {
                 "additionalProperties": False,
             },
             "bounds": {"type": "object", "description": "Options of the bounds command."},
-            "simulate": {"type": "object", "description": "Options of the simulate command."},
+            "simulate": {
+                "type": "object",
+                "description": (
+                    "Options of the simulate command.  outage_thresholds: a list of up to 20 positive numbers M; "
+                    "the report's stationary.outage gives P(trace P > M) with a 95% interval for each."
+                ),
+            },
         },
         "additionalProperties": False,
         "examples": [{"time_budget_s": 10}],
@@ -462,6 +468,16 @@ COMPONENTS: dict[str, dict[str, Any]] = {
             "diverged": {"type": "boolean"},
             "checks": {"type": "object"},
             "exact": {"type": ["object", "null"]},
+            "stationary": {
+                "type": ["object", "null"],
+                "description": (
+                    "trace(P_T) over the trajectories at the last step (P_t converges in distribution: Kar, "
+                    "Sinopoli and Moura, 2012): quantiles with 95% intervals, outage P(trace P > M) for "
+                    "options.simulate.outage_thresholds with Wilson intervals, Hill's tail exponent beside the "
+                    "exact kappa (Mo and Sinopoli, 2012), the exact per-step growth of E[P_t], and a warning "
+                    "when kappa <= 2 (the sample mean is then unreliable)."
+                ),
+            },
         },
         "required": ["steps", "trajectories", "seed", "mean_trace", "percentiles", "diverged"],
         "examples": [_SEED004_SCALAR_SIMULATION],
