@@ -28,7 +28,7 @@ MIN_GRID, MAX_GRID = 2, 41
 #: The stability LMI has ``n (2^m + 1)`` rows for ``n`` states and ``m`` packets.
 MAX_LMI_ROWS = 200
 
-_KEYS = ("tolerance", "horizon", "grid", "arrival_probability")
+_KEYS = ("tolerance", "horizon", "grid", "arrival_probability", "trace_target")
 _WHERE = "/options/bounds"
 
 

@@ -355,7 +355,14 @@ COMPONENTS: dict[str, dict[str, Any]] = {
                 },
                 "additionalProperties": False,
             },
-            "bounds": {"type": "object", "description": "Options of the bounds command."},
+            "bounds": {
+                "type": "object",
+                "description": (
+                    "Options of the bounds command.  trace_target: a positive number T; the report's trace_target "
+                    "gives the smallest arrival probability at which the certified upper bound trace(V_bar) is at "
+                    "most T (one Bernoulli packet; bisection, V_bar decreases with lambda: Sinopoli et al. 2004)."
+                ),
+            },
             "simulate": {
                 "type": "object",
                 "description": (
