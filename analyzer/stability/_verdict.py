@@ -19,6 +19,7 @@ import mpmath
 import sympy
 
 from .._budget import Budget
+from ..errors import BudgetExceeded
 from ..model._request import require_assumption_1
 from ..model._types import MarkovChannel, PerSensorChannel, Request, System, to_domain
 from ..structure._fmo import FmoBlock, fmo_blocks
@@ -302,6 +303,33 @@ def _critical_probability(blocks: Sequence[BlockReport]) -> tuple[float | None, 
     return float(best[0]), str(best[1]), warnings
 
 
+#: The Gilbert-Elliott region is computed unasked only for periods up to this (the boundary polynomials have
+#: degree up to N, and every maximal blind set is enumerated: 51 059 orbits and minutes at N = 60).
+GE_AUTO_MAX_PERIOD = 24
+#: Closure-search steps the unasked Gilbert-Elliott region may use.
+GE_AUTO_MAX_STEPS = 20_000
+
+
+def _with_ge_region(
+    report: StabilityReport, items: list, channel: MarkovChannel, budget: Budget, opts: Any
+) -> StabilityReport:
+    """Add the Gilbert-Elliott region; unasked (no ``ge_grid``), it never costs more than a small budget."""
+    if opts.ge_grid is not None:
+        return dataclasses.replace(report, gilbert_elliott=ge_region(items, channel, budget, opts.ge_grid))
+    periods = [res.period for _, res in items if res is not None]
+    skip = None
+    if periods and max(periods) > GE_AUTO_MAX_PERIOD:
+        skip = f"period {max(periods)} > {GE_AUTO_MAX_PERIOD}"
+    else:
+        try:
+            region = ge_region(items, channel, Budget(max_steps=GE_AUTO_MAX_STEPS, seconds=budget.remaining()))
+            return dataclasses.replace(report, gilbert_elliott=region)
+        except BudgetExceeded:
+            skip = f"more than {GE_AUTO_MAX_STEPS} closure-search steps"
+    note = f"Gilbert-Elliott critical rates not computed ({skip}); ask with options.analyze.ge_grid"
+    return dataclasses.replace(report, warnings=report.warnings + (note,))
+
+
 def analyze(request: Request, budget: Budget | None = None) -> StabilityReport:
     """Decide stability of the expected error covariance (seed 001, Theorem 1).
 
@@ -377,8 +405,7 @@ def analyze(request: Request, budget: Budget | None = None) -> StabilityReport:
         tail=tail_report([(b, res) for b, (_, res) in zip(fmo, analyzed)], channels),
     )
     if len(channels) == 1 and channels[0].model == "gilbert_elliott":
-        items = [(b, res) for b, (_, res) in zip(fmo, analyzed)]
-        report = dataclasses.replace(report, gilbert_elliott=ge_region(items, channels[0], budget, opts.ge_grid))
+        report = _with_ge_region(report, [(b, res) for b, (_, res) in zip(fmo, analyzed)], channels[0], budget, opts)
     if opts.critical_parameter is not None:
         items = [(b, res) for b, (_, res) in zip(fmo, analyzed)]
         found = critical_parameter(request, opts.critical_parameter, items, channels, budget)

@@ -205,3 +205,18 @@ def test_options_validation():
     )
     with pytest.raises(InvalidInput, match="needs a single gilbert_elliott channel"):
         analyze(bern)
+
+
+@pytest.mark.parametrize(
+    "knob, value, why", [("GE_AUTO_MAX_PERIOD", 1, "period 2 > 1"), ("GE_AUTO_MAX_STEPS", 0, "steps")]
+)
+def test_unasked_region_never_costs_much(monkeypatch, knob, value, why):
+    # unasked, the region is skipped (with a warning) beyond a period or a search budget; the verdict stands
+    import kfio.stability._verdict as verdict_module
+
+    monkeypatch.setattr(verdict_module, knob, value)
+    r = analyze(request("pair", "1/4", "1/2"))
+    assert r.gilbert_elliott is None and r.verdict == "stable"
+    assert any("Gilbert-Elliott critical rates not computed" in w and why in w for w in r.warnings)
+    # asked for, it is computed under the request's budget
+    assert analyze(request("pair", "1/4", "1/2", ge_grid=3)).gilbert_elliott is not None
