@@ -60,6 +60,9 @@ from ._setup import (
 )
 from ._stationary import StationaryReport, parse_thresholds, stationary_report
 
+#: Seconds the simulation may spend on Theorem 1's report (tail exponent, growth rate) before going without it.
+EXACT_ANALYSIS_S = 5.0
+
 #: Two-sided 95% quantile of the standard normal distribution.
 Z95 = 1.959963984540054
 
@@ -370,7 +373,8 @@ def _exact_analysis(request: Request) -> Any | None:
 
     try:
         return analyze(
-            dataclasses.replace(request, options={}), Budget(seconds=min(30.0, request.time_budget_s or 30.0))
+            dataclasses.replace(request, options={}),
+            Budget(seconds=min(EXACT_ANALYSIS_S, request.time_budget_s or EXACT_ANALYSIS_S)),
         )
     except AnalyzerError:
         return None
