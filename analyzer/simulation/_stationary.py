@@ -80,7 +80,7 @@ def wilson(successes: int, n: int, z: float = Z95) -> tuple[float, float]:
     --------
     >>> from kfio.simulation._stationary import wilson
     >>> lo, hi = wilson(0, 100)
-    >>> lo, round(hi, 4)
+    >>> round(lo, 12), round(hi, 4)
     (0.0, 0.037)
     """
     if n == 0:
