@@ -325,7 +325,8 @@ def expected_covariance(
     ----------
     system, channel, budget:
         As in :func:`analyze`; ``Q`` and ``R`` are needed.  With a validated
-        request, pass the horizon by keyword: ``expected_covariance(request, steps=4)``.
+        request (which carries its channel), the horizon may come second:
+        ``expected_covariance(request, 4)`` or ``expected_covariance(request, steps=4)``.
     steps:
         Horizon ``T >= 0`` (required).
     P0, initial_channel:
@@ -344,6 +345,8 @@ def expected_covariance(
     """
     from .simulation._finite_horizon import expected_covariance as _expected
 
+    if isinstance(system, Request) and steps is None and isinstance(channel, int) and not isinstance(channel, bool):
+        channel, steps = None, channel  # expected_covariance(request, steps)
     if steps is None:
         raise InvalidInput("steps", "the horizon is required: expected_covariance(system, channel, steps)")
     keywords = {k: v for k, v in dict(P0=P0, initial_channel=initial_channel).items() if v is not None}

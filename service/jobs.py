@@ -107,6 +107,7 @@ JOBS: dict[str, JobFn] = {
     "plot-region": _plot_job("region"),
     "plot-simulation": _plot_job("simulation"),
     "sweep": _sweep_job,
+    "plot-ge-region": _plot_job("ge_region"),
 }
 
 

@@ -57,36 +57,72 @@ def _require_noise(request: Request, what: str) -> None:
 
 
 def simulation(request: Request, budget: Budget, params: Mapping[str, Any]) -> bytes:
-    """``trace(P_t)`` against ``t``: mean with its 95% band, and the 50/90/99th percentiles.
+    """``trace(P_t)`` against ``t``: percentiles, the mean with its 95% band, exact ``E[P_t]`` if asked.
 
-    Draws :func:`kfio.simulation._simulate.simulate`'s report, and the exact
-    ``E[P_t]`` when ``options.simulate.exact_steps`` asked for it.
+    Draws :func:`kfio.simulation._simulate.simulate`'s report.  Where the
+    exact tail exponent is ``kappa <= 2`` (Mo and Sinopoli, 2012) the mean is
+    unreliable: the percentiles come first, the mean is drawn thin, and the
+    exact per-step growth of ``E[P_t]`` (Theorem 1's rate) is drawn as a slope
+    beside it.  On a log axis the band is drawn only where its lower end is
+    positive; elsewhere only its upper edge (a log axis cannot show 0).
     """
     report = resolve("kfio.simulation._simulate", "simulate")(request, budget=budget).to_dict()
     t = np.arange(report["steps"] + 1)
+    stationary = report.get("stationary") or {}
+    unreliable = bool(stationary.get("mean_unreliable"))
     fig = _figure()
     ax = fig.subplots()
     mean = _nan(report["mean_trace"])
-    ax.fill_between(t, _nan(report["ci95_low"]), _nan(report["ci95_high"]), alpha=0.3, label="95% band of the mean")
-    ax.plot(t, mean, lw=1.5, label="mean")
-    for q, style in zip(("50", "90", "99"), (":", "--", "-.")):
+    low, high = _nan(report["ci95_low"]), _nan(report["ci95_high"])
+    for q, style in zip(("50", "90", "99"), ("-", "--", "-.")):
         if q in report["percentiles"]:
-            ax.plot(t, _nan(report["percentiles"][q]), style, lw=1, label=f"{q}th percentile")
+            ax.plot(t, _nan(report["percentiles"][q]), style, lw=1.6 if unreliable else 1, label=f"{q}th percentile")
+    finite = np.concatenate([mean[np.isfinite(mean)], _nan(report["percentiles"].get("99", []))])
+    finite = finite[np.isfinite(finite) & (finite > 0)]
+    log_axis = bool(finite.size and finite.max() / finite.min() > 50)
+    band_ok = low > 0 if log_axis else np.isfinite(low)
+    ax.fill_between(t, low, high, where=band_ok, alpha=0.25, color="C0", label="95% band of the mean")
+    if log_axis and (~band_ok & np.isfinite(high)).any():
+        ax.plot(t, np.where(band_ok, np.nan, high), ":", color="C0", lw=1, label="band upper edge (lower end <= 0)")
+    ax.plot(t, mean, lw=0.8 if unreliable else 1.5, color="grey" if unreliable else "C0", label="sample mean")
+    growth = stationary.get("exact_mean_growth_per_step")
+    if unreliable and growth is not None and growth > 1:
+        t0 = max(1, len(t) // 4)
+        if math.isfinite(mean[t0]) and mean[t0] > 0:
+            slope = mean[t0] * growth ** (t[t0:] - t0)
+            ax.plot(t[t0:], slope, color="red", lw=1, label=f"exact growth of E[P_t]: x{growth:.4g} per step")
     exact = report.get("exact")
     if exact:
         te = np.arange(len(exact["mean_trace"]))
         ax.plot(te, _nan(exact["mean_trace"]), "k.", ms=4, label="exact E[P_t]")
     if report.get("mean_diverged_at") is not None:
         ax.axvline(report["mean_diverged_at"], color="red", lw=1, label="first divergence")
-    finite = mean[np.isfinite(mean)]
-    if finite.size and finite.min() > 0 and finite.max() / finite.min() > 50:
+    if log_axis:
         ax.set_yscale("log")
+        top = np.nanmax(np.where(np.isfinite(finite), finite, np.nan)) if finite.size else None
+        if top is not None:
+            ax.set_ylim(top=top * 10)
     ax.set_xlabel("t")
     ax.set_ylabel("trace(P_t)")
-    ax.set_title(f"Simulated error covariance: {report['trajectories']} trajectories, seed {report['seed']}")
-    ax.legend(fontsize="small")
+    title = f"Simulated trace(P_t): n = {request.system.n}, {_channel_text(request)}"
+    if stationary.get("verdict"):
+        title += f", verdict {stationary['verdict']} (Theorem 1)"
+    sub = f"{report['trajectories']} trajectories, seed {report['seed']}"
+    if unreliable:
+        sub += f"; kappa = {stationary['tail_exponent_exact']:.3g} <= 2: sample mean unreliable, read the percentiles"
+    ax.set_title(title + "\n" + sub, fontsize="small")
+    ax.legend(fontsize="x-small")
     ax.grid(alpha=0.3)
     return _png(fig)
+
+
+def _channel_text(request: Request) -> str:
+    ch = request.channel
+    if isinstance(ch, PerSensorChannel):
+        return f"{len(ch.channels)} sensors"
+    d = ch.describe()
+    params = ", ".join(f"{k} {v}" for k, v in d.items() if k not in ("model", "order"))
+    return f"{ch.model} ({params})" if ch.model != "markov" else f"Markov order {ch.order}"
 
 
 # -- phase transition (Sinopoli et al. 2004, Figs. 1-3) ------------------------
@@ -250,3 +286,73 @@ def _draw_region(
     )
     ax.legend(handles=handles, fontsize="x-small", loc="upper left", bbox_to_anchor=(1.01, 1.0))
     return _png(fig)
+
+
+# -- exact Gilbert-Elliott region (issue 11) ----------------------------------
+
+
+def ge_region(request: Request, budget: Budget, params: Mapping[str, Any]) -> bytes:
+    """The (recovery rate q, failure rate p) square of a Gilbert-Elliott channel, labelled exactly.
+
+    Every cell is Theorem 1's exact verdict (Rohr, Marelli and Fu, 2014) at its
+    centre; the line is the boundary ``|alpha_k|^2 sigma_k(p, q) = 1`` drawn
+    piece by piece from the closed forms of
+    :mod:`kfio.stability._ge_region`; the star is the request.
+    """
+    import dataclasses
+
+    ch = request.channel
+    if not isinstance(ch, MarkovChannel) or ch.model != "gilbert_elliott":
+        raise InvalidInput("/channel/model", "the Gilbert-Elliott region plot needs one gilbert_elliott channel")
+    points = int(params.get("points", 41))
+    opts = {**request.options.get("analyze", {}), "ge_grid": points}
+    gridded = dataclasses.replace(request, options={**request.options, "analyze": opts})
+    report = resolve("kfio.stability._verdict", "analyze")(gridded, budget)
+    region = report.gilbert_elliott
+    return _draw_ge_region(region, report.verdict, request)
+
+
+def _draw_ge_region(region: Any, verdict: str, request: Request) -> bytes:
+    from matplotlib.colors import ListedColormap
+    from matplotlib.patches import Patch
+
+    m = region.map
+    rates = np.array(m.rates)
+    step = rates[1] - rates[0] if len(rates) > 1 else 1.0
+    extent = (0.0, 1.0, 0.0, 1.0)
+    codes = np.array([[_EXACT_CODE[x] for x in row] for row in m.labels])  # codes[i][j]: p = rates[i], q = rates[j]
+    fig = _figure()
+    ax = fig.subplots()
+    cmap = ListedColormap(["#e8a0a0", "#f0f0c0", "#a0d0a0"])
+    ax.imshow(codes, origin="lower", extent=extent, cmap=cmap, vmin=-1, vmax=1, interpolation="nearest", aspect="auto")
+    handles: list[Any] = [
+        Patch(color="#a0d0a0", label="stable (exact)"),
+        Patch(color="#e8a0a0", label="unstable (exact)"),
+    ]
+    colours = ["navy", "darkorange", "purple", "teal", "brown", "black"]
+    curve = np.array(m.curve, dtype=float).reshape(-1, 3)
+    for k, piece in enumerate(m.pieces):
+        pts = curve[curve[:, 2] == k]
+        if pts.size:
+            label = f"block {', '.join(piece['eigenvalues'])}: {piece['equation']}"
+            handles.append(
+                ax.scatter(pts[:, 0], pts[:, 1], s=3, c=colours[k % len(colours)], label=_shorten(label, 70))
+            )
+    p0, q0 = 1 - float(request.channel.table[1]), float(request.channel.table[0])  # type: ignore[union-attr]
+    handles.append(ax.scatter([q0], [p0], marker="*", s=140, c="blue", label="request"))
+    ax.set_xlim(extent[0], extent[1])
+    ax.set_ylim(extent[2], extent[3])
+    ax.set_xlabel("recovery rate q = P(arrived | lost)")
+    ax.set_ylabel("failure rate p = P(lost | arrived)")
+    n = request.system.n
+    ax.set_title(
+        f"Gilbert-Elliott region, n = {n}; request (q, p) = ({q0:.3g}, {p0:.3g}): {verdict}\n"
+        f"{len(rates)} x {len(rates)} cells of {step:.3g}, exact per cell (Rohr, Marelli, Fu 2014, Thm 1)",
+        fontsize="small",
+    )
+    ax.legend(handles=handles, fontsize="xx-small", loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    return _png(fig)
+
+
+def _shorten(text: str, width: int) -> str:
+    return text if len(text) <= width else text[: width - 3] + "..."

@@ -23,6 +23,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from .._budget import Budget
+from ..errors import InvalidInput
 from ..model._types import Request, to_float
 from ._certificate import ExactPlant
 from ._lmi import v_bar_sdp
@@ -31,6 +32,7 @@ from ._phat import PHat, p_hat_sequence
 from ._report import BoundsReport, CovarianceBounds, CriticalInterval, PHatBounds, RegionMap
 from ._riccati import ArrivalModel, arrival_model, lyapunov_residual, s_bar, solve_v_bar, spectral_radius, subset_rows
 from ._search import CertifiedSearch
+from ._targets import parse_trace_target, smallest_arrival_for_trace
 
 __all__ = ["BoundsReport", "compute_bounds", "critical_lower_bound", "hypotheses"]
 
@@ -204,6 +206,12 @@ def compute_bounds(
         rows = list(opts.packets[0].rows)
         p_hat = _p_hat(A, C[rows, :], Q, R[np.ix_(rows, rows)], float(lams[0]), opts.horizon, budget)
     region = _region(search, opts, rho, request, budget) if opts.grid is not None else None
+    target = parse_trace_target(request)
+    if target is not None and not one:
+        raise InvalidInput("/options/bounds/trace_target", "trace_target needs one packet")
+    if target is not None:
+        rows = list(opts.packets[0].rows)
+        target_report = smallest_arrival_for_trace(A, C[rows, :], Q, R[np.ix_(rows, rows)], target, budget=budget)
     return BoundsReport(
         packets=opts.packets,
         arrival=lams,
@@ -217,4 +225,5 @@ def compute_bounds(
         covariance=covariance,
         p_hat=p_hat,
         region=region,
+        trace_target=target_report if target is not None else None,
     )

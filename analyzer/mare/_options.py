@@ -31,7 +31,7 @@ MAX_LMI_ROWS = 200
 MAX_FLOAT_EXPONENT = 30
 MAX_FLOAT_ENTRY = Fraction(10) ** MAX_FLOAT_EXPONENT
 
-_KEYS = ("tolerance", "horizon", "grid", "arrival_probability")
+_KEYS = ("tolerance", "horizon", "grid", "arrival_probability", "trace_target")
 _WHERE = "/options/bounds"
 
 

@@ -237,6 +237,7 @@ class BoundsReport(Report):
     covariance: CovarianceBounds
     p_hat: PHatBounds | None
     region: RegionMap | None
+    trace_target: Any = None  # kfio.mare._targets.TraceTarget when options.bounds.trace_target is set
 
     @property
     def one_packet(self) -> bool:
@@ -288,6 +289,7 @@ class BoundsReport(Report):
             "covariance": self.covariance.to_dict(),
             "p_hat": None if self.p_hat is None else self.p_hat.to_dict(),
             "region": None if self.region is None else self.region.to_dict(),
+            "trace_target": None if self.trace_target is None else self.trace_target.to_dict(),
             "notes": self._notes(),
         }
 
@@ -356,5 +358,7 @@ class BoundsReport(Report):
             sym = {"stable": "S", "unstable": "U", "undecided": "."}
             for v, row in zip(r.values, r.labels):
                 lines.append(f"    {float(v):5.3f} " + "".join(sym[x] for x in row))
+        if self.trace_target is not None:
+            lines.append("  " + self.trace_target.summary_line())
         lines.extend(f"  note: {n}" for n in self._notes())
         return "\n".join(lines)

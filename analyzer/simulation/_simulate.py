@@ -35,6 +35,7 @@ at short horizons.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -58,6 +59,10 @@ from ._setup import (
     parse_options,
     sim_system,
 )
+from ._stationary import StationaryReport, parse_thresholds, stationary_report
+
+#: Seconds the simulation may spend on Theorem 1's report (tail exponent, growth rate) before going without it.
+EXACT_ANALYSIS_S = 5.0
 
 #: Two-sided 95% quantile of the standard normal distribution.
 Z95 = 1.959963984540054
@@ -86,6 +91,7 @@ class MonteCarloRun:
     stats: TraceStatistics
     final_mean_covariance: np.ndarray | None
     arrival_rate: np.ndarray  # empirical, per packet
+    final_traces: np.ndarray | None = None  # trace(P_T) per trajectory, +inf where diverged
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -116,6 +122,7 @@ class SimulationReport(Report):
     stationary_arrival_rate: np.ndarray
     packet_names: tuple[str, ...]
     exact: FiniteHorizonReport | None = None
+    stationary: StationaryReport | None = None
 
     @property
     def mean_trace(self) -> np.ndarray:
@@ -198,12 +205,14 @@ class SimulationReport(Report):
                 "exact_agreement": self.exact_agreement(),
             },
             "exact": None if self.exact is None else self.exact.to_dict(),
+            "stationary": None if self.stationary is None else self.stationary.to_dict(),
         }
 
     def summary(self) -> str:
         o = self.options
         low, high = self.ci95
-        lines = [
+        lines = [w for w in self.stationary.summary_lines() if w.startswith("warning")] if self.stationary else []
+        lines += [
             f"Monte Carlo: {o.trajectories} trajectories x {o.steps} steps, seed {o.seed}, "
             f"channel history at t = 0: {o.initial_channel}, P0 = {'Q' if o.P0_is_default else 'given'}",
             f"{'t':>6}  {'mean trace(P_t)':>14}  {'95% band':>25}  {'median':>11}  {'90%':>11}  {'99%':>11}",
@@ -227,6 +236,8 @@ class SimulationReport(Report):
                 f"exact E[P_t] (t <= {self.exact.steps}): inside the 95% band at {agree['within_ci95']} of "
                 f"{agree['steps_compared']} steps (max |z| = {'n/a' if max_z is None else f'{max_z:.3g}'})"
             )
+        if self.stationary is not None:
+            lines.extend(w for w in self.stationary.summary_lines() if not w.startswith("warning"))
         return "\n".join(lines)
 
 
@@ -297,7 +308,10 @@ def run_monte_carlo(
             mean[t + 1], std[t + 1], pct[:, t + 1] = _record(tr, alive)
     final = P.mean(axis=0) if alive.all() else None
     stats = TraceStatistics(mean=mean, std=std, percentiles=pct, diverged=diverged, trajectories=M)
-    return MonteCarloRun(stats=stats, final_mean_covariance=final, arrival_rate=arrivals / (M * T))
+    final_traces = np.where(alive, traces(P), np.inf)
+    return MonteCarloRun(
+        stats=stats, final_mean_covariance=final, arrival_rate=arrivals / (M * T), final_traces=final_traces
+    )
 
 
 def simulate(
@@ -348,7 +362,10 @@ def simulate(
     exact = None
     if opts.exact_steps is not None:
         exact = expected_covariance(request, opts.exact_steps, budget, limits)
+    thresholds = parse_thresholds(request)
     run = run_monte_carlo(sim, opts, budget)
+    assert run.final_traces is not None
+    stationary = stationary_report(run.final_traces, opts.steps, thresholds, _exact_analysis(request))
     return SimulationReport(
         options=opts,
         stats=run.stats,
@@ -357,4 +374,19 @@ def simulate(
         stationary_arrival_rate=JointChannel.from_packets(sim.packets).stationary_arrival_rates(),
         packet_names=tuple(pk.name if pk.per_sensor and pk.name is not None else "" for pk in sim.packets),
         exact=exact,
+        stationary=stationary,
     )
+
+
+def _exact_analysis(request: Request) -> Any | None:
+    """Theorem 1's report for the same request (tail exponent, growth rate), or ``None`` if it cannot be had."""
+    from ..errors import AnalyzerError
+    from ..stability._verdict import analyze
+
+    try:
+        return analyze(
+            dataclasses.replace(request, options={}),
+            Budget(seconds=min(EXACT_ANALYSIS_S, request.time_budget_s or EXACT_ANALYSIS_S)),
+        )
+    except AnalyzerError:
+        return None

@@ -65,6 +65,7 @@ from ._regions_constraints import (
     rational,
 )
 from ._regions_curve import DEFAULT_SAMPLES, BoundaryCurve, boundary_curve
+from ._sensor_gain import sensor_gains
 from ._sigma import SigmaResult
 
 BASIS = "extension"
@@ -522,6 +523,7 @@ def region_report(
     out["boundary"] = (
         boundary_curve(th.blocks, (th.sensors[0], th.sensors[1])).to_dict() if len(th.sensors) == 2 else None
     )
+    out["sensor_improvement"] = sensor_gains(th.blocks, th.sensors, th.arrival)
     return out
 
 

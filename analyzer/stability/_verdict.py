@@ -20,16 +20,20 @@ import sympy
 
 from .._budget import Budget
 from .._reporting import Report, ShortRepr, stamp
-from ..errors import InvalidInput
+from ..errors import BudgetExceeded
 from ..model._exact import finite_or_none
 from ..model._request import require_assumption_1
 from ..model._types import MarkovChannel, PerSensorChannel, Request, System, packets_of, to_domain
 from ..structure._display import SHORT_TEXT_CHARS, algebraic_degree, short_text
 from ..structure._fmo import FmoBlock, fmo_blocks
+from ._critical_parameter import CriticalParameter, critical_parameter
 from ._decide import VERDICTS, bernoulli_factor, compare_rate_bernoulli, compare_rate_markov
+from ._design_options import analyze_options
+from ._ge_region import GeRegion, ge_region
 from ._radicals import RealRadical
 from ._regions import region_report
 from ._sigma import SigmaResult, compute_sigma, period_transfer_matrix
+from ._tail import TailReport, tail_report
 
 #: Default wall-clock budget (s) of one analysis when the request sets none.
 DEFAULT_BUDGET_S = 120.0
@@ -94,6 +98,10 @@ class StabilityReport(Report):
     assumptions: tuple[str, ...] = ()
     warnings: tuple[str, ...] = ()
     regions: Optional[dict[str, Any]] = None
+    tail: Optional[TailReport] = None
+    gilbert_elliott: Optional[GeRegion] = None
+    critical_parameter: Optional[CriticalParameter] = None
+
     #: Short forms of long exact texts for :meth:`summary` (never in the JSON).
     display: Mapping[str, str] = field(default_factory=dict, repr=False, compare=False)
 
@@ -116,6 +124,9 @@ class StabilityReport(Report):
             "assumptions": list(self.assumptions),
             "warnings": list(self.warnings),
             "regions": self.regions,
+            "tail": self.tail.to_dict() if self.tail is not None else None,
+            "gilbert_elliott_region": self.gilbert_elliott.to_dict() if self.gilbert_elliott is not None else None,
+            "critical_parameter": self.critical_parameter.to_dict() if self.critical_parameter is not None else None,
         }
 
     def summary(self) -> str:
@@ -148,6 +159,12 @@ class StabilityReport(Report):
                     s.get("status"), str(s.get("status"))
                 )
             lines.append(f"sensor {s['sensor']}: critical arrival probability given the others {crit}  [extension]")
+        if self.tail is not None:
+            lines.extend(self.tail.summary_lines())
+        if self.gilbert_elliott is not None:
+            lines.extend(self.gilbert_elliott.summary_lines())
+        if self.critical_parameter is not None:
+            lines.extend(self.critical_parameter.summary_lines())
         for a in self.assumptions:
             lines.append(f"assumption: {a}")
         for w in self.warnings:
@@ -348,13 +365,36 @@ def _critical_probability(
     return float(val), text, warnings
 
 
-def _parse_options(request: Request) -> None:
-    opts = request.options.get("analyze", {})
-    for key in opts:
-        raise InvalidInput(f"/options/analyze/{key}", "analyze takes no options")
+#: The Gilbert-Elliott region is computed unasked only for periods up to this (the boundary polynomials have
+#: degree up to N, and every maximal blind set is enumerated: 51 059 orbits and minutes at N = 60).
+GE_AUTO_MAX_PERIOD = 24
+#: Closure-search steps the unasked Gilbert-Elliott region may use.
+GE_AUTO_MAX_STEPS = 20_000
 
 
-def analyze(request: Request, budget: Budget | None = None, *, fmo: Sequence[FmoBlock] | None = None) -> StabilityReport:
+def _with_ge_region(
+    report: StabilityReport, items: list, channel: MarkovChannel, budget: Budget, opts: Any
+) -> StabilityReport:
+    """Add the Gilbert-Elliott region; unasked (no ``ge_grid``), it never costs more than a small budget."""
+    if opts.ge_grid is not None:
+        return dataclasses.replace(report, gilbert_elliott=ge_region(items, channel, budget, opts.ge_grid))
+    periods = [res.period for _, res in items if res is not None]
+    skip = None
+    if periods and max(periods) > GE_AUTO_MAX_PERIOD:
+        skip = f"period {max(periods)} > {GE_AUTO_MAX_PERIOD}"
+    else:
+        try:
+            region = ge_region(items, channel, Budget(max_steps=GE_AUTO_MAX_STEPS, seconds=budget.remaining()))
+            return dataclasses.replace(report, gilbert_elliott=region)
+        except BudgetExceeded:
+            skip = f"more than {GE_AUTO_MAX_STEPS} closure-search steps"
+    note = f"Gilbert-Elliott critical rates not computed ({skip}); ask with options.analyze.ge_grid"
+    return dataclasses.replace(report, warnings=report.warnings + (note,))
+
+
+def analyze(
+    request: Request, budget: Budget | None = None, *, fmo: Sequence[FmoBlock] | None = None
+) -> StabilityReport:
     """Decide stability of the expected error covariance (seed 001, Theorem 1).
 
     Parameters
@@ -390,7 +430,7 @@ def analyze(request: Request, budget: Budget | None = None, *, fmo: Sequence[Fmo
     >>> analyze(req).verdict
     'boundary'
     """
-    _parse_options(request)
+    opts = analyze_options(request)
     require_assumption_1(request.channel)
     if budget is None:
         budget = Budget(seconds=request.time_budget_s or DEFAULT_BUDGET_S)
@@ -433,7 +473,14 @@ def analyze(request: Request, budget: Budget | None = None, *, fmo: Sequence[Fmo
         assumptions=tuple(assumptions),
         warnings=tuple(warnings),
         display=display,
+        tail=tail_report([(b, res) for b, (_, res) in zip(fmo, analyzed)], channels),
     )
+    if len(channels) == 1 and channels[0].model == "gilbert_elliott":
+        report = _with_ge_region(report, [(b, res) for b, (_, res) in zip(fmo, analyzed)], channels[0], budget, opts)
+    if opts.critical_parameter is not None:
+        items = [(b, res) for b, (_, res) in zip(fmo, analyzed)]
+        found = critical_parameter(request, opts.critical_parameter, items, channels, budget)
+        report = dataclasses.replace(report, critical_parameter=found)
     if basis != "extension":
         return report
     # per-sensor Bernoulli channels: exact critical probability of each sensor, and for two

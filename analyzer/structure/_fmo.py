@@ -592,7 +592,12 @@ def build_block(
     oracle = None
     try:
         K, member_vals = _member_field_and_values(members, factors, mod_sq)
-    except (BasePolynomialError, ArithmeticError, NotImplementedError, ValueError):  # SymPy could not build or embed in the compositum
+    except (
+        BasePolynomialError,
+        ArithmeticError,
+        NotImplementedError,
+        ValueError,
+    ):  # SymPy could not build or embed in the compositum
         K, member_vals = None, {}
     if K is not None:
         theta0 = member_vals[head]

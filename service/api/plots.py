@@ -13,7 +13,14 @@ from fastapi.responses import Response
 
 from ..problems import Problem, ProblemError
 from .deps import BodyDep, DispatcherDep
-from .schemas import PHASE_TRANSITION_EXAMPLES, REGION_EXAMPLES, REQUEST_EXAMPLES, json_body, problem_responses
+from .schemas import (
+    GE_REGION_EXAMPLES,
+    PHASE_TRANSITION_EXAMPLES,
+    REGION_EXAMPLES,
+    REQUEST_EXAMPLES,
+    json_body,
+    problem_responses,
+)
 
 router = APIRouter(prefix="/v1/plots", tags=["plots"])
 
@@ -77,6 +84,27 @@ async def region(
     points: Annotated[int, Query(ge=2, le=41, description="grid points per axis (options.bounds.grid)")] = 21,
 ) -> Response:
     return await dispatcher.answer("plot-region", body, {"points": points})
+
+
+@router.post(
+    "/ge-region",
+    summary="Exact stability region of a Gilbert-Elliott channel in the (recovery, failure) square",
+    description=(
+        "One packet over a Gilbert-Elliott channel.  Colours every cell of the (q, p) square by the exact "
+        "verdict of Theorem 1 (Rohr, Marelli and Fu, 2014) at its centre, draws the boundary "
+        "|alpha_k|^2 sigma_k(p, q) = 1 piece by piece (one algebraic curve per FMO block and blind pattern), "
+        "and marks the request's own point.  The same map is in the analyze report with options.analyze.ge_grid."
+    ),
+    response_class=Response,
+    responses={**_PNG, **_ERRORS},
+    openapi_extra=json_body(GE_REGION_EXAMPLES),
+)
+async def ge_region(
+    body: BodyDep,
+    dispatcher: DispatcherDep,
+    points: Annotated[int, Query(ge=2, le=101, description="cells per axis (options.analyze.ge_grid)")] = 41,
+) -> Response:
+    return await dispatcher.answer("plot-ge-region", body, {"points": points})
 
 
 @router.post(

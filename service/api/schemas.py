@@ -222,6 +222,7 @@ REQUEST_EXAMPLES: dict[str, dict[str, Any]] = {
 #: Example bodies for the plot endpoints (a subset that suits each plot).
 PHASE_TRANSITION_EXAMPLES = {k: REQUEST_EXAMPLES[k] for k in ("seed004-3x3", "seed002-2x2", "seed004-scalar")}
 REGION_EXAMPLES = {k: REQUEST_EXAMPLES[k] for k in ("seed000-two-sensors",)}
+GE_REGION_EXAMPLES = {k: REQUEST_EXAMPLES[k] for k in ("seed001-degenerate-gilbert-elliott",)}
 
 
 # -- component schemas ------------------------------------------------------
@@ -337,9 +338,46 @@ COMPONENTS: dict[str, dict[str, Any]] = {
                 **_ref("ExactNumber"),
                 "description": "Seconds this request may take, in (0, 3600]; the deployment's budget caps it.",
             },
-            "analyze": {"type": "object", "description": "Options of the analyze command."},
-            "bounds": {"type": "object", "description": "Options of the bounds command."},
-            "simulate": {"type": "object", "description": "Options of the simulate command."},
+            "analyze": {
+                "type": "object",
+                "description": "Options of the analyze command.",
+                "properties": {
+                    "ge_grid": {
+                        "type": "integer",
+                        "minimum": 2,
+                        "maximum": 101,
+                        "description": (
+                            "Gilbert-Elliott channel only: cells per axis of the exact (failure rate, recovery "
+                            "rate) stability map added to the report (gilbert_elliott_region.map)."
+                        ),
+                    },
+                    "critical_parameter": {
+                        "type": "string",
+                        "description": (
+                            "A JSON pointer into channel naming one conditional arrival probability "
+                            "(/channel/recovery_rate, /channel/failure_rate, /channel/arrival_probability/01, "
+                            "/channel/channels/<sensor>/...); the report's critical_parameter gives its exact "
+                            "critical value(s) with the other parameters fixed."
+                        ),
+                    },
+                },
+                "additionalProperties": False,
+            },
+            "bounds": {
+                "type": "object",
+                "description": (
+                    "Options of the bounds command.  trace_target: a positive number T; the report's trace_target "
+                    "gives the smallest arrival probability at which the certified upper bound trace(V_bar) is at "
+                    "most T (one Bernoulli packet; bisection, V_bar decreases with lambda: Sinopoli et al. 2004)."
+                ),
+            },
+            "simulate": {
+                "type": "object",
+                "description": (
+                    "Options of the simulate command.  outage_thresholds: a list of up to 20 positive numbers M; "
+                    "the report's stationary.outage gives P(trace P > M) with a 95% interval for each."
+                ),
+            },
         },
         "additionalProperties": False,
         "examples": [{"time_budget_s": 10}],
@@ -370,6 +408,31 @@ COMPONENTS: dict[str, dict[str, Any]] = {
             "system": {"type": "object"},
             "assumptions": {"type": "array", "items": {"type": "string"}},
             "warnings": {"type": "array", "items": {"type": "string"}},
+            "tail": {
+                "type": ["object", "null"],
+                "description": (
+                    "Tail exponent kappa of the stationary error: P(trace P > M) ~ M^(-kappa), the moment of "
+                    "order r finite iff kappa > r; per block kappa_k = log(1/sigma_k) / (2 log|alpha_k|), exact "
+                    "text where sigma is.  basis 'theorem' (Mo and Sinopoli, 2012) for non-degenerate blocks, "
+                    "'extension' otherwise."
+                ),
+            },
+            "critical_parameter": {
+                "type": ["object", "null"],
+                "description": (
+                    "With options.analyze.critical_parameter: the exact verdict on every interval of that one "
+                    "parameter in (0, 1) and the critical values between them, with the deciding block and blind set."
+                ),
+            },
+            "gilbert_elliott_region": {
+                "type": ["object", "null"],
+                "description": (
+                    "Gilbert-Elliott channel only: the critical recovery rate q*(p) at the request's p and the "
+                    "critical failure rate p*(q) at its q, exact and as floats, with the deciding block and blind "
+                    "pattern; every boundary equation; and, with options.analyze.ge_grid, the exactly labelled "
+                    "(p, q) map and its boundary curve (Theorem 1 of Rohr, Marelli and Fu, 2014, on the family)."
+                ),
+            },
         },
         "required": ["kfio_version", "verdict", "blocks"],
         "examples": [_SEED004_SCALAR_REPORT],
@@ -424,6 +487,16 @@ COMPONENTS: dict[str, dict[str, Any]] = {
             "diverged": {"type": "boolean"},
             "checks": {"type": "object"},
             "exact": {"type": ["object", "null"]},
+            "stationary": {
+                "type": ["object", "null"],
+                "description": (
+                    "trace(P_T) over the trajectories at the last step (P_t converges in distribution: Kar, "
+                    "Sinopoli and Moura, 2012): quantiles with 95% intervals, outage P(trace P > M) for "
+                    "options.simulate.outage_thresholds with Wilson intervals, Hill's tail exponent beside the "
+                    "exact kappa (Mo and Sinopoli, 2012), the exact per-step growth of E[P_t], and a warning "
+                    "when kappa <= 2 (the sample mean is then unreliable)."
+                ),
+            },
         },
         "required": ["kfio_version", "steps", "trajectories", "seed", "mean_trace", "percentiles", "diverged"],
         "examples": [_SEED004_SCALAR_SIMULATION],

@@ -1,8 +1,9 @@
-"""``kfio analyze FILE [--json]``: the exact verdict of seed 001, Theorem 1."""
+"""``kfio analyze FILE [--json] [--ge-grid K] [--ge-plot PNG]``: the exact verdict of seed 001, Theorem 1."""
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 
 from .. import exitcodes
 from ..io import add_request_arguments, dump_json, read_request_text, run_guarded
@@ -16,6 +17,17 @@ def register(sub: argparse._SubParsersAction) -> None:
         "Exit 0 stable, 1 unstable, 3 boundary, 2 invalid input.",
     )
     add_request_arguments(p)
+    p.add_argument(
+        "--ge-grid",
+        type=int,
+        metavar="K",
+        help="Gilbert-Elliott channel: add the exact K x K (p, q) stability map (options.analyze.ge_grid)",
+    )
+    p.add_argument(
+        "--ge-plot",
+        metavar="PNG",
+        help="Gilbert-Elliott channel: write the exact (q, p) region map as a PNG (grid --ge-grid, default 41)",
+    )
     p.set_defaults(func=_run, quick_exit=True)
 
 
@@ -23,7 +35,17 @@ def _run(args: argparse.Namespace) -> int:
     from kfio import analyze, load_request  # here, not at import: `kfio --help` stays fast
 
     def body() -> int:
-        report = analyze(load_request(read_request_text(args.file)))
+        request = load_request(read_request_text(args.file))
+        grid = args.ge_grid if args.ge_grid is not None else (41 if args.ge_plot else None)
+        if grid is not None:
+            opts = {**request.options.get("analyze", {}), "ge_grid": grid}
+            request = dataclasses.replace(request, options={**request.options, "analyze": opts})
+        report = analyze(request)
+        if args.ge_plot:
+            from ..plots import _draw_ge_region
+
+            with open(args.ge_plot, "wb") as fh:
+                fh.write(_draw_ge_region(report.gilbert_elliott, report.verdict, request))
         print(dump_json(report.to_dict()) if args.json else report.summary())
         return exitcodes.BY_VERDICT[report.verdict]
 

@@ -134,7 +134,9 @@ def test_option_and_budget_errors_name_the_keyword():
         kfio.simulate(sys, ch, steps=0)
     with pytest.raises(InvalidInput, match=r"^options\['stepz'\]: unknown option 'stepz'"):
         kfio.simulate(sys, ch, options={"stepz": 3})
-    with pytest.raises(InvalidInput, match=r"^options\['x'\]: analyze takes no options$"):
+    with pytest.raises(
+        InvalidInput, match=r"^options\['x'\]: unknown option 'x'; allowed: critical_parameter, ge_grid$"
+    ):
         kfio.analyze(sys, ch, options={"x": 1})
     with pytest.raises(InvalidInput, match=r"^budget: time_budget_s must be in \(0, 3600\]$"):
         kfio.analyze(sys, ch, budget=-1.0)

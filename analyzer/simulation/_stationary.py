@@ -1,0 +1,235 @@
+"""The stationary distribution of ``trace(P)`` from a simulation: quantiles, outage, tail exponent.
+
+``P_t`` converges in distribution for every arrival rate above 0 (Kar,
+Sinopoli and Moura, 2012), even where ``E[P_t]`` diverges, so quantiles and
+outage probabilities exist where the mean does not.  This module reads the
+``M`` independent trajectories of :func:`kfio.simulation.simulate` at the
+final step ``T`` (one sample each of ``P_T``, close to stationary once ``T``
+is well past the channel's mixing time) and reports
+
+* quantiles of ``trace(P_T)`` with distribution-free 95% intervals (order
+  statistics: the ``q``-quantile lies between the ``j``-th and ``k``-th smallest
+  samples with ``j, k = M q -+ 1.96 sqrt(M q (1 - q))``);
+* the outage ``P(trace P > M_i)`` for each threshold ``M_i`` of
+  ``options.simulate.outage_thresholds``, with Wilson 95% intervals;
+* the Hill estimate of the tail exponent from the largest ``k = M / 20``
+  samples, ``1/kappa_hat = mean(log(x_(i) / x_(k+1)))``, with its asymptotic
+  sampling interval ``kappa_hat (1 +- 1.96 / sqrt(k))`` (Hill, 1975), beside
+  the exact ``kappa`` of :mod:`kfio.stability._tail` (Mo and Sinopoli, 2012);
+* a warning when the exact ``kappa <= 2``: the variance of ``trace P`` is
+  infinite (and the mean too when ``kappa <= 1``), so the sample mean and its
+  normal band mislead; the exact growth rate of ``E[P_t]`` per step
+  (``max_k |alpha_k|^2 sigma_k``, Theorem 1 of Rohr, Marelli and Fu, 2014) is
+  given beside it.
+
+The power-law tail of a lattice-like chain (``P`` grows by ``|alpha|^2`` per
+lost step) oscillates within one period of ``M``; with ``k = sqrt(M)`` the
+Hill estimate follows that oscillation (measured 0.37-0.48 for an exact 0.5),
+with ``k = M / 20`` the tail spans several periods and the estimate landed
+within 0.05 of the exact ``kappa`` on the scalar, degenerate, Bernoulli and
+Gilbert-Elliott test systems (1.2*10^4 samples, two seeds).  The interval
+covers sampling error only, not that bias.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Sequence
+
+import numpy as np
+
+from ..errors import InvalidInput, LimitExceeded
+from ..model._exact import parse_number
+from ..model._types import Request
+
+Z95 = 1.959963984540054
+QUANTILES = (0.5, 0.9, 0.99, 0.999)
+MAX_THRESHOLDS = 20
+FIELD = "/options/simulate/outage_thresholds"
+
+
+def parse_thresholds(request: Request) -> tuple[float, ...]:
+    """``options.simulate.outage_thresholds``: positive exact numbers, at most 20.
+
+    Raises
+    ------
+    InvalidInput, LimitExceeded
+        Naming ``/options/simulate/outage_thresholds`` (or one of its items).
+    """
+    raw = request.options.get("simulate", {}).get("outage_thresholds")
+    if raw is None:
+        return ()
+    if not isinstance(raw, list) or not raw:
+        raise InvalidInput(FIELD, "outage_thresholds must be a non-empty list of positive numbers")
+    if len(raw) > MAX_THRESHOLDS:
+        raise LimitExceeded(FIELD, f"at most {MAX_THRESHOLDS} outage thresholds; got {len(raw)}")
+    out = []
+    for i, v in enumerate(raw):
+        x = parse_number(v, f"{FIELD}/{i}")
+        if x <= 0:
+            raise InvalidInput(f"{FIELD}/{i}", "an outage threshold must be positive")
+        out.append(float(x))
+    return tuple(out)
+
+
+def wilson(successes: int, n: int, z: float = Z95) -> tuple[float, float]:
+    """Wilson score interval of a binomial proportion (Wilson, 1927).
+
+    Examples
+    --------
+    >>> from kfio.simulation._stationary import wilson
+    >>> lo, hi = wilson(0, 100)
+    >>> round(lo, 12), round(hi, 4)
+    (0.0, 0.037)
+    """
+    if n == 0:
+        return 0.0, 1.0
+    p = successes / n
+    denom = 1 + z * z / n
+    centre = (p + z * z / (2 * n)) / denom
+    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / denom
+    return max(0.0, centre - half), min(1.0, centre + half)
+
+
+def hill(samples: np.ndarray, k: int | None = None) -> tuple[float | None, int]:
+    """Hill's estimate of the tail exponent from the ``k`` largest finite samples (default ``M / 20``)."""
+    x = np.sort(samples[np.isfinite(samples) & (samples > 0)])[::-1]
+    k = k or samples.size // 20
+    if k < 10 or x.size <= k:
+        return None, k
+    logs = np.log(x[:k]) - math.log(x[k])
+    mean = float(logs.mean())
+    return (1.0 / mean if mean > 0 else None), k
+
+
+@dataclass(frozen=True)
+class StationaryReport:
+    """Distribution of ``trace(P_T)`` over the trajectories at the last step.
+
+    Attributes
+    ----------
+    step, samples:
+        ``T`` and the number of trajectories ``M``.
+    quantiles:
+        ``(q, value, low, high)``: the sample quantile and its 95% interval
+        (``inf`` where a diverged trajectory sits at or below it).
+    outage:
+        ``(threshold, probability, low, high)`` with Wilson 95% intervals.
+    hill, hill_interval, hill_k:
+        Hill's tail exponent, its 95% interval and the samples it used.
+    kappa, kappa_exact:
+        The exact tail exponent from ``analyze`` (``None`` if unknown).
+    growth_rate:
+        ``max_k |alpha_k|^2 sigma_k``: per-step growth of ``E[P_t]`` where it diverges.
+    warnings:
+        Why the sample mean should not be read, when it should not.
+    """
+
+    step: int
+    samples: int
+    quantiles: tuple[tuple[float, float, float, float], ...]
+    outage: tuple[tuple[float, float, float, float], ...]
+    hill: float | None
+    hill_interval: tuple[float, float] | None
+    hill_k: int
+    kappa: float | None
+    kappa_exact: str | None
+    growth_rate: float | None
+    warnings: tuple[str, ...]
+    verdict: str | None = None
+
+    @property
+    def mean_unreliable(self) -> bool:
+        return self.kappa is not None and self.kappa <= 2
+
+    def to_dict(self) -> dict[str, Any]:
+        def fin(x: float) -> float | None:
+            return x if math.isfinite(x) else None
+
+        return {
+            "step": self.step,
+            "samples": self.samples,
+            "method": "one sample of P_T per trajectory (Kar, Sinopoli and Moura 2012: P_t converges in distribution)",
+            "quantiles": [{"q": q, "trace": fin(v), "ci95": [fin(lo), fin(hi)]} for q, v, lo, hi in self.quantiles],
+            "outage": [{"threshold": m, "probability": p, "ci95": [lo, hi]} for m, p, lo, hi in self.outage],
+            "tail_exponent_hill": self.hill,
+            "tail_exponent_hill_ci95": list(self.hill_interval) if self.hill_interval else None,
+            "hill_k": self.hill_k,
+            "tail_exponent_exact": self.kappa,
+            "tail_exponent_exact_text": self.kappa_exact,
+            "exact_mean_growth_per_step": self.growth_rate,
+            "verdict": self.verdict,
+            "mean_unreliable": self.mean_unreliable,
+            "warnings": list(self.warnings),
+        }
+
+    def summary_lines(self) -> list[str]:
+        lines = [w for w in (f"warning: {w}" for w in self.warnings)]
+        qs = ", ".join(f"{100 * q:g}%: {v:.5g} [{lo:.4g}, {hi:.4g}]" for q, v, lo, hi in self.quantiles)
+        lines.append(f"quantiles of trace(P_{self.step}) over {self.samples} trajectories (95% CI): {qs}")
+        for m, p, lo, hi in self.outage:
+            lines.append(f"outage P(trace P > {m:g}) = {p:.4g}  (95% CI [{lo:.4g}, {hi:.4g}])")
+        exact = f"{self.kappa:.4g}" if self.kappa is not None else "n/a"
+        est = f"{self.hill:.4g}" if self.hill is not None else "n/a"
+        lines.append(f"tail exponent: exact kappa = {exact}, Hill estimate {est} (k = {self.hill_k})")
+        return lines
+
+
+def _quantile_ci(x: np.ndarray, q: float) -> tuple[float, float, float]:
+    M = x.size
+    s = np.sort(x)
+    j = int(math.floor(M * q - Z95 * math.sqrt(M * q * (1 - q))))
+    k = int(math.ceil(M * q + Z95 * math.sqrt(M * q * (1 - q))))
+    value = float(np.quantile(s, q, method="inverted_cdf"))
+    lo = float(s[max(j, 0)]) if j >= 0 else 0.0
+    hi = float(s[min(k, M - 1)]) if k < M else math.inf
+    return value, lo, hi
+
+
+def stationary_report(
+    final_traces: np.ndarray, step: int, thresholds: Sequence[float], analysis: Any | None
+) -> StationaryReport:
+    """Quantiles, outage probabilities and tail exponents of ``trace(P_T)`` (diverged = ``inf``).
+
+    Parameters
+    ----------
+    final_traces:
+        ``trace(P_T)`` per trajectory.
+    thresholds:
+        Outage thresholds ``M_i``.
+    analysis:
+        The :class:`~kfio.stability._verdict.StabilityReport` of the same
+        request, or ``None`` (then no exact exponent and no warning).
+    """
+    x = np.where(np.isfinite(final_traces), final_traces, np.inf)
+    M = x.size
+    quantiles = tuple((q, *_quantile_ci(x, q)) for q in QUANTILES)
+    outage = tuple((m, int((x > m).sum()) / M, *wilson(int((x > m).sum()), M)) for m in thresholds)
+    h, k = hill(x)
+    interval = (h * (1 - Z95 / math.sqrt(k)), h * (1 + Z95 / math.sqrt(k))) if h is not None else None
+    kappa = kappa_text = growth = None
+    warnings: list[str] = []
+    verdict = analysis.verdict if analysis is not None else None
+    if analysis is not None and analysis.tail is not None:
+        kappa, kappa_text = analysis.tail.kappa, analysis.tail.kappa_exact
+        rates = [b.rate for b in analysis.blocks if b.rate is not None]
+        growth = max(rates) if rates else None
+        if kappa is not None and kappa <= 2:
+            what = "mean and variance are" if kappa <= 1 else "variance is"
+            warnings.append(
+                f"exact tail exponent kappa = {kappa:.4g} <= 2: the {what} infinite (Mo and Sinopoli 2012), so "
+                "the sample mean of trace(P_t) is dominated by rare trajectories and its 95% band is not to be "
+                "trusted; read the quantiles"
+                + (
+                    f". Exact E[P_t] grows by {growth:.4g} per step (Theorem 1 rate, Rohr, Marelli and Fu 2014)"
+                    if growth is not None and growth > 1
+                    else ""
+                )
+            )
+    return StationaryReport(
+        step, M, quantiles, outage, h, interval, k, kappa, kappa_text, growth, tuple(warnings), verdict
+    )
+
+
+__all__ = ["StationaryReport", "hill", "parse_thresholds", "stationary_report", "wilson"]
