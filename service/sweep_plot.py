@@ -108,7 +108,7 @@ def sweep_png(result: SweepResult) -> bytes:
         if boundary and boundary["kind"] == "curve":
             bx = np.array([np.nan if v is None else v for v in boundary["x"]], dtype=float)
             by = np.array([np.nan if v is None else v for v in boundary["y"]], dtype=float)
-            (line,) = ax.plot(bx, by, color="black", lw=1.5, label="exact boundary (kfio extension)")
+            (line,) = ax.plot(bx, by, color="black", lw=1.5, label="exact boundary")
             handles.append(line)
         ax.set_xlim(min(xs), max(xs)) if len(xs) > 1 else None
         ax.set_ylim(min(ys), max(ys)) if len(ys) > 1 else None

@@ -5,7 +5,10 @@ sensors of a per-sensor Bernoulli channel, the stable region is known exactly
 (kfio's per-sensor extension of Rohr, Marelli and Fu (2014), Theorem 1; see
 :mod:`kfio.stability._regions`): its boundary curve is taken from the report of
 the base request.  For a 1-D ``analyze`` sweep of a one-packet Bernoulli
-arrival probability, the boundary is the exact critical probability.
+arrival probability, the boundary is the exact critical probability; for a
+2-D sweep of a Gilbert-Elliott channel's failure and recovery rates, the exact
+curve of :mod:`kfio.stability._ge_region` (Rohr, Marelli and Fu (2014),
+Theorem 1, on the Gilbert-Elliott family).
 """
 
 from __future__ import annotations
@@ -15,6 +18,9 @@ from typing import Any
 from ..errors import AnalyzerError
 from ..model import parse_request
 from ._spec import SweepSpec
+
+#: Resolution of the exact Gilbert-Elliott boundary drawn under a (p, q) sweep.
+_GE_GRID = 61
 
 
 def exact_boundary(spec: SweepSpec) -> dict[str, Any] | None:
@@ -41,6 +47,30 @@ def exact_boundary(spec: SweepSpec) -> dict[str, Any] | None:
                 "value": rep["critical_arrival_probability"],
                 "exact": rep["critical_arrival_probability_exact"],
             }
+        if len(spec.axes) == 2 and channel.get("model") == "gilbert_elliott":
+            names = {"/channel/failure_rate": "failure_rate", "/channel/recovery_rate": "recovery_rate"}
+            if sorted(pointers) != sorted(names):
+                return None
+            from ..stability import analyze
+
+            base = dict(spec.base)
+            base["options"] = {**base.get("options", {}), "analyze": {"ge_grid": _GE_GRID}}
+            region = analyze(parse_request(base)).to_dict().get("gilbert_elliott_region") or {}
+            curve = (region.get("map") or {}).get("curve") or []
+            columns = (region.get("map") or {}).get("curve_columns") or ["recovery_rate", "failure_rate", "piece"]
+            ix, iy = columns.index(names[pointers[0]]), columns.index(names[pointers[1]])
+            pieces: dict[Any, list[tuple[float, float]]] = {}
+            for point in curve:
+                pieces.setdefault(point[columns.index("piece")], []).append((point[ix], point[iy]))
+            x: list[float | None] = []
+            y: list[float | None] = []
+            for pts in pieces.values():
+                for px, py in sorted(pts):
+                    x.append(px)
+                    y.append(py)
+                x.append(None)  # a break between pieces
+                y.append(None)
+            return {"kind": "curve", "axes": (spec.axes[0].name, spec.axes[1].name), "x": x, "y": y} if curve else None
         if len(spec.axes) == 2 and channel.get("model") == "per_sensor":
             names = list(channel.get("channels", {}))
             wanted = [f"/channel/channels/{n}/arrival_probability" for n in names]

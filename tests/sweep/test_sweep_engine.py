@@ -7,6 +7,8 @@ import os
 import signal
 import threading
 
+import pytest
+
 from kfio import analyze, compute_bounds, load_request
 from kfio.sweep import cache_stats, clear_caches, iter_sweep, load_sweep, point_at, row_from_report, run_sweep
 from kfio.sweep._spec import request_text
@@ -202,3 +204,30 @@ def test_cancel_and_budget_give_rows_for_every_point():
     assert [r.index for r in rows] == list(range(12))
     assert all(r.fields["error"] is None for r in rows[:3])
     assert all(r.fields["error"].startswith("cancelled") for r in rows[3:])
+
+
+def test_exact_boundary_of_a_gilbert_elliott_sweep_is_the_closed_form_curve():
+    from kfio.sweep._boundary import exact_boundary
+
+    spec = load_sweep(
+        json.dumps(
+            {
+                "command": "analyze",
+                "base": {
+                    "system": {"A": [["5/4", 0], [0, "-5/4"]], "C": [[1, 1]]},
+                    "channel": {"model": "gilbert_elliott", "failure_rate": "1/10", "recovery_rate": "3/10"},
+                },
+                "axes": [
+                    {"pointer": "/channel/recovery_rate", "values": ["1/2"]},
+                    {"pointer": "/channel/failure_rate", "values": ["1/10"]},
+                ],
+            }
+        )
+    )
+    b = exact_boundary(spec)
+    assert b is not None and b["kind"] == "curve"
+    pts = [(q, p) for q, p in zip(b["x"], b["y"]) if q is not None]
+    assert len(pts) > 10
+    # Rohr, Marelli and Fu (2014) Example 2 class: |alpha|^4 ((1-q)^2 + p q) = 1 on the boundary
+    for q, p in pts:
+        assert (5 / 4) ** 4 * ((1 - q) ** 2 + p * q) == pytest.approx(1, abs=1e-6)
