@@ -531,13 +531,13 @@ function loadText(text, what) {
 async function loadExample() {
   const id = $("example").value;
   const meta = state.examples.find((e) => e.id === id);
-  const text = await (await fetch(`/static/examples/${id}.json`)).text();
+  const text = await (await fetch(`/static/requests/${id}.json`)).text();
   $("example-note").textContent = meta ? meta.note : "";
   loadText(text, `example "${meta ? meta.title : id}"`);
 }
 
 async function init() {
-  state.examples = await (await fetch("/static/examples/index.json")).json();
+  state.examples = await (await fetch("/static/requests/index.json")).json();
   const select = $("example");
   for (const e of state.examples) {
     const o = el("option", `${e.title} [${e.endpoint}]`);

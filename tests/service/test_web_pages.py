@@ -48,13 +48,13 @@ def test_docs_pages_load_their_assets_from_this_server(client: TestClient) -> No
 
 
 def test_shipped_examples_are_valid_requests_matching_the_repository_examples(client: TestClient) -> None:
-    index = client.get("/static/examples/index.json").json()
+    index = client.get("/static/requests/index.json").json()
     ids = {e["id"] for e in index}
     assert {"seed004-2x2", "bursty-gilbert-elliott", "two-sensors", "seed004-scalar"} <= ids
     for example in index:
         assert example["endpoint"] in {"analyze", "bounds", "simulate"}
-        body = client.get(f"/static/examples/{example['id']}.json").content
+        body = client.get(f"/static/requests/{example['id']}.json").content
         load_request(body)  # raises on an invalid request
     # the 2x2 example is the one of the browser test: A = [[1.25, 0], [1, 1.1]], C = [1 1], Q = 20 I, R = 2.5
-    two_by_two = json.loads(client.get("/static/examples/seed004-2x2.json").content)
+    two_by_two = json.loads(client.get("/static/requests/seed004-2x2.json").content)
     assert two_by_two == json.loads((REPO / "examples" / "bounds_seed004_2x2.json").read_text())
