@@ -132,7 +132,7 @@ function renderFields(fields) {
     area.id = `field-${n}`;
     area.spellcheck = false;
     area.value = f.text;
-    area.rows = Math.min(12, Math.max(1, f.text.split("\n").length));
+    area.rows = Math.min(12, Math.max(f.text.split("\n").length, Math.ceil(f.text.length / 60)));
     const err = document.createElement("p");
     err.className = "field-error";
     err.id = `field-${n}-error`;
@@ -285,7 +285,8 @@ async function runJob(endpoint, body) {
     const job = poll.doc;
     const p = job.progress || {};
     if (typeof p.fraction === "number") $("job-progress").value = p.fraction;
-    $("job-text").textContent = `job ${job.status}` + (p.stage ? `: ${p.stage}, ${p.steps} steps, ${p.elapsed_s} s` : "");
+    const pct = typeof p.fraction === "number" ? ` (${(100 * p.fraction).toFixed(1)}%)` : "";
+    $("job-text").textContent = `job ${job.status}` + (p.stage ? `: ${p.stage}, ${p.steps} steps, ${p.elapsed_s} s${pct}` : "");
     setStatus(`Job ${job.id}: ${job.status}`);
     if (job.status === "done") {
       const result = await fetch(`${location}/result`);

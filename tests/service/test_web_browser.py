@@ -17,7 +17,7 @@ from urllib.parse import urlsplit
 
 import pytest
 
-from support.live_server import REPO, LiveServer
+from support.live_server import REPO, LiveServer, slow_request
 
 CHROMIUM = Path("/usr/bin/chromium")
 ARTIFACTS = REPO / "artifacts" / "browser"
@@ -178,3 +178,27 @@ def test_docs_and_redoc_work_offline(server: LiveServer, browser_context: tuple[
     shot(page, "redoc")
     # ReDoc's bundle asks for its vendor's logo and hides the image when it cannot load; nothing else goes out
     assert set(outside) <= {REDOC_LOGO}
+
+
+def test_long_work_as_a_job_shows_progress_and_can_be_cancelled(
+    server: LiveServer, browser_context: tuple[Any, list[str]]
+) -> None:
+    context, outside = browser_context
+    outside.clear()
+    page = open_page(context, server.url + "/")
+    page.check("#as-job")
+    page.click("button[data-endpoint=analyze]")  # the default example, through the job lane
+    page.wait_for_selector("#verdict", timeout=60_000)
+    assert page.inner_text("#verdict strong").lower() == "stable" and "9/25 = 0.36" in page.inner_text("#report")
+    # a simulation of minutes, pasted in: the job reports its progress, and Cancel stops it
+    page.click("#paste-box summary")
+    page.fill("#paste", slow_request(seed=21).decode())
+    page.click("#use-paste")
+    page.click("button[data-endpoint=simulate]")
+    page.wait_for_function("document.querySelector('#job-progress').value > 0", timeout=120_000)
+    assert "Monte Carlo simulation" in page.inner_text("#job-text")
+    shot(page, "job-running")
+    page.click("#job-cancel")
+    page.wait_for_function("document.querySelector('#status').textContent.includes('cancelled')", timeout=60_000)
+    assert page.locator("#job-box").is_hidden()
+    assert outside == []
