@@ -406,7 +406,8 @@ function renderAnalyze(r) {
 function renderBounds(r) {
   const out = document.createDocumentFragment();
   const op = r.operating_point || {};
-  out.append(headline(op.verdict_by_bounds || "undecided", `${MEANING[op.verdict_by_bounds] || ""} ${op.reason || ""}`.trim()));
+  const why = op.reason ? ` Here: ${op.reason}.` : "";
+  out.append(headline(op.verdict_by_bounds || "undecided", `${MEANING[op.verdict_by_bounds] || ""}${why}`.trim()));
   const cp = r.critical_probability || {};
   const lo = cp.lower || {}, up = cp.upper || {};
   out.append(facts([
@@ -418,6 +419,14 @@ function renderBounds(r) {
     ["trace S_bar (lower bound on E[P])", r.covariance && r.covariance.S_bar ? num(r.covariance.S_bar.trace) : undefined],
     ["trace V_bar (upper bound on E[P])", r.covariance && r.covariance.V_bar ? num(r.covariance.V_bar.trace) : undefined],
   ]));
+  if (Array.isArray(r.sensors) && r.sensors.length) {
+    out.append(el("h3", "Critical probability of each sensor, the others held at their own (Liu and Goldsmith 2004)"));
+    out.append(table(["sensor", "lower bound", "upper bound (LMI)", "gap"], r.sensors.map((s) => {
+      const ci = s.critical_interval || {};
+      const l = ci.lower || {}, u = ci.upper || {};
+      return [s.name, exactAndFloat(l.exact, l.value), exactAndFloat(u.exact, u.value), ci.gap === undefined ? "-" : num(ci.gap)];
+    })));
+  }
   if (r.packets) out.append(el("h3", "Packets"), table(["name", "rows", "arrival probability"], r.packets.map((p) => [p.name || "-", JSON.stringify(p.rows), exactAndFloat(p.arrival_probability_exact, p.arrival_probability)])));
   out.append(list("Notes", r.notes));
   return out;

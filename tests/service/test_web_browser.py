@@ -202,3 +202,23 @@ def test_long_work_as_a_job_shows_progress_and_can_be_cancelled(
     page.wait_for_function("document.querySelector('#status').textContent.includes('cancelled')", timeout=60_000)
     assert page.locator("#job-box").is_hidden()
     assert outside == []
+
+
+def test_an_uploaded_two_sensor_request_gets_its_region_map(
+    server: LiveServer, browser_context: tuple[Any, list[str]]
+) -> None:
+    context, outside = browser_context
+    outside.clear()
+    page = open_page(context, server.url + "/")
+    page.set_input_files("#upload", str(REPO / "examples" / "bounds_seed000_two_sensors.json"))
+    page.wait_for_selector('#field-list .field[data-pointer="/system/sensors"]')
+    page.click("button[data-endpoint=bounds]")
+    page.wait_for_selector("#verdict", timeout=60_000)
+    assert page.inner_text("#verdict strong").lower() in {"stable", "unstable", "undecided"}
+    rows = page.locator("#report table").first.locator("tbody tr").all_inner_texts()
+    assert [r.split("\t")[0] for r in rows] == ["first", "second"]  # one row of bounds per sensor
+    figure = page.locator("#plots figure")
+    assert "Liu and Goldsmith 2004" in figure.locator("figcaption").inner_text()
+    figure.locator("img").wait_for(timeout=120_000)
+    shot(page, "two-sensors-bounds")
+    assert outside == []
