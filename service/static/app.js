@@ -112,6 +112,7 @@ const FIELD_HELP = {
 function renderFields(fields) {
   const list = $("field-list");
   list.replaceChildren();
+  list.dataset.version = String(Number(list.dataset.version || 0) + 1); // lets tests see a reload
   fields.forEach((f, n) => {
     const pointer = "/" + f.path.map(escapePointer).join("/");
     const div = document.createElement("div");
