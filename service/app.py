@@ -40,6 +40,11 @@ Stability analysis of Kalman filters whose measurements travel over lossy packet
   a request may ask for less with `options.time_budget_s`).  Past it the answer is 504; when no
   worker becomes free in time, 503 with `Retry-After`.
 * Identical requests (same canonical JSON) are answered from an in-memory cache (`X-Cache: hit`).
+* Longer work runs as a job: `POST /v1/jobs/analyze` (`bounds`, `simulate`) with the same body answers
+  202 with a `Location` to poll; budgets up to an hour (`KFIO_JOB_TIME_BUDGET_S`), a separate lane of
+  worker processes (`KFIO_JOB_WORKERS`), at most `KFIO_MAX_JOBS` waiting (429 beyond), `DELETE` cancels.
+  Jobs live in the server's memory: a restart forgets them.
+* A web page for all of this is at `/`; these docs and the page load nothing from other hosts.
 """
 
 

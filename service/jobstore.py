@@ -58,7 +58,7 @@ import shutil
 import tempfile
 import time
 from collections import OrderedDict
-from collections.abc import Awaitable, Callable
+from collections.abc import Callable, Coroutine
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
@@ -181,7 +181,7 @@ class JobKind:
     """
 
     name: str
-    run: Callable[[JobContext], Awaitable[JobOutput]]
+    run: Callable[[JobContext], Coroutine[Any, Any, JobOutput]]
     fraction: Callable[[Any, Mapping[str, Any]], float | None] | None = None
 
 
@@ -398,7 +398,7 @@ class JobStore:
         raw = read_progress(job.progress_file)
         if raw is None:
             return
-        progress = {k: raw[k] for k in ("stage", "steps", "elapsed_s") if k in raw}
+        progress: dict[str, Any] = {k: raw[k] for k in ("stage", "steps", "elapsed_s") if k in raw}
         kind = self.kinds.get(job.kind)
         if kind is not None and kind.fraction is not None:
             try:

@@ -100,7 +100,7 @@ for _kind in ("analyze", "bounds", "simulate"):
     "/{job_id}",
     summary="A job's status, progress, and result or problem",
     response_class=Response,
-    responses={200: {"description": "The job", **_STATUS_RESPONSE}, **problem_responses(404)},
+    responses={200: {"description": "The job", **_STATUS_RESPONSE}, **problem_responses(404, 422)},
 )
 async def get_job(job_id: JobId, store: JobStoreDep) -> Response:
     return Response(store.document(store.get(job_id)), media_type="application/json")
@@ -130,7 +130,7 @@ async def get_job_result(job_id: JobId, store: JobStoreDep) -> Response:
     "/{job_id}",
     summary="Cancel a job (a running one's worker process is killed)",
     response_class=Response,
-    responses={200: {"description": "The job, now cancelled", **_STATUS_RESPONSE}, **problem_responses(404, 409)},
+    responses={200: {"description": "The job, now cancelled", **_STATUS_RESPONSE}, **problem_responses(404, 409, 422)},
 )
 async def cancel_job(job_id: JobId, store: JobStoreDep) -> Response:
     return Response(store.document(store.cancel(job_id)), media_type="application/json")

@@ -112,6 +112,7 @@ const FIELD_HELP = {
 function renderFields(fields) {
   const list = $("field-list");
   list.replaceChildren();
+  list.dataset.version = String(Number(list.dataset.version || 0) + 1); // lets tests see a reload
   fields.forEach((f, n) => {
     const pointer = "/" + f.path.map(escapePointer).join("/");
     const div = document.createElement("div");
@@ -132,7 +133,7 @@ function renderFields(fields) {
     area.id = `field-${n}`;
     area.spellcheck = false;
     area.value = f.text;
-    area.rows = Math.min(12, Math.max(1, f.text.split("\n").length));
+    area.rows = Math.min(12, Math.max(f.text.split("\n").length, Math.ceil(f.text.length / 60)));
     const err = document.createElement("p");
     err.className = "field-error";
     err.id = `field-${n}-error`;
@@ -285,7 +286,8 @@ async function runJob(endpoint, body) {
     const job = poll.doc;
     const p = job.progress || {};
     if (typeof p.fraction === "number") $("job-progress").value = p.fraction;
-    $("job-text").textContent = `job ${job.status}` + (p.stage ? `: ${p.stage}, ${p.steps} steps, ${p.elapsed_s} s` : "");
+    const pct = typeof p.fraction === "number" ? ` (${(100 * p.fraction).toFixed(1)}%)` : "";
+    $("job-text").textContent = `job ${job.status}` + (p.stage ? `: ${p.stage}, ${p.steps} steps, ${p.elapsed_s} s${pct}` : "");
     setStatus(`Job ${job.id}: ${job.status}`);
     if (job.status === "done") {
       const result = await fetch(`${location}/result`);
@@ -405,7 +407,8 @@ function renderAnalyze(r) {
 function renderBounds(r) {
   const out = document.createDocumentFragment();
   const op = r.operating_point || {};
-  out.append(headline(op.verdict_by_bounds || "undecided", `${MEANING[op.verdict_by_bounds] || ""} ${op.reason || ""}`.trim()));
+  const why = op.reason ? ` Here: ${op.reason}.` : "";
+  out.append(headline(op.verdict_by_bounds || "undecided", `${MEANING[op.verdict_by_bounds] || ""}${why}`.trim()));
   const cp = r.critical_probability || {};
   const lo = cp.lower || {}, up = cp.upper || {};
   out.append(facts([
@@ -417,6 +420,14 @@ function renderBounds(r) {
     ["trace S_bar (lower bound on E[P])", r.covariance && r.covariance.S_bar ? num(r.covariance.S_bar.trace) : undefined],
     ["trace V_bar (upper bound on E[P])", r.covariance && r.covariance.V_bar ? num(r.covariance.V_bar.trace) : undefined],
   ]));
+  if (Array.isArray(r.sensors) && r.sensors.length) {
+    out.append(el("h3", "Critical probability of each sensor, the others held at their own (Liu and Goldsmith 2004)"));
+    out.append(table(["sensor", "lower bound", "upper bound (LMI)", "gap"], r.sensors.map((s) => {
+      const ci = s.critical_interval || {};
+      const l = ci.lower || {}, u = ci.upper || {};
+      return [s.name, exactAndFloat(l.exact, l.value), exactAndFloat(u.exact, u.value), ci.gap === undefined ? "-" : num(ci.gap)];
+    })));
+  }
   if (r.packets) out.append(el("h3", "Packets"), table(["name", "rows", "arrival probability"], r.packets.map((p) => [p.name || "-", JSON.stringify(p.rows), exactAndFloat(p.arrival_probability_exact, p.arrival_probability)])));
   out.append(list("Notes", r.notes));
   return out;
@@ -531,13 +542,13 @@ function loadText(text, what) {
 async function loadExample() {
   const id = $("example").value;
   const meta = state.examples.find((e) => e.id === id);
-  const text = await (await fetch(`/static/examples/${id}.json`)).text();
+  const text = await (await fetch(`/static/requests/${id}.json`)).text();
   $("example-note").textContent = meta ? meta.note : "";
   loadText(text, `example "${meta ? meta.title : id}"`);
 }
 
 async function init() {
-  state.examples = await (await fetch("/static/examples/index.json")).json();
+  state.examples = await (await fetch("/static/requests/index.json")).json();
   const select = $("example");
   for (const e of state.examples) {
     const o = el("option", `${e.title} [${e.endpoint}]`);

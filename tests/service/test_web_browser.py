@@ -17,7 +17,7 @@ from urllib.parse import urlsplit
 
 import pytest
 
-from support.live_server import REPO, LiveServer
+from support.live_server import REPO, LiveServer, slow_request
 
 CHROMIUM = Path("/usr/bin/chromium")
 ARTIFACTS = REPO / "artifacts" / "browser"
@@ -85,8 +85,15 @@ def open_page(context: Any, url: str, width: int = 1280) -> Any:
     page = context.new_page()
     page.set_viewport_size({"width": width, "height": 900})
     page.goto(url)
-    page.wait_for_selector("#field-list .field")  # the default example is loaded
+    page.wait_for_function("Number(document.querySelector('#field-list').dataset.version) >= 1")  # default example
     return page
+
+
+def load(page: Any, action: Any) -> None:
+    """Run ``action`` (which loads a request) and wait until the fields were rebuilt from it."""
+    version = page.get_attribute("#field-list", "data-version")
+    action()
+    page.wait_for_function(f"document.querySelector('#field-list').dataset.version !== '{version}'", timeout=30_000)
 
 
 def field(page: Any, pointer: str) -> Any:
@@ -99,7 +106,7 @@ def test_seed004_2x2_example_is_stable_with_critical_probability_9_25(
     context, outside = browser_context
     page = open_page(context, server.url + "/")
     page.select_option("#example", "seed004-2x2")
-    page.click("#load-example")
+    load(page, lambda: page.click("#load-example"))
     assert field(page, "/system/A").locator("textarea").input_value() == "[[1.25, 0],\n [1, 1.1]]"
     page.click("button[data-endpoint=analyze]")
     page.wait_for_selector("#verdict", timeout=60_000)
@@ -127,7 +134,7 @@ def test_bad_input_is_shown_beside_its_field(server: LiveServer, browser_context
     context, outside = browser_context
     page = open_page(context, server.url + "/")
     page.select_option("#example", "seed004-2x2")
-    page.click("#load-example")
+    load(page, lambda: page.click("#load-example"))
     q = field(page, "/system/Q")
     q.locator("textarea").fill("[[20, 0], [0, -20]]")  # not positive semidefinite
     page.click("button[data-endpoint=analyze]")
@@ -153,8 +160,8 @@ def test_keyboard_only_run(server: LiveServer, browser_context: tuple[Any, list[
     page.focus("#example")
     page.keyboard.press("End")  # the last example: on the boundary
     page.keyboard.press("Tab")
-    page.keyboard.press("Enter")  # Load example
-    page.wait_for_function("document.querySelector('#example-note').textContent.includes('21/121')")
+    load(page, lambda: page.keyboard.press("Enter"))  # Load example
+    assert "21/121" in page.inner_text("#example-note")
     page.focus("button[data-endpoint=analyze]")
     page.keyboard.press("Enter")
     page.wait_for_selector("#verdict", timeout=60_000)
@@ -178,3 +185,46 @@ def test_docs_and_redoc_work_offline(server: LiveServer, browser_context: tuple[
     shot(page, "redoc")
     # ReDoc's bundle asks for its vendor's logo and hides the image when it cannot load; nothing else goes out
     assert set(outside) <= {REDOC_LOGO}
+
+
+def test_long_work_as_a_job_shows_progress_and_can_be_cancelled(
+    server: LiveServer, browser_context: tuple[Any, list[str]]
+) -> None:
+    context, outside = browser_context
+    outside.clear()
+    page = open_page(context, server.url + "/")
+    page.check("#as-job")
+    page.click("button[data-endpoint=analyze]")  # the default example, through the job lane
+    page.wait_for_selector("#verdict", timeout=60_000)
+    assert page.inner_text("#verdict strong").lower() == "stable" and "9/25 = 0.36" in page.inner_text("#report")
+    # a simulation of minutes, pasted in: the job reports its progress, and Cancel stops it
+    page.click("#paste-box summary")
+    page.fill("#paste", slow_request(seed=21).decode())
+    load(page, lambda: page.click("#use-paste"))
+    page.click("button[data-endpoint=simulate]")
+    page.wait_for_function("document.querySelector('#job-progress').value > 0", timeout=120_000)
+    assert "Monte Carlo simulation" in page.inner_text("#job-text")
+    shot(page, "job-running")
+    page.click("#job-cancel")
+    page.wait_for_function("document.querySelector('#status').textContent.includes('cancelled')", timeout=60_000)
+    assert page.locator("#job-box").is_hidden()
+    assert outside == []
+
+
+def test_an_uploaded_two_sensor_request_gets_its_region_map(
+    server: LiveServer, browser_context: tuple[Any, list[str]]
+) -> None:
+    context, outside = browser_context
+    outside.clear()
+    page = open_page(context, server.url + "/")
+    load(page, lambda: page.set_input_files("#upload", str(REPO / "examples" / "bounds_seed000_two_sensors.json")))
+    page.click("button[data-endpoint=bounds]")
+    page.wait_for_selector("#verdict", timeout=60_000)
+    assert page.inner_text("#verdict strong").lower() in {"stable", "unstable", "undecided"}
+    rows = page.locator("#report table").first.locator("tbody tr").all_inner_texts()
+    assert [r.split("\t")[0] for r in rows] == ["first", "second"]  # one row of bounds per sensor
+    figure = page.locator("#plots figure")
+    assert "Liu and Goldsmith 2004" in figure.locator("figcaption").inner_text()
+    figure.locator("img").wait_for(timeout=120_000)
+    shot(page, "two-sensors-bounds")
+    assert outside == []
