@@ -53,6 +53,16 @@ def test_every_schema_has_examples_that_it_accepts(name: str) -> None:
 def test_every_post_documents_body_examples_and_errors(path: str) -> None:
     op = POSTS[path]
     content = op["requestBody"]["content"]["application/json"]
+    if path == "/v1/sweeps":
+        from kfio.sweep import load_sweep, validate_points
+
+        assert {"base", "axes", "requests", "combine"} <= set(content["schema"]["properties"])
+        assert content["schema"]["properties"]["base"] == {"$ref": "#/components/schemas/AnalysisRequest"}
+        for example in content["examples"].values():
+            validator("AnalysisRequest").validate(example["value"]["base"])
+            assert validate_points(load_sweep(json.dumps(example["value"])))  # the sweep validator accepts it
+        assert {"202", "413", "422", "429", "503"} <= set(op["responses"])
+        return
     assert content["schema"] == {"$ref": "#/components/schemas/AnalysisRequest"}
     assert content["examples"], path
     for example in content["examples"].values():
