@@ -470,9 +470,11 @@ def problem_responses(*statuses: int) -> dict[int | str, dict[str, Any]]:
     """OpenAPI ``responses`` entries for problem documents."""
     texts = {
         413: "Request body larger than the deployment's limit (1 MiB by default)",
-        422: "Invalid request: the problem names the field (JSON pointer) and the rule",
+        415: "The body was not sent as Content-Type: application/json",
+        422: "Invalid request: the problem names the field (JSON pointer) and the rule; or the "
+        "computation needs more memory than one analysis process may use (memory-exceeded)",
         501: "This part of the analyzer is not available in this build",
-        503: "No worker became free in time, or a worker died; retry later",
+        503: "No worker became free in time, a worker died, or the server is shutting down; retry later",
         504: "The computation did not finish within its time budget",
     }
     return {

@@ -17,7 +17,7 @@ from kfio.service.jobs import PRELOAD
 from kfio.service.pool import PoolBusy, PoolTimeout, WorkerCrashed, WorkerPool
 from kfio.service.settings import Settings
 
-from support.live_server import SLOW_PATH, slow_request
+from support.live_server import JSON_HEADERS, SLOW_PATH, slow_request
 
 HERE = __name__  # the workers import this module to find the runners below
 
@@ -126,7 +126,7 @@ def client_not_ready(c: TestClient) -> bool:
 
 def test_past_its_budget_a_request_gets_504_promptly_and_the_service_recovers(client: TestClient) -> None:
     t0 = time.monotonic()
-    r = client.post(SLOW_PATH, content=slow_request(time_budget_s=1))
+    r = client.post(SLOW_PATH, content=slow_request(time_budget_s=1), headers=JSON_HEADERS)
     elapsed = time.monotonic() - t0
     assert r.status_code == 504, r.text
     assert r.headers["content-type"] == "application/problem+json"
@@ -142,7 +142,10 @@ def test_healthz_stays_fast_while_every_worker_is_busy(client: TestClient) -> No
     results: list[int] = []
     slow = [slow_request(time_budget_s=4, seed=s) for s in (11, 12)]  # distinct: no shared computation
     threads = [
-        threading.Thread(target=lambda b=b: results.append(client.post(SLOW_PATH, content=b).status_code)) for b in slow
+        threading.Thread(
+            target=lambda b=b: results.append(client.post(SLOW_PATH, content=b, headers=JSON_HEADERS).status_code)
+        )
+        for b in slow
     ]
     for t in threads:
         t.start()

@@ -16,8 +16,8 @@ import pytest
 
 from kfio.service.api.schemas import REQUEST_EXAMPLES
 
+from support.live_server import JSON_HEADERS, SLOW_PATH, LiveServer, slow_request
 from support.live_server import OPENAPI_PATH as DEFAULT_PATH
-from support.live_server import SLOW_PATH, LiveServer, slow_request
 
 SEED_2X2 = REQUEST_EXAMPLES["seed002-2x2"]["value"]
 
@@ -55,7 +55,9 @@ def test_analyze_over_loopback(server: LiveServer) -> None:
     r = httpx.post(f"{server.url}/v1/analyze", json=SEED_2X2, timeout=30)
     assert r.status_code == 200, r.text
     assert r.json()["verdict"] in {"stable", "unstable", "boundary"}
-    again = httpx.post(f"{server.url}/v1/analyze", content=json.dumps(SEED_2X2, indent=1), timeout=30)
+    again = httpx.post(
+        f"{server.url}/v1/analyze", content=json.dumps(SEED_2X2, indent=1), headers=JSON_HEADERS, timeout=30
+    )
     assert again.headers["x-cache"] == "hit" and again.content == r.content
 
 
@@ -73,7 +75,10 @@ def test_oversized_body_is_refused_on_its_content_length(server: LiveServer) -> 
 
 def test_oversized_chunked_body_is_refused_while_streaming(server: LiveServer) -> None:
     # no Content-Length: the server counts while reading and stops past 1 MiB
-    head = b"POST /v1/analyze HTTP/1.1\r\nHost: 127.0.0.1\r\nTransfer-Encoding: chunked\r\n\r\n"
+    head = (
+        b"POST /v1/analyze HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: application/json\r\n"
+        b"Transfer-Encoding: chunked\r\n\r\n"
+    )
     piece = b"x" * 65536
     chunks = [b"%x\r\n%s\r\n" % (len(piece), piece)] * 16 + [b"1\r\nx\r\n"]  # 1 MiB + 1 byte, never terminated
     answer = raw_exchange(server.port, head, chunks)
@@ -82,7 +87,9 @@ def test_oversized_chunked_body_is_refused_while_streaming(server: LiveServer) -
 
 def test_timeout_is_504_promptly_and_the_server_keeps_serving(server: LiveServer) -> None:
     t0 = time.monotonic()
-    r = httpx.post(f"{server.url}{SLOW_PATH}", content=slow_request(time_budget_s=1, seed=21), timeout=30)
+    r = httpx.post(
+        f"{server.url}{SLOW_PATH}", content=slow_request(time_budget_s=1, seed=21), headers=JSON_HEADERS, timeout=30
+    )
     assert r.status_code == 504 and r.headers["content-type"] == "application/problem+json"
     assert time.monotonic() - t0 < 3.0
     assert (
@@ -99,7 +106,9 @@ def test_healthz_under_100_ms_while_every_worker_is_busy(server: LiveServer) -> 
     async def scenario() -> tuple[list[float], list[int]]:
         async with httpx.AsyncClient(base_url=server.url, timeout=30) as client:
             slow = [
-                asyncio.create_task(client.post(SLOW_PATH, content=slow_request(time_budget_s=4, seed=s)))
+                asyncio.create_task(
+                    client.post(SLOW_PATH, content=slow_request(time_budget_s=4, seed=s), headers=JSON_HEADERS)
+                )
                 for s in (31, 32, 33)  # three for two workers: one waits in the queue
             ]
             deadline = time.monotonic() + 5
@@ -171,6 +180,6 @@ def test_workers_die_with_a_killed_server_even_mid_computation() -> None:
 
 def _post_quietly(url: str, body: bytes) -> None:
     try:
-        httpx.post(f"{url}{SLOW_PATH}", content=body, timeout=30)
+        httpx.post(f"{url}{SLOW_PATH}", content=body, headers=JSON_HEADERS, timeout=30)
     except httpx.HTTPError:
         pass  # the server is killed under it

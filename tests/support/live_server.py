@@ -150,3 +150,7 @@ def slow_request(time_budget_s: float | None = None, seed: int = 1) -> bytes:
         "options": options,
     }
     return json.dumps(body).encode()
+
+
+#: Headers of a JSON POST sent with ``content=`` (the service refuses other media types with 415).
+JSON_HEADERS = {"Content-Type": "application/json"}
