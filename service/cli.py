@@ -21,7 +21,7 @@ def build_parser() -> argparse.ArgumentParser:
         prog="kfio",
         description="Stability analyzer for Kalman filters with lossy measurement channels.",
         epilog="Exit codes: 0 stable/ok, 1 unstable, 2 invalid input, 3 boundary, 4 budget exceeded, "
-        "5 numerical failure, 70 internal error.",
+        "5 numerical failure, 6 cannot serve (kfio serve), 70 internal error.",
     )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     sub.required = True
