@@ -20,9 +20,10 @@ from typing import Any, Mapping
 from fastapi import Request
 from fastapi.responses import Response
 
-from kfio import InvalidInput, load_json, load_request, parse_number
+from kfio import InvalidInput, load_json, load_request
 
 from .cache import AnswerCache, CachedAnswer, canonical_json
+from .io import requested_budget
 from .jobs import PRELOAD
 from .pool import PoolBusy, PoolShuttingDown, WorkerPool
 from .problems import MEMORY_EXCEEDED, Problem, ProblemError, problem_from_exception
@@ -86,18 +87,6 @@ def request_key(job: str, body: bytes, params: Mapping[str, Any]) -> tuple[str, 
 def retire_worker(result: Any) -> bool:
     """A worker that ran out of memory is replaced (its heap may be left fragmented)."""
     return isinstance(result, tuple) and result[0] == "problem" and result[1].get("kind") == MEMORY_EXCEEDED
-
-
-def requested_budget(tree: Any) -> float | None:
-    """``options.time_budget_s`` if it is a valid number; the worker reports it otherwise."""
-    options = tree.get("options") if isinstance(tree, dict) else None
-    if not isinstance(options, dict) or "time_budget_s" not in options:
-        return None
-    try:
-        value = parse_number(options["time_budget_s"], "/options/time_budget_s")
-    except InvalidInput:
-        return None
-    return float(value) if value > 0 else None
 
 
 class Dispatcher:

@@ -4,12 +4,18 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from typing import Any, Callable
 
+from kfio import Budget, Request, load_json, load_request, parse_number
 from kfio.errors import BudgetExceeded, InvalidInput, NumericalFailure
 
 from . import exitcodes
+from .watchdog import DEFAULT_MEMORY_MB, memory_message, run_supervised
+
+#: Budget of a command whose request and flags name none (seconds).
+DEFAULT_TIME_BUDGET_S = 120.0
 
 MAX_REQUEST_BYTES = 1 << 20
 
@@ -33,6 +39,75 @@ def add_request_arguments(p: argparse.ArgumentParser) -> None:
     """Arguments every request-taking command shares."""
     p.add_argument("file", metavar="FILE", help="request JSON file, or - for standard input")
     p.add_argument("--json", action="store_true", help="print the JSON report instead of a summary")
+    p.add_argument(
+        "--time-budget",
+        type=float,
+        metavar="S",
+        help="wall-clock budget in seconds (default: options.time_budget_s of the request, else "
+        f"{DEFAULT_TIME_BUDGET_S:g}); enforced by a watchdog that stops the work, exit 4",
+    )
+    p.add_argument(
+        "--memory-mb",
+        type=int,
+        metavar="M",
+        help="address-space limit of the computation in MiB (default: KFIO_MEMORY_MB, else "
+        f"{DEFAULT_MEMORY_MB}; 0 for none); past it, exit 4",
+    )
+
+
+def requested_budget(tree: Any) -> float | None:
+    """``options.time_budget_s`` if it is a valid number; the worker reports it otherwise."""
+    options = tree.get("options") if isinstance(tree, dict) else None
+    if not isinstance(options, dict) or "time_budget_s" not in options:
+        return None
+    try:
+        value = parse_number(options["time_budget_s"], "/options/time_budget_s")
+    except InvalidInput:
+        return None
+    return float(value) if value > 0 else None
+
+
+def request_budget(data: bytes) -> float | None:
+    """``options.time_budget_s`` of a request's bytes, read leniently (the validator reports bad values)."""
+    try:
+        return requested_budget(load_json(data))
+    except InvalidInput:
+        return None
+
+
+def memory_limit(args: argparse.Namespace) -> int | None:
+    """The ``--memory-mb`` limit in bytes (``None``: no limit)."""
+    mb = args.memory_mb
+    if mb is None:
+        text = os.environ.get("KFIO_MEMORY_MB", "").strip()
+        mb = int(text) if text.isdigit() else DEFAULT_MEMORY_MB
+    if mb < 0:
+        raise InvalidInput("--memory-mb", "must be a whole number of MiB, at least 0")
+    return mb << 20 if mb else None
+
+
+def run_request_command(args: argparse.Namespace, work: Callable[[Request, Budget], int]) -> int:
+    """Read the request of ``args.file`` and run ``work(request, budget)`` under the watchdog.
+
+    The budget is ``--time-budget``, else the request's ``options.time_budget_s``,
+    else :data:`DEFAULT_TIME_BUDGET_S`; the work gets it as a cooperative
+    :class:`kfio.Budget` and the watchdog (:func:`kfio.service.watchdog.run_supervised`)
+    kills it shortly after.  Exit codes as :func:`run_guarded`.
+    """
+
+    def body() -> int:
+        if args.time_budget is not None and not 0.01 <= args.time_budget <= 86400:
+            raise InvalidInput("--time-budget", "must be in [0.01, 86400] seconds")
+        memory = memory_limit(args)
+        data = read_request_text(args.file)
+        seconds = args.time_budget or request_budget(data) or DEFAULT_TIME_BUDGET_S
+
+        def child() -> int:
+            return run_guarded(lambda: work(load_request(data), Budget(seconds=seconds)))
+
+        return run_supervised(child, seconds, memory_bytes=memory)
+
+    return run_guarded(body)
 
 
 def dump_json(report: dict[str, Any]) -> str:
@@ -49,6 +124,9 @@ def run_guarded(body: Callable[[], int]) -> int:
         return exitcodes.INVALID_INPUT
     except BudgetExceeded as exc:
         print(f"kfio: budget exceeded: {exc}", file=sys.stderr)
+        return exitcodes.BUDGET
+    except MemoryError:
+        print(memory_message(), file=sys.stderr)
         return exitcodes.BUDGET
     except NumericalFailure as exc:
         print(f"kfio: numerical failure: {exc}", file=sys.stderr)

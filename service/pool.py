@@ -32,6 +32,8 @@ from dataclasses import dataclass
 from multiprocessing.connection import Connection
 from typing import Any, Callable
 
+from .watchdog import limit_memory
+
 log = logging.getLogger("kfio.service")
 
 #: Thread pools of numerical libraries in workers: one thread each, so that
@@ -59,21 +61,6 @@ class PoolShuttingDown(PoolBusy):
     """The server is shutting down: the task was refused, or stopped when the grace period ended."""
 
 
-def _limit_memory(memory_bytes: int | None) -> None:
-    """Cap this process's address space (``RLIMIT_AS``) at ``memory_bytes``.
-
-    Past it an allocation fails: Python raises :class:`MemoryError`, which the
-    runner reports; the pool then retires the worker (see ``retire``).
-    """
-    if memory_bytes is None:
-        return
-    import resource
-
-    _soft, hard = resource.getrlimit(resource.RLIMIT_AS)
-    limit = memory_bytes if hard == resource.RLIM_INFINITY else min(memory_bytes, hard)
-    resource.setrlimit(resource.RLIMIT_AS, (limit, hard))
-
-
 def _exit_with_server(lifeline: Connection) -> None:
     """Let the kernel end this worker as soon as the server is gone, even mid-task.
 
@@ -99,7 +86,7 @@ def _worker_main(conn: Connection, runner_path: str, lifeline: Connection, memor
     _exit_with_server(lifeline)
     module, _, name = runner_path.partition(":")
     runner: Callable[..., Any] = getattr(importlib.import_module(module), name)
-    _limit_memory(memory_bytes)  # after the imports: the limit is for the work
+    limit_memory(memory_bytes)  # after the imports: the limit is for the work
     conn.send("ready")
     while True:
         try:

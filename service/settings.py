@@ -20,8 +20,7 @@ from pydantic_settings import BaseSettings, SettingsConfigDict
 
 from kfio.model._limits import Limits
 
-#: Default of :attr:`Settings.memory_mb` and of the CLI's ``--memory-mb`` (see docs/service.md).
-DEFAULT_MEMORY_MB = 3072
+from .watchdog import DEFAULT_MEMORY_MB
 
 
 def _default_workers() -> int:

@@ -13,13 +13,13 @@ import argparse
 import dataclasses
 from typing import Any
 
-from kfio import load_request
+from kfio import Budget
 from kfio.model._types import Request
 from kfio.simulation._setup import packets_of
 from kfio.simulation._simulate import simulate
 
 from .. import exitcodes
-from ..io import add_request_arguments, dump_json, read_request_text, run_guarded
+from ..io import add_request_arguments, dump_json, run_request_command
 
 #: ``--exact`` without ``options.simulate.exact_steps`` enumerates at most 2^16 sequences.
 DEFAULT_EXACT_SEQUENCES_LOG2 = 16
@@ -63,10 +63,9 @@ def with_overrides(request: Request, args: argparse.Namespace) -> Request:
 
 
 def _run(args: argparse.Namespace) -> int:
-    def body() -> int:
-        request = with_overrides(load_request(read_request_text(args.file)), args)
-        report = simulate(request)
+    def work(request: Request, budget: Budget) -> int:
+        report = simulate(with_overrides(request, args), budget=budget)
         print(dump_json(report.to_dict()) if args.json else report.summary())
         return exitcodes.STABLE
 
-    return run_guarded(body)
+    return run_request_command(args, work)
