@@ -20,7 +20,10 @@ from kfio.service.watchdog import run_supervised
 
 from support.live_server import slow_request
 
-SCALAR = {"system": {"A": [[2]], "C": [[1]], "Q": [[1]], "R": [[1]]}, "channel": {"model": "bernoulli", "arrival_probability": 0.5}}
+SCALAR = {
+    "system": {"A": [[2]], "C": [[1]], "Q": [[1]], "R": [[1]]},
+    "channel": {"model": "bernoulli", "arrival_probability": 0.5},
+}
 
 
 def markov10_request() -> dict:
