@@ -229,7 +229,8 @@ COMPONENTS: dict[str, dict[str, Any]] = {
         "examples": [1.25, "11/10", "2.5e-1"],
     },
     "Probability": {
-        "description": "An exact number in [0, 1].",
+        "description": "An exact number in [0, 1] (as text too: '9/25'; the validator checks the range of text "
+        "forms). A command may need more (its 422 names the rule).",
         "anyOf": [
             {"type": "number", "minimum": 0, "maximum": 1},
             {"type": "string", "pattern": _NUMBER_PATTERN, "maxLength": 816},
@@ -257,8 +258,16 @@ COMPONENTS: dict[str, dict[str, Any]] = {
         "properties": {
             "A": {**_ref("Matrix"), "description": "n x n state matrix"},
             "C": {**_ref("Matrix"), "description": "p x n output matrix"},
-            "Q": {**_ref("Matrix"), "description": "n x n process noise covariance, symmetric positive semidefinite"},
-            "R": {**_ref("Matrix"), "description": "p x p measurement noise covariance, symmetric positive definite"},
+            "Q": {
+                **_ref("Matrix"),
+                "description": "n x n process noise covariance, symmetric positive semidefinite (JSON Schema cannot "
+                "say symmetric or semidefinite: the validator checks both, exactly, and answers 422)",
+            },
+            "R": {
+                **_ref("Matrix"),
+                "description": "p x p measurement noise covariance, symmetric positive definite (checked exactly by "
+                "the validator, 422 otherwise)",
+            },
             "sensors": {"type": "array", "minItems": 1, "maxItems": 8, "items": _ref("Sensor")},
         },
         "required": ["A", "C"],
@@ -285,8 +294,12 @@ COMPONENTS: dict[str, dict[str, Any]] = {
             "order": {"type": "integer", "minimum": 0, "maximum": 10},
             "arrival_probability": {
                 "type": "object",
-                "description": "P(arrival | last `order` outcomes), keyed by the history as 0/1 text, oldest first.",
+                "description": "P(arrival | last `order` outcomes), keyed by the history as 0/1 text, oldest first. "
+                "Every key has exactly `order` characters and all 2^order histories are required (the validator "
+                "checks both).",
                 "propertyNames": {"pattern": "^[01]{0,10}$"},
+                "minProperties": 1,
+                "maxProperties": 1024,
                 "additionalProperties": _ref("Probability"),
             },
         },
@@ -299,7 +312,12 @@ COMPONENTS: dict[str, dict[str, Any]] = {
         {
             "channels": {
                 "type": "object",
-                "description": "One independent channel per sensor name (requires system.sensors).",
+                "description": "One independent channel per sensor name (requires system.sensors). The keys must "
+                "be exactly the names in system.sensors, each once (the validator checks it: an unknown or "
+                "missing name is 422).",
+                "propertyNames": {"minLength": 1, "maxLength": 64},
+                "minProperties": 1,
+                "maxProperties": 8,
                 "additionalProperties": _ref("PacketChannel"),
             }
         },
@@ -326,8 +344,12 @@ COMPONENTS: dict[str, dict[str, Any]] = {
         "description": "Per-command options (each command validates its own group) and the time budget.",
         "properties": {
             "time_budget_s": {
-                **_ref("ExactNumber"),
-                "description": "Seconds this request may take, in (0, 3600]; the deployment's budget caps it.",
+                "description": "Seconds this request may take, in [0.01, 3600] (an exact number; less cannot even "
+                "reach a worker, and is 422); the deployment's budget caps it.",
+                "anyOf": [
+                    {"type": "number", "minimum": 0.01, "maximum": 3600},
+                    {"type": "string", "pattern": _NUMBER_PATTERN, "maxLength": 816},
+                ],
             },
             "analyze": {"type": "object", "description": "Options of the analyze command."},
             "bounds": {"type": "object", "description": "Options of the bounds command."},

@@ -45,10 +45,11 @@ def test_deadline_kills_the_stuck_worker_and_replaces_it() -> None:
         p = pool(1, "sleeper", kill_grace_s=0.1)
         await p.start()
         try:
-            t0 = time.monotonic()
-            with pytest.raises(PoolTimeout):
+            (stuck,) = p._all
+            with pytest.raises(PoolTimeout):  # a 60 s sleep cannot have finished: the deadline fired
                 await p.run((60.0,), budget_s=0.5)
-            assert time.monotonic() - t0 < 1.5  # budget 0.5 s + grace 0.1 s, promptly
+            await asyncio.to_thread(stuck.process.join, 30)
+            assert not stuck.process.is_alive()  # killed, not left running
             assert await p.run((0.01,), budget_s=10) == 0.01  # the replacement works
             assert p.stats()["replaced"] == 1 and p.stats()["alive"] == 1
         finally:
@@ -74,20 +75,19 @@ def test_a_crashed_worker_is_reported_and_replaced() -> None:
 
 def test_waiting_is_bounded_in_count_and_in_time() -> None:
     async def scenario() -> None:
-        p = pool(1, "sleeper", max_waiting=1)
+        p = pool(1, "sleeper", max_waiting=1)  # the busy task sleeps 5 s, the waiter's budget is 0.3 s
         await p.start()
         try:
-            busy = asyncio.create_task(p.run((1.0,), budget_s=10))
+            busy = asyncio.create_task(p.run((5.0,), budget_s=30))
             await asyncio.sleep(0.1)
-            t0 = time.monotonic()
             waiting = asyncio.create_task(p.run((0.0,), budget_s=0.3))  # waits, then gives up
             await asyncio.sleep(0.05)
             with pytest.raises(PoolBusy, match="already waiting"):  # the queue (1) is full
                 await p.run((0.0,), budget_s=10)
             with pytest.raises(PoolBusy, match="no worker became free"):
                 await waiting
-            assert time.monotonic() - t0 < 1.0
-            assert await busy == 1.0
+            assert not busy.done()  # it gave up on its own budget while the worker was still busy
+            assert await busy == 5.0
         finally:
             await p.close()
 
@@ -114,8 +114,9 @@ def test_results_come_back_unchanged() -> None:
 @pytest.fixture(scope="module")
 def client() -> Iterator[TestClient]:
     with TestClient(create_app(Settings(workers=2, time_budget_s=20, kill_grace_s=0.25))) as c:
-        deadline = time.monotonic() + 30
-        while client_not_ready(c) and time.monotonic() < deadline:
+        for _ in range(1200):  # bounded by count
+            if not client_not_ready(c):
+                break
             time.sleep(0.05)
         yield c
 
@@ -124,21 +125,18 @@ def client_not_ready(c: TestClient) -> bool:
     return c.get("/readyz").status_code != 200
 
 
-def test_past_its_budget_a_request_gets_504_promptly_and_the_service_recovers(client: TestClient) -> None:
-    t0 = time.monotonic()
+def test_past_its_budget_a_request_gets_504_and_the_service_recovers(client: TestClient) -> None:
     r = client.post(SLOW_PATH, content=slow_request(time_budget_s=1), headers=JSON_HEADERS)
-    elapsed = time.monotonic() - t0
-    assert r.status_code == 504, r.text
+    assert r.status_code == 504, r.text  # the request takes minutes: only the budget ended it
     assert r.headers["content-type"] == "application/problem+json"
     assert r.json()["type"] == "urn:kfio:problem:budget-exceeded"
-    assert elapsed < 3.0, elapsed  # budget 1 s + grace 0.25 s + parsing
     ok = client.post("/v1/analyze", json=REQUEST_EXAMPLES["seed002-2x2"]["value"])
     assert ok.status_code == 200, ok.text
     pool = client.get("/readyz").json()["pool"]  # budget hit in the worker, or the worker killed: whole again
     assert pool["alive"] == pool["size"] and pool["busy"] == 0
 
 
-def test_healthz_stays_fast_while_every_worker_is_busy(client: TestClient) -> None:
+def test_healthz_answers_while_every_worker_is_busy(client: TestClient) -> None:
     results: list[int] = []
     slow = [slow_request(time_budget_s=4, seed=s) for s in (11, 12)]  # distinct: no shared computation
     threads = [
@@ -150,17 +148,14 @@ def test_healthz_stays_fast_while_every_worker_is_busy(client: TestClient) -> No
     for t in threads:
         t.start()
     try:
-        deadline = time.monotonic() + 3
-        while client.get("/readyz").json()["pool"]["busy"] < 2:
-            assert time.monotonic() < deadline, "the slow requests never occupied the pool"
+        for _ in range(1200):  # bounded by count: a hang guard
+            if client.get("/readyz").json()["pool"]["busy"] == 2:
+                break
             time.sleep(0.02)
-        latencies = []
+        assert client.get("/readyz").json()["pool"]["busy"] == 2, "the slow requests never occupied the pool"
         for _ in range(20):
-            t0 = time.perf_counter()
             assert client.get("/healthz").status_code == 200
-            latencies.append(time.perf_counter() - t0)
-        assert client.get("/readyz").json()["pool"]["busy"] == 2  # still fully busy while measured
-        assert max(latencies) < 0.1, latencies
+        assert client.get("/readyz").json()["pool"]["busy"] == 2  # every answer came while both were busy
     finally:
         for t in threads:
             t.join(timeout=15)
