@@ -229,7 +229,7 @@ def _analyze_block(
         for F in sets:
             budget.tick("exact transfer matrices")
             si, ex = compare_rate_markov(
-                block.modulus_sq, block.modulus_sq_float, N, period_transfer_matrix(N, F, channels)
+                block.modulus_sq, block.modulus_sq_float, N, period_transfer_matrix(N, F, channels, budget)
             )
             signs.append(si)
             exact = exact and ex
