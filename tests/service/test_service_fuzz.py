@@ -120,6 +120,7 @@ def fuzz(server: LiveServer, label: str, mode: GenerationMode) -> None:
     check()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("label", sorted(label for label in OPERATIONS if label.startswith("POST")))
 @pytest.mark.parametrize("mode", list(EXAMPLES), ids=lambda m: m.value)
 def test_fuzzed_requests_never_get_a_server_error(server: LiveServer, label: str, mode: GenerationMode) -> None:
