@@ -57,6 +57,14 @@ class WorkerCrashed(PoolError):
     """The worker died while running the task (it was replaced)."""
 
 
+class WorkerOutOfMemory(WorkerCrashed):
+    """The worker died of SIGABRT/SIGSEGV/SIGBUS under a memory limit: C code failed to allocate."""
+
+
+#: Signals of a worker whose C code failed an allocation (FLINT aborts, others crash).
+_MEMORY_SIGNALS = (signal.SIGABRT, signal.SIGSEGV, signal.SIGBUS)
+
+
 class PoolShuttingDown(PoolBusy):
     """The server is shutting down: the task was refused, or stopped when the grace period ended."""
 
@@ -401,6 +409,11 @@ class WorkerPool:
             except (EOFError, OSError):
                 await asyncio.to_thread(worker.process.join, 1.0)  # reap it, for the exit code
                 code = worker.process.exitcode
+                if self.memory_bytes is not None and code is not None and -code in _MEMORY_SIGNALS:
+                    raise WorkerOutOfMemory(
+                        f"the worker process died of signal {-code} during the task, most likely when an "
+                        f"allocation in C code went past its memory limit of {self.memory_bytes >> 20} MiB"
+                    ) from None
                 raise WorkerCrashed(f"the worker process died during the task (exit code {code})") from None
             ok = self.retire is None or not self.retire(value)
             self.completed += 1

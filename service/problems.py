@@ -18,6 +18,7 @@ exception                  status  type (``urn:kfio:problem:...``)
 ``PoolShuttingDown``       503     ``shutting-down`` (with ``Retry-After``)
 ``PoolBusy``               503     ``busy`` (with ``Retry-After``)
 ``MemoryError``            422     ``memory-exceeded`` (the worker is replaced)
+``WorkerOutOfMemory``      422     ``memory-exceeded`` (died in C code at its limit)
 ``WorkerCrashed``          503     ``worker-crashed`` (with ``Retry-After``)
 analyzer part missing      501     ``not-implemented``
 anything else              500     ``internal`` (a bug; logged, never detailed)
@@ -44,7 +45,7 @@ from kfio.errors import (
     NumericalFailure,
 )
 
-from .pool import PoolBusy, PoolShuttingDown, PoolTimeout, WorkerCrashed
+from .pool import PoolBusy, PoolShuttingDown, PoolTimeout, WorkerCrashed, WorkerOutOfMemory
 
 log = logging.getLogger("kfio.service")
 
@@ -164,6 +165,8 @@ def problem_from_exception(exc: BaseException) -> Problem:
         return Problem(503, "shutting-down", "Service shutting down", str(exc), retry_after=SHUTDOWN_RETRY_AFTER_S)
     if isinstance(exc, PoolBusy):
         return Problem(503, "busy", "Service busy", str(exc), retry_after=1)
+    if isinstance(exc, WorkerOutOfMemory):
+        return Problem(422, MEMORY_EXCEEDED, "Memory limit exceeded", str(exc))
     if isinstance(exc, WorkerCrashed):
         return Problem(503, "worker-crashed", "Worker process died", str(exc), retry_after=1)
     if isinstance(exc, MemoryError):

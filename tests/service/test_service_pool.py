@@ -14,7 +14,7 @@ from fastapi.testclient import TestClient
 from kfio.service.api.schemas import REQUEST_EXAMPLES
 from kfio.service.app import create_app
 from kfio.service.jobs import PRELOAD
-from kfio.service.pool import PoolBusy, PoolTimeout, WorkerCrashed, WorkerPool
+from kfio.service.pool import PoolBusy, PoolTimeout, WorkerCrashed, WorkerOutOfMemory, WorkerPool
 from kfio.service.settings import Settings
 
 from support.live_server import JSON_HEADERS, SLOW_PATH, slow_request
@@ -33,6 +33,17 @@ def sleeper(seconds: float, budget_s: float) -> float:
 
 def crasher(code: int, budget_s: float) -> None:
     os._exit(code)
+
+
+def aborter(_: object, budget_s: float) -> None:
+    os.abort()  # what FLINT does when an allocation fails
+
+
+def allocator(n_bytes: int, budget_s: float) -> tuple[str, int]:
+    try:
+        return ("ok", len(bytearray(n_bytes)))
+    except MemoryError:
+        return ("problem", -1)
 
 
 def pool(size: int, runner: str, **kw: object) -> WorkerPool:
@@ -69,6 +80,32 @@ def test_a_crashed_worker_is_reported_and_replaced() -> None:
             assert p.stats()["replaced"] == 1
         finally:
             await p.close()
+
+    asyncio.run(scenario())
+
+
+def test_a_worker_at_its_memory_limit_is_reported_and_retired() -> None:
+    async def scenario() -> None:
+        p = pool(1, "allocator", memory_bytes=1 << 30, retire=lambda v: v[0] == "problem")
+        await p.start()
+        try:
+            assert await p.run((1 << 20,), budget_s=30) == ("ok", 1 << 20)
+            assert await p.run((2 << 30,), budget_s=30) == ("problem", -1)  # 2 GiB past a 1 GiB limit
+            for _ in range(600):  # bounded by count: the retired worker is replaced in the background
+                if p.stats()["replaced"] == 1 and p.ready:
+                    break
+                await asyncio.sleep(0.05)
+            assert p.stats()["replaced"] == 1
+            assert await p.run((1 << 20,), budget_s=30) == ("ok", 1 << 20)
+        finally:
+            await p.close()
+        q = pool(1, "aborter", memory_bytes=1 << 30)
+        await q.start()
+        try:
+            with pytest.raises(WorkerOutOfMemory, match="signal 6.*memory limit of 1024 MiB"):
+                await q.run((None,), budget_s=30)
+        finally:
+            await q.close()
 
     asyncio.run(scenario())
 
