@@ -75,6 +75,7 @@ def test_internal_error_in_the_child_is_exit_70(capsys: pytest.CaptureFixture[st
     assert "internal error" in capsys.readouterr().err
 
 
+@pytest.mark.slow  # a subprocess that runs to its budget
 def test_markov_order_10_stops_at_its_cli_budget(tmp_path: Path) -> None:
     path = tmp_path / "markov10.json"
     path.write_text(json.dumps(markov10_request()))
@@ -89,6 +90,7 @@ def test_markov_order_10_stops_at_its_cli_budget(tmp_path: Path) -> None:
     assert len(lines) == 1 and lines[0].startswith("kfio: budget exceeded"), r.stderr
 
 
+@pytest.mark.slow  # a subprocess that runs to its memory limit
 def test_cli_memory_limit_is_exit_4(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     # Monte Carlo at the size limits needs far more than 400 MiB (the CLI maps about 200 MiB
     # after its imports); see docs/service.md for the measured figures

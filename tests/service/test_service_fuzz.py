@@ -46,6 +46,8 @@ from schemathesis.checks import (
 from support.live_server import OPENAPI_PATH as DEFAULT_PATH
 from support.live_server import LiveServer
 
+pytestmark = pytest.mark.slow  # a few minutes: .ci/run's second step
+
 DOC = json.loads(DEFAULT_PATH.read_text(encoding="utf-8"))
 SCHEMA = schemathesis.openapi.from_dict(DOC)
 OPERATIONS = {op.label: op for op in (r.ok() for r in SCHEMA.get_all_operations())}
@@ -120,7 +122,6 @@ def fuzz(server: LiveServer, label: str, mode: GenerationMode) -> None:
     check()
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("label", sorted(label for label in OPERATIONS if label.startswith("POST")))
 @pytest.mark.parametrize("mode", list(EXAMPLES), ids=lambda m: m.value)
 def test_fuzzed_requests_never_get_a_server_error(server: LiveServer, label: str, mode: GenerationMode) -> None:

@@ -152,6 +152,7 @@ def alive(pid: int) -> bool:
     return state != "Z"
 
 
+@pytest.mark.slow  # starts its own server
 @pytest.mark.skipif(not os.path.isdir("/proc"), reason="needs /proc")
 def test_workers_die_with_a_killed_server_even_mid_computation() -> None:
     with LiveServer(workers=2) as live:

@@ -13,6 +13,7 @@ import signal
 import socket
 
 import httpx
+import pytest
 
 from kfio.service import exitcodes
 
@@ -28,6 +29,7 @@ async def _wait_for(client: httpx.AsyncClient, busy: int, waiting: int) -> None:
     raise AssertionError(f"the pool never reached busy={busy}, waiting={waiting}")
 
 
+@pytest.mark.slow  # starts its own server: tens of seconds on a loaded machine
 def test_sigterm_answers_running_and_queued_requests_with_503_problems() -> None:
     with LiveServer(workers=1, env={"KFIO_SHUTDOWN_GRACE_S": "1", "KFIO_TIME_BUDGET_S": "600"}) as live:
         assert live.proc is not None
