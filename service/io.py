@@ -6,10 +6,11 @@ import argparse
 import json
 import os
 import sys
-from typing import Any, Callable
+from typing import Any, Callable, TextIO
 
 from kfio import Budget, Request, load_json, load_request, parse_number
 from kfio.errors import BudgetExceeded, InvalidInput, NumericalFailure
+from kfio.model._exact import escaped
 
 from . import exitcodes
 from .watchdog import DEFAULT_MEMORY_MB, memory_message, run_supervised
@@ -115,22 +116,34 @@ def dump_json(report: dict[str, Any]) -> str:
     return json.dumps(report, indent=2, allow_nan=False)
 
 
+def emit(text: str, stream: TextIO | None = None) -> None:
+    """Print ``text`` so that no user string can make printing fail.
+
+    Sensor names and keys are user text; whatever the terminal's encoding,
+    a character it cannot show is written as a backslash escape instead of
+    raising ``UnicodeEncodeError``.
+    """
+    stream = stream if stream is not None else sys.stdout
+    encoding = getattr(stream, "encoding", None) or "utf-8"
+    print(escaped(text).encode(encoding, "backslashreplace").decode(encoding), file=stream)
+
+
 def run_guarded(body: Callable[[], int]) -> int:
     """Run a command body, mapping errors to exit codes and one stderr line."""
     try:
         return body()
     except InvalidInput as exc:
-        print(f"kfio: invalid input at {exc.field}: {exc.rule}", file=sys.stderr)
+        emit(f"kfio: invalid input at {exc.field}: {exc.rule}", sys.stderr)
         return exitcodes.INVALID_INPUT
     except BudgetExceeded as exc:
-        print(f"kfio: budget exceeded: {exc}", file=sys.stderr)
+        emit(f"kfio: budget exceeded: {exc}", sys.stderr)
         return exitcodes.BUDGET
     except MemoryError:
         print(memory_message(), file=sys.stderr)
         return exitcodes.BUDGET
     except NumericalFailure as exc:
-        print(f"kfio: numerical failure: {exc}", file=sys.stderr)
+        emit(f"kfio: numerical failure: {exc}", sys.stderr)
         return exitcodes.NUMERICAL
     except KeyboardInterrupt:
-        print("kfio: interrupted", file=sys.stderr)
+        emit("kfio: interrupted", sys.stderr)
         return 130

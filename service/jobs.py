@@ -20,13 +20,13 @@ Examples
 
 from __future__ import annotations
 
-import importlib
 import json
 import logging
 from typing import Any, Callable, Mapping
 
 from kfio import Budget, Request, load_request
 
+from .loader import resolve
 from .problems import Unavailable, problem_from_exception
 from .settings import Settings
 
@@ -48,20 +48,6 @@ PNG = "image/png"
 #: ``(content, media_type)``: what a job hands back to the shell.
 JobOutput = tuple[bytes, str]
 JobFn = Callable[[bytes, Settings, Budget, Mapping[str, Any]], JobOutput]
-
-
-def resolve(module: str, name: str) -> Callable[..., Any]:
-    """``module.name``, or :class:`Unavailable` if this build does not have it."""
-    try:
-        mod = importlib.import_module(module)
-    except ModuleNotFoundError as exc:
-        if exc.name is not None and module.startswith(exc.name):
-            raise Unavailable(f"{module} is not part of this build of kfio") from None
-        raise
-    fn = getattr(mod, name, None)
-    if fn is None:
-        raise Unavailable(f"{module}.{name} is not part of this build of kfio")
-    return fn
 
 
 def report_json(report: Any) -> JobOutput:

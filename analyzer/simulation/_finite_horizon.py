@@ -41,7 +41,9 @@ from typing import Any
 import numpy as np
 
 from .._budget import Budget
+from .._json import json_float
 from ..errors import InvalidInput, LimitExceeded
+from ..model._exact import value_text
 from ..model._types import Request
 from ._channel import JointChannel
 from ._kernel import PRECISION_RATIO, RiccatiStep
@@ -51,7 +53,6 @@ from ._setup import (
     SimSystem,
     SimulationLimits,
     check_exact_steps,
-    finite_or_none,
     matrix_or_none,
     parse_options,
     sim_system,
@@ -119,12 +120,12 @@ class FiniteHorizonReport:
             "steps": self.steps,
             "sequences": self.sequences,
             "initial_channel": self.initial_channel,
-            "mean_trace": [finite_or_none(x) for x in self.mean_trace],
+            "mean_trace": [json_float(x) for x in self.mean_trace],
             "final_mean_covariance": matrix_or_none(last_ok),
             "diverged": self.diverged_at is not None,
             "diverged_at": self.diverged_at,
-            "imprecise_probability": finite_or_none(self.imprecise_probability[-1]),
-            "growth_per_step": None if growth is None else finite_or_none(growth),
+            "imprecise_probability": json_float(self.imprecise_probability[-1]),
+            "growth_per_step": None if growth is None else json_float(growth),
         }
 
     def summary(self) -> str:
@@ -329,7 +330,9 @@ def expected_covariance(
     4.0
     """
     if isinstance(steps, bool) or not isinstance(steps, int) or steps < 0:
-        raise InvalidInput(f"{OPTIONS_FIELD}/exact_steps", f"the horizon must be a non-negative integer; got {steps!r}")
+        raise InvalidInput(
+            f"{OPTIONS_FIELD}/exact_steps", f"the horizon must be a non-negative integer; got {value_text(steps)}"
+        )
     sim = sim_system(request)
     opts = parse_options(request, limits)
     _check_enumeration_size(sim, steps, opts.initial_channel, limits)

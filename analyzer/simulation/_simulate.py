@@ -42,6 +42,7 @@ from typing import Any
 import numpy as np
 
 from .._budget import Budget
+from .._json import json_float
 from ..model._types import Request
 from ._channel import JointChannel
 from ._finite_horizon import FiniteHorizonReport, expected_covariance
@@ -52,7 +53,6 @@ from ._setup import (
     SimSystem,
     SimulateOptions,
     SimulationLimits,
-    finite_or_none,
     matrix_or_none,
     parse_options,
     sim_system,
@@ -157,7 +157,7 @@ class SimulationReport:
         return {
             "steps_compared": int(ok.sum()),
             "within_ci95": int((z <= Z95).sum()),
-            "max_abs_z": finite_or_none(z.max()) if z.size else None,
+            "max_abs_z": json_float(z.max()) if z.size else None,
         }
 
     def to_dict(self) -> dict[str, Any]:
@@ -224,7 +224,7 @@ def _first(flags: np.ndarray) -> int | None:
 
 
 def _series(x: np.ndarray) -> list[float | None]:
-    return [finite_or_none(v) for v in x]
+    return [json_float(v) for v in x]
 
 
 def _fmt(x: float) -> str:
@@ -343,6 +343,6 @@ def simulate(
         final_mean_covariance=run.final_mean_covariance,
         arrival_rate=run.arrival_rate,
         stationary_arrival_rate=JointChannel.from_packets(sim.packets).stationary_arrival_rates(),
-        packet_names=tuple(pk.name for pk in sim.packets),
+        packet_names=tuple(pk.name if pk.per_sensor and pk.name is not None else "" for pk in sim.packets),
         exact=exact,
     )

@@ -41,7 +41,7 @@ def _channel(
     }
 
 
-# -- examples (MATH.md section 4, from the seeds) ---------------------------
+# -- examples: the reference cases of the papers (docs/theory.md) -----------
 
 _SEED004_SCALAR = {
     "system": {"A": [[-1.25]], "C": [[1]], "Q": [[1]], "R": [[2.5]]},
@@ -93,7 +93,7 @@ _SEED000_TWO_SENSORS = {
 #: ``kfio analyze --json`` on ``_SEED004_SCALAR`` (lambda_c = 9/25, as seed 004 finds).
 _SEED004_SCALAR_REPORT = {
     "verdict": "stable",
-    "theorem": "seed 001 (Rohr, Marelli, Fu), Theorem 1",
+    "theorem": "Rohr, Marelli and Fu 2014, Theorem 1",
     "blocks": [
         {
             "eigenvalues": ["-5/4"],
@@ -110,7 +110,7 @@ _SEED004_SCALAR_REPORT = {
             "certified": True,
             "blind_set": [],
             "basis": "theorem",
-            "notes": ["non-degenerate block: only the empty set is blind (seed 001, Lemma 2)"],
+            "notes": ["non-degenerate block: only the empty set is blind (Rohr, Marelli and Fu 2014, Lemma 2)"],
         }
     ],
     "critical_arrival_probability": 0.36,
@@ -129,7 +129,7 @@ _SEED004_SCALAR_BOUNDS = {
     "hypotheses": {"A_unstable": True, "A_C_detectable": True, "A_Q_controllable": True},
     "operating_point": {
         "verdict_by_bounds": "stable",
-        "reason": "the stability LMI is feasible here, certificate re-checked (seed 004 Theorems 3 and 5)",
+        "reason": "the stability LMI is feasible here, certificate re-checked (Sinopoli et al. 2004, Theorems 3 and 5)",
         "certificate": {"method": "exact_rational", "at": ["1/2"], "margin": 0.21875},
     },
     "critical_probability": {
@@ -186,27 +186,27 @@ _SEED004_SCALAR_SIMULATION = {
 
 REQUEST_EXAMPLES: dict[str, dict[str, Any]] = {
     "seed004-scalar": {
-        "summary": "Seed 004, scalar system: lambda_c = 0.36 (stable at 0.5)",
+        "summary": "Sinopoli et al. 2004, scalar system: lambda_c = 0.36 (stable at 0.5)",
         "value": _SEED004_SCALAR,
     },
     "seed004-3x3": {
-        "summary": "Seed 004, 3x3 system with one unstable eigenvalue: lambda_c = 0.36",
+        "summary": "Sinopoli et al. 2004, 3x3 system with one unstable eigenvalue: lambda_c = 0.36",
         "value": _SEED004_3X3,
     },
     "seed002-2x2": {
-        "summary": "Seeds 002/004, 2x2 system whose bounds differ (0.36 and about 0.48)",
+        "summary": "Sinopoli et al. 2004; Rohr, Marelli and Fu 2010, 2x2 system whose bounds differ (0.36 and about 0.48)",
         "value": _SEED002_2X2,
     },
     "seed001-degenerate-gilbert-elliott": {
-        "summary": "Seed 001, degenerate pair alpha diag(1, -1) over a Gilbert-Elliott channel (exact fractions as strings)",
+        "summary": "Rohr, Marelli and Fu 2014, degenerate pair alpha diag(1, -1) over a Gilbert-Elliott channel (exact fractions as strings)",
         "value": _SEED001_DEGENERATE_GE,
     },
     "seed001-markov-order-2": {
-        "summary": "Seed 001, Markov channel of order 2 with a 10 s budget",
+        "summary": "Rohr, Marelli and Fu 2014, Markov channel of order 2 with a 10 s budget",
         "value": _SEED001_MARKOV,
     },
     "seed000-two-sensors": {
-        "summary": "Seed 000, two packets: exact region lambda_1 > 0.84, lambda_2 > 5/9",
+        "summary": "Liu and Goldsmith 2004, two packets: exact region lambda_1 > 0.84, lambda_2 > 5/9",
         "value": _SEED000_TWO_SENSORS,
     },
 }
@@ -254,7 +254,7 @@ COMPONENTS: dict[str, dict[str, Any]] = {
     },
     "System": {
         "type": "object",
-        "description": "x[t+1] = A x + w, w ~ N(0, Q); y = C x + v, v ~ N(0, R) (MATH.md section 1).",
+        "description": "x[t+1] = A x + w, w ~ N(0, Q); y = C x + v, v ~ N(0, R) (see docs/theory.md, The model).",
         "properties": {
             "A": {**_ref("Matrix"), "description": "n x n state matrix"},
             "C": {**_ref("Matrix"), "description": "p x n output matrix"},
@@ -278,7 +278,7 @@ COMPONENTS: dict[str, dict[str, Any]] = {
         "bernoulli",
         {"arrival_probability": _ref("Probability")},
         ["arrival_probability"],
-        "i.i.d. arrivals with P(arrival) = arrival_probability (seed 004).",
+        "i.i.d. arrivals with P(arrival) = arrival_probability (Sinopoli et al. 2004).",
         _SEED004_SCALAR["channel"],
     ),
     "GilbertElliottChannel": _channel(
@@ -304,7 +304,7 @@ COMPONENTS: dict[str, dict[str, Any]] = {
             },
         },
         ["order", "arrival_probability"],
-        "Finite-state Markov channel of order nu (seed 001, Definition 2); all 2^order histories are required.",
+        "Finite-state Markov channel of order nu (Rohr, Marelli and Fu 2014, Definition 2); all 2^order histories are required.",
         _SEED001_MARKOV["channel"],
     ),
     "PerSensorChannel": _channel(
@@ -322,7 +322,7 @@ COMPONENTS: dict[str, dict[str, Any]] = {
             }
         },
         ["channels"],
-        "Independent packet channels, one per sensor (seeds 000/003).",
+        "Independent packet channels, one per sensor (Liu and Goldsmith 2004).",
         _SEED000_TWO_SENSORS["channel"],
     ),
     "PacketChannel": {
@@ -369,8 +369,9 @@ COMPONENTS: dict[str, dict[str, Any]] = {
     "StabilityReport": {
         "type": "object",
         "description": (
-            "The report of `kfio analyze --json`: the verdict of seed 001, Theorem 1, with its evidence per "
-            'FMO block.  Exact values are strings ("9/25"), their float approximations numbers.'
+            "The report of `kfio analyze --json`: the verdict of Rohr, Marelli and Fu 2014, Theorem 1, with its evidence per "
+            "finite multiplicative order (FMO) block: eigenvalues whose ratios are roots of unity.  "
+            'Exact values are strings ("9/25"), their float approximations numbers.'
         ),
         "properties": {
             "verdict": {"type": "string", "enum": ["stable", "unstable", "boundary"]},
@@ -390,7 +391,7 @@ COMPONENTS: dict[str, dict[str, Any]] = {
         "type": "object",
         "description": (
             "The report of `kfio bounds --json`: bounds on the critical arrival probability (closed-form lower, "
-            "certified LMI upper), S_bar <= lim E[P_t] <= V_bar at the operating point, seed 002's P_hat_N for "
+            "certified LMI upper), S_bar <= lim E[P_t] <= V_bar at the operating point, the P_hat_N of Rohr, Marelli and Fu 2010 for "
             "one packet, and the region map for two packets when options.bounds.grid is set."
         ),
         "properties": {
