@@ -169,8 +169,13 @@ def test_past_its_budget_a_request_gets_504_and_the_service_recovers(client: Tes
     assert r.json()["type"] == "urn:kfio:problem:budget-exceeded"
     ok = client.post("/v1/analyze", json=REQUEST_EXAMPLES["seed002-2x2"]["value"])
     assert ok.status_code == 200, ok.text
-    pool = client.get("/readyz").json()["pool"]  # budget hit in the worker, or the worker killed: whole again
-    assert pool["alive"] == pool["size"] and pool["busy"] == 0
+    # budget hit in the worker, or the worker killed and replaced in the background: whole again
+    for _ in range(1200):  # bounded by count: a replacement may take seconds on a loaded machine
+        pool = client.get("/readyz").json()["pool"]
+        if pool["alive"] == pool["size"] and pool["busy"] == 0:
+            break
+        time.sleep(0.05)
+    assert pool["alive"] == pool["size"] and pool["busy"] == 0, pool
 
 
 def test_healthz_answers_while_every_worker_is_busy(client: TestClient) -> None:
