@@ -108,7 +108,7 @@ def test_healthz_answers_while_every_worker_is_busy(server: LiveServer) -> None:
         async with httpx.AsyncClient(base_url=server.url, timeout=30) as client:
             slow = [
                 asyncio.create_task(
-                    client.post(SLOW_PATH, content=slow_request(time_budget_s=4, seed=s), headers=JSON_HEADERS)
+                    client.post(SLOW_PATH, content=slow_request(time_budget_s=10, seed=s), headers=JSON_HEADERS)
                 )
                 for s in (31, 32, 33)  # three for two workers: one waits in the queue
             ]
