@@ -35,10 +35,15 @@ Stability analysis of Kalman filters whose measurements travel over lossy packet
 * Every `POST` takes the request JSON of the `kfio` CLI (the same file) and returns its `--json` report,
   or a PNG for `/v1/plots/...`.  Numbers are exact: `1.1` means 11/10; strings such as `"11/10"` work too.
 * Errors are `application/problem+json` (RFC 9457).  Invalid input is 422 with `field`
-  (a JSON pointer into the request) and `rule`.  Bodies over 1 MiB are refused with 413.
+  (a JSON pointer into the request) and `rule`.  Bodies over 1 MiB are refused with 413, bodies
+  not sent as `Content-Type: application/json` with 415.
 * Each request has a time budget (30 s by default, set per deployment with `KFIO_TIME_BUDGET_S`;
-  a request may ask for less with `options.time_budget_s`).  Past it the answer is 504; when no
-  worker becomes free in time, 503 with `Retry-After`.
+  a request may ask for less with `options.time_budget_s`, at least 0.01 s).  Past it the answer
+  is 504; when no worker becomes free in time, 503 with `Retry-After` (an invalid body is 422 even
+  then).  When the server is stopped (SIGTERM), running requests get a few seconds to finish, then
+  they and every waiting request get 503 `shutting-down` with `Retry-After`.
+* Each analysis process has a memory limit (`KFIO_MEMORY_MB`); a request that needs more is 422
+  `memory-exceeded`.
 * Identical requests (same canonical JSON) are answered from an in-memory cache (`X-Cache: hit`).
 * Longer work runs as a job: `POST /v1/jobs/analyze` (`bounds`, `simulate`) with the same body answers
   202 with a `Location` to poll; budgets up to an hour (`KFIO_JOB_TIME_BUDGET_S`), a separate lane of
@@ -67,6 +72,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         finally:
             await dispatcher.pool.close()
             await jobs.close()
+            dispatcher.close()
             # they see the pools closed and stop their last workers; a start error was logged
             await asyncio.gather(*starting, return_exceptions=True)
             app.state.dispatcher = app.state.jobs = None

@@ -1,27 +1,36 @@
 """From a request body to an answer: cache, then the worker pool.
 
-The event loop does only cheap work here: read the body (bounded), parse its
-JSON once for the cache key, look up the cache.  Validation and analysis run
-in a worker via :func:`kfio.service.jobs.run_job`.  Identical requests that arrive
-while the first is still computing wait for the same computation.
+The event loop does only cheap work here: read the body (bounded) and look
+up the cache.  Parsing the JSON and building its canonical text for the cache
+key run in a small thread pool (a 1 MiB body costs the loop nothing), and
+validation and analysis run in a worker via :func:`kfio.service.jobs.run_job`.
+Identical requests that arrive while the first is still computing wait for the
+same computation.  A request the pool cannot take (busy, or a budget too
+small to wait) is validated first, so an invalid body gets its 422, never a
+503 that invites a retry.
 """
 
 from __future__ import annotations
 
 import asyncio
 import json
+from concurrent.futures import ThreadPoolExecutor
 from typing import Any, Mapping
 
 from fastapi import Request
 from fastapi.responses import Response
 
-from kfio import InvalidInput, load_json, parse_number
+from kfio import InvalidInput, load_json, load_request
 
 from .cache import AnswerCache, CachedAnswer, canonical_json
+from .io import requested_budget
 from .jobs import PRELOAD
-from .pool import WorkerPool
-from .problems import Problem, ProblemError, problem_from_exception
+from .pool import PoolBusy, PoolShuttingDown, WorkerPool
+from .problems import MEMORY_EXCEEDED, Problem, ProblemError, problem_from_exception
 from .settings import Settings
+
+#: Threads that parse bodies and build cache keys (off the event loop).
+PARSE_THREADS = 2
 
 
 async def read_body(request: Request, limit: int) -> bytes:
@@ -47,16 +56,37 @@ async def read_body(request: Request, limit: int) -> bytes:
     return b"".join(chunks)
 
 
-def requested_budget(tree: Any) -> float | None:
-    """``options.time_budget_s`` if it is a valid number; the worker reports it otherwise."""
-    options = tree.get("options") if isinstance(tree, dict) else None
-    if not isinstance(options, dict) or "time_budget_s" not in options:
-        return None
-    try:
-        value = parse_number(options["time_budget_s"], "/options/time_budget_s")
-    except InvalidInput:
-        return None
-    return float(value) if value > 0 else None
+def require_json(content_type: str | None) -> None:
+    """Refuse (415) a body whose ``Content-Type`` is not ``application/json`` (or ``+json``).
+
+    Browsers send ``text/plain``, form and multipart bodies cross-site without
+    asking first; requiring JSON keeps such "simple" requests out.
+    """
+    media = (content_type or "").split(";", 1)[0].strip().lower()
+    if media != "application/json" and not (media.startswith("application/") and media.endswith("+json")):
+        raise ProblemError(
+            Problem(
+                415,
+                "unsupported-media-type",
+                "Unsupported media type",
+                f"request bodies must be sent with Content-Type: application/json (got {media or 'none'!r})",
+                field="Content-Type",
+                rule="must be application/json",
+                location="header",
+            )
+        )
+
+
+def request_key(job: str, body: bytes, params: Mapping[str, Any]) -> tuple[str, float | None]:
+    """Cache key of a request and its ``options.time_budget_s`` (CPU work: run it off the loop)."""
+    tree = load_json(body)
+    key = f"{job} {json.dumps(dict(params), sort_keys=True)} {canonical_json(tree)}"
+    return key, requested_budget(tree)
+
+
+def retire_worker(result: Any) -> bool:
+    """A worker that ran out of memory is replaced (its heap may be left fragmented)."""
+    return isinstance(result, tuple) and result[0] == "problem" and result[1].get("kind") == MEMORY_EXCEEDED
 
 
 class Dispatcher:
@@ -70,7 +100,10 @@ class Dispatcher:
             preload=PRELOAD,
             max_waiting=settings.max_queue,
             kill_grace_s=settings.kill_grace_s,
+            memory_bytes=settings.memory_bytes(),
+            retire=retire_worker,
         )
+        self._parser = ThreadPoolExecutor(PARSE_THREADS, thread_name_prefix="kfio-parse")
         self.cache = AnswerCache(settings.cache_entries, settings.cache_bytes)
         self._inflight: dict[str, asyncio.Task[CachedAnswer]] = {}
 
@@ -84,20 +117,26 @@ class Dispatcher:
         InvalidInput
             The body is not JSON (mapped to 422 by the app's handler).
         """
-        tree = load_json(body)
-        key = f"{job} {json.dumps(dict(params), sort_keys=True)} {canonical_json(tree)}"
+        key, asked = await self._off_loop(request_key, job, body, params)
         hit = self.cache.get(key)
         if hit is not None:
             return Response(hit.content, media_type=hit.media_type, headers={"X-Cache": "hit"})
         task = self._inflight.get(key)
         if task is None:
-            budget = min(self.settings.time_budget_s, requested_budget(tree) or self.settings.time_budget_s)
+            budget = min(self.settings.time_budget_s, asked or self.settings.time_budget_s)
             task = asyncio.get_running_loop().create_task(self._compute(key, job, body, params, budget))
             self._inflight[key] = task
             task.add_done_callback(lambda t: self._forget(key, t))
         # shield: a client that goes away does not cancel work others wait for
         answer = await asyncio.shield(task)
         return Response(answer.content, media_type=answer.media_type, headers={"X-Cache": "miss"})
+
+    async def _off_loop(self, fn: Any, *args: Any) -> Any:
+        return await asyncio.get_running_loop().run_in_executor(self._parser, fn, *args)
+
+    def close(self) -> None:
+        """Stop the parsing threads (the pool is closed by the app)."""
+        self._parser.shutdown(wait=False, cancel_futures=True)
 
     def _forget(self, key: str, task: asyncio.Task[CachedAnswer]) -> None:
         self._inflight.pop(key, None)
@@ -107,6 +146,10 @@ class Dispatcher:
     async def _compute(self, key: str, job: str, body: bytes, params: Mapping[str, Any], budget: float) -> CachedAnswer:
         try:
             outcome = await self.pool.run((job, body, self.settings, dict(params)), budget)
+        except PoolBusy as exc:
+            if not isinstance(exc, PoolShuttingDown):
+                await self._off_loop(self._validate, body)  # an invalid body is told so, not to retry
+            raise ProblemError(problem_from_exception(exc)) from None
         except Exception as exc:  # noqa: BLE001 - pool failures are problems too
             raise ProblemError(problem_from_exception(exc)) from None
         if outcome[0] != "ok":
@@ -114,3 +157,10 @@ class Dispatcher:
         answer = CachedAnswer(outcome[1], outcome[2])
         self.cache.put(key, answer)
         return answer
+
+    def _validate(self, body: bytes) -> None:
+        """Raise the 422 problem of an invalid ``body`` (nothing if it is valid)."""
+        try:
+            load_request(body, self.settings.limits())
+        except InvalidInput as exc:
+            raise ProblemError(problem_from_exception(exc)) from None

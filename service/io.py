@@ -3,14 +3,20 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sys
-from typing import Any, Callable, TextIO
+from typing import TYPE_CHECKING, Any, Callable, TextIO
 
-from kfio._reporting import json_text
 from kfio.errors import BudgetExceeded, InvalidInput, NumericalFailure
-from kfio.model._exact import escaped
+
+if TYPE_CHECKING:  # the analyzer is imported when a command runs, not for `kfio --help`
+    from kfio import Budget, Request
 
 from . import exitcodes
+from .watchdog import DEFAULT_MEMORY_MB, memory_message, run_supervised
+
+#: Budget of a command whose request and flags name none (seconds).
+DEFAULT_TIME_BUDGET_S = 120.0
 
 MAX_REQUEST_BYTES = 1 << 20
 
@@ -34,10 +40,87 @@ def add_request_arguments(p: argparse.ArgumentParser) -> None:
     """Arguments every request-taking command shares."""
     p.add_argument("file", metavar="FILE", help="request JSON file, or - for standard input")
     p.add_argument("--json", action="store_true", help="print the JSON report instead of a summary")
+    p.add_argument(
+        "--time-budget",
+        type=float,
+        metavar="S",
+        help="wall-clock budget in seconds (default: options.time_budget_s of the request, else "
+        f"{DEFAULT_TIME_BUDGET_S:g}); enforced by a watchdog that stops the work, exit 4",
+    )
+    p.add_argument(
+        "--memory-mb",
+        type=int,
+        metavar="M",
+        help="address-space limit of the computation in MiB (default: KFIO_MEMORY_MB, else "
+        f"{DEFAULT_MEMORY_MB}; 0 for none); past it, exit 4",
+    )
+
+
+def requested_budget(tree: Any) -> float | None:
+    """``options.time_budget_s`` if it is a valid number; the worker reports it otherwise."""
+    from kfio.model._exact import parse_number
+
+    options = tree.get("options") if isinstance(tree, dict) else None
+    if not isinstance(options, dict) or "time_budget_s" not in options:
+        return None
+    try:
+        value = parse_number(options["time_budget_s"], "/options/time_budget_s")
+    except InvalidInput:
+        return None
+    return float(value) if value > 0 else None
+
+
+def request_budget(data: bytes) -> float | None:
+    """``options.time_budget_s`` of a request's bytes, read leniently (the validator reports bad values)."""
+    from kfio.model._exact import load_json
+
+    try:
+        return requested_budget(load_json(data))
+    except InvalidInput:
+        return None
+
+
+def memory_limit(args: argparse.Namespace) -> int | None:
+    """The ``--memory-mb`` limit in bytes (``None``: no limit)."""
+    mb = args.memory_mb
+    if mb is None:
+        text = os.environ.get("KFIO_MEMORY_MB", "").strip()
+        mb = int(text) if text.isdigit() else DEFAULT_MEMORY_MB
+    if mb < 0:
+        raise InvalidInput("--memory-mb", "must be a whole number of MiB, at least 0")
+    return mb << 20 if mb else None
+
+
+def run_request_command(args: argparse.Namespace, work: Callable[[Request, Budget], int]) -> int:
+    """Read the request of ``args.file`` and run ``work(request, budget)`` under the watchdog.
+
+    The budget is ``--time-budget``, else the request's ``options.time_budget_s``,
+    else :data:`DEFAULT_TIME_BUDGET_S`; the work gets it as a cooperative
+    :class:`kfio.Budget` and the watchdog (:func:`kfio.service.watchdog.run_supervised`)
+    kills it shortly after.  Exit codes as :func:`run_guarded`.
+    """
+
+    def body() -> int:
+        if args.time_budget is not None and not 0.01 <= args.time_budget <= 86400:
+            raise InvalidInput("--time-budget", "must be in [0.01, 86400] seconds")
+        memory = memory_limit(args)
+        data = read_request_text(args.file)
+        seconds = args.time_budget or request_budget(data) or DEFAULT_TIME_BUDGET_S
+
+        def child() -> int:
+            from kfio import Budget, load_request
+
+            return run_guarded(lambda: work(load_request(data), Budget(seconds=seconds)))
+
+        return run_supervised(child, seconds, memory_bytes=memory)
+
+    return run_guarded(body)
 
 
 def dump_json(report: dict[str, Any]) -> str:
     """Stable JSON text: fixed key order as built, two-space indent (the text of ``report.to_json()``)."""
+    from kfio._reporting import json_text
+
     return json_text(report)
 
 
@@ -48,6 +131,8 @@ def emit(text: str, stream: TextIO | None = None) -> None:
     a character it cannot show is written as a backslash escape instead of
     raising ``UnicodeEncodeError``.
     """
+    from kfio.model._exact import escaped
+
     stream = stream if stream is not None else sys.stdout
     encoding = getattr(stream, "encoding", None) or "utf-8"
     print(escaped(text).encode(encoding, "backslashreplace").decode(encoding), file=stream)
@@ -62,6 +147,9 @@ def run_guarded(body: Callable[[], int]) -> int:
         return exitcodes.INVALID_INPUT
     except BudgetExceeded as exc:
         emit(f"kfio: budget exceeded: {exc}", sys.stderr)
+        return exitcodes.BUDGET
+    except MemoryError:
+        print(memory_message(), file=sys.stderr)
         return exitcodes.BUDGET
     except NumericalFailure as exc:
         emit(f"kfio: numerical failure: {exc}", sys.stderr)

@@ -66,7 +66,8 @@ from typing import Any, Mapping
 
 from kfio import load_json
 
-from .dispatch import requested_budget
+from .dispatch import retire_worker
+from .io import requested_budget
 from .jobs import PRELOAD
 from .pool import PoolTimeout, WorkerPool
 from .problems import Problem, ProblemError, problem_from_exception
@@ -229,6 +230,8 @@ class JobStore:
             preload=PRELOAD,
             max_waiting=settings.job_workers,
             kill_grace_s=settings.kill_grace_s,
+            memory_bytes=settings.memory_bytes(),
+            retire=retire_worker,
         )
         self.kinds: dict[str, JobKind] = {}
         self._jobs: OrderedDict[str, Job] = OrderedDict()

@@ -32,6 +32,8 @@ from dataclasses import dataclass
 from multiprocessing.connection import Connection
 from typing import Any, Callable
 
+from .watchdog import limit_memory
+
 log = logging.getLogger("kfio.service")
 
 #: Thread pools of numerical libraries in workers: one thread each, so that
@@ -55,6 +57,18 @@ class WorkerCrashed(PoolError):
     """The worker died while running the task (it was replaced)."""
 
 
+class WorkerOutOfMemory(WorkerCrashed):
+    """The worker died of SIGABRT/SIGSEGV/SIGBUS under a memory limit: C code failed to allocate."""
+
+
+#: Signals of a worker whose C code failed an allocation (FLINT aborts, others crash).
+_MEMORY_SIGNALS = (signal.SIGABRT, signal.SIGSEGV, signal.SIGBUS)
+
+
+class PoolShuttingDown(PoolBusy):
+    """The server is shutting down: the task was refused, or stopped when the grace period ended."""
+
+
 def _exit_with_server(lifeline: Connection) -> None:
     """Let the kernel end this worker as soon as the server is gone, even mid-task.
 
@@ -75,11 +89,12 @@ def _exit_with_server(lifeline: Connection) -> None:
         os._exit(1)
 
 
-def _worker_main(conn: Connection, runner_path: str, lifeline: Connection) -> None:
+def _worker_main(conn: Connection, runner_path: str, lifeline: Connection, memory_bytes: int | None = None) -> None:
     """Body of a worker process: answer tasks until killed or the server is gone."""
     _exit_with_server(lifeline)
     module, _, name = runner_path.partition(":")
     runner: Callable[..., Any] = getattr(importlib.import_module(module), name)
+    limit_memory(memory_bytes)  # after the imports: the limit is for the work
     conn.send("ready")
     while True:
         try:
@@ -130,6 +145,12 @@ class WorkerPool:
         no threads of the server).
     start_timeout_s:
         How long a new worker may take to import its modules and say ready.
+    memory_bytes:
+        Address-space limit (``RLIMIT_AS``) of each worker once its imports
+        are done, or ``None`` for none.
+    retire:
+        Predicate on a task's result: when true the worker is replaced after
+        answering (e.g. it ran out of memory and its heap may be fragmented).
 
     Examples
     --------
@@ -150,12 +171,16 @@ class WorkerPool:
         kill_grace_s: float = 0.25,
         start_method: str = "forkserver",
         start_timeout_s: float = 60.0,
+        memory_bytes: int | None = None,
+        retire: Callable[[Any], bool] | None = None,
     ) -> None:
         self.size = size
         self.runner = runner
         self.max_waiting = max_waiting
         self.kill_grace_s = kill_grace_s
         self.start_timeout_s = start_timeout_s
+        self.memory_bytes = memory_bytes
+        self.retire = retire
         self._ctx = multiprocessing.get_context(start_method)
         if start_method == "forkserver" and preload:
             self._ctx.set_forkserver_preload(list(preload))
@@ -168,6 +193,9 @@ class WorkerPool:
         self._start_error: BaseException | None = None
         self.replaced = 0
         self.completed = 0
+        self._draining = False
+        self._queued: set[asyncio.Task[Any]] = set()  # tasks waiting for a worker
+        self._running: set[asyncio.Task[Any]] = set()  # tasks whose worker computes
 
     # -- life cycle -------------------------------------------------------
 
@@ -175,7 +203,10 @@ class WorkerPool:
         parent_end, child_end = self._ctx.Pipe(duplex=True)
         lifeline, keep_alive = self._ctx.Pipe(duplex=False)
         proc = self._ctx.Process(
-            target=_worker_main, args=(child_end, self.runner, lifeline), daemon=True, name="kfio-worker"
+            target=_worker_main,
+            args=(child_end, self.runner, lifeline, self.memory_bytes),
+            daemon=True,
+            name="kfio-worker",
         )
         proc.start()
         child_end.close()  # so that the worker's death reads as EOF here
@@ -219,6 +250,29 @@ class WorkerPool:
             raise
         finally:
             self._ready.set()
+
+    async def drain(self, grace_s: float) -> None:
+        """Stop taking tasks, then give the running ones ``grace_s`` seconds to finish.
+
+        Tasks waiting for a worker, and every task submitted from now on, fail
+        at once with :class:`PoolShuttingDown`; tasks still running when the
+        grace period ends fail with it too (their workers are killed).  Call
+        it when the server is told to stop, before :meth:`close`.
+        """
+        self._draining = True
+        for task in list(self._queued):
+            task.cancel(msg=_DRAIN)
+        loop = asyncio.get_running_loop()
+        end = loop.time() + grace_s
+        while self._running and loop.time() < end:
+            await asyncio.sleep(0.05)
+        for task in list(self._running):
+            task.cancel(msg=_DRAIN)
+
+    @property
+    def draining(self) -> bool:
+        """True once :meth:`drain` was called."""
+        return self._draining
 
     async def close(self) -> None:
         """Kill every worker (they hold no state worth a graceful stop)."""
@@ -268,6 +322,22 @@ class WorkerPool:
     # -- running tasks ----------------------------------------------------
 
     async def _checkout(self, deadline: float) -> _Worker:
+        if self._draining:
+            raise PoolShuttingDown("the server is shutting down and takes no new work")
+        task = asyncio.current_task()
+        assert task is not None
+        self._queued.add(task)
+        try:
+            return await self._wait_for_worker(deadline)
+        except asyncio.CancelledError:
+            if not self._draining:
+                raise
+            task.uncancel()
+            raise PoolShuttingDown("the server is shutting down; the request was refused before it ran") from None
+        finally:
+            self._queued.discard(task)
+
+    async def _wait_for_worker(self, deadline: float) -> _Worker:
         if not self._ready.is_set():
             try:
                 await asyncio.wait_for(self._ready.wait(), max(0.0, deadline - time.monotonic()))
@@ -314,6 +384,9 @@ class WorkerPool:
         worker = await self._checkout(deadline)
         self._busy += 1
         ok = False
+        task = asyncio.current_task()
+        assert task is not None
+        self._running.add(task)
         try:
             remaining = max(0.0, deadline - time.monotonic())
             try:
@@ -324,22 +397,38 @@ class WorkerPool:
                 await _readable(worker.conn, remaining + self.kill_grace_s)
             except TimeoutError:
                 raise PoolTimeout(f"the computation did not finish within {budget_s:g} s; it was stopped") from None
+            except asyncio.CancelledError:
+                if not self._draining:
+                    raise
+                task.uncancel()
+                raise PoolShuttingDown(
+                    "the server is shutting down; the computation was stopped at the end of the grace period"
+                ) from None
             try:
                 value = worker.conn.recv()
             except (EOFError, OSError):
                 await asyncio.to_thread(worker.process.join, 1.0)  # reap it, for the exit code
                 code = worker.process.exitcode
+                if self.memory_bytes is not None and code is not None and -code in _MEMORY_SIGNALS:
+                    raise WorkerOutOfMemory(
+                        f"the worker process died of signal {-code} during the task, most likely when an "
+                        f"allocation in C code went past its memory limit of {self.memory_bytes >> 20} MiB"
+                    ) from None
                 raise WorkerCrashed(f"the worker process died during the task (exit code {code})") from None
-            ok = True
+            ok = self.retire is None or not self.retire(value)
             self.completed += 1
             return value
         finally:
             self._busy -= 1
+            self._running.discard(task)
             if ok:
                 assert self._idle is not None
                 self._idle.put_nowait(worker)
             else:  # timed out, crashed, or the request was cancelled mid-task
                 self._replace_soon(worker)
+
+
+_DRAIN = "kfio: the pool is draining"
 
 
 async def _readable(conn: Connection, timeout: float) -> None:

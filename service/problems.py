@@ -15,7 +15,10 @@ exception                  status  type (``urn:kfio:problem:...``)
 ``NumericalFailure``       422     ``numerical-failure``
 ``BudgetExceeded``         504     ``budget-exceeded``
 ``PoolTimeout``            504     ``budget-exceeded`` (the worker was killed)
+``PoolShuttingDown``       503     ``shutting-down`` (with ``Retry-After``)
 ``PoolBusy``               503     ``busy`` (with ``Retry-After``)
+``MemoryError``            422     ``memory-exceeded`` (the worker is replaced)
+``WorkerOutOfMemory``      422     ``memory-exceeded`` (died in C code at its limit)
 ``WorkerCrashed``          503     ``worker-crashed`` (with ``Retry-After``)
 analyzer part missing      501     ``not-implemented``
 anything else              500     ``internal`` (a bug; logged, never detailed)
@@ -43,7 +46,7 @@ from kfio.errors import (
 )
 from kfio.model._exact import escaped
 
-from .pool import PoolBusy, PoolTimeout, WorkerCrashed
+from .pool import PoolBusy, PoolShuttingDown, PoolTimeout, WorkerCrashed, WorkerOutOfMemory
 
 log = logging.getLogger("kfio.service")
 
@@ -127,6 +130,13 @@ class Unavailable(RuntimeError):
     """A part of :mod:`kfio` a job needs does not exist (yet) in this build."""
 
 
+#: ``Retry-After`` of a refusal while the server shuts down (a restarted server takes a few seconds).
+SHUTDOWN_RETRY_AFTER_S = 5
+
+#: Problem kind of a job that ran out of memory (its worker is retired).
+MEMORY_EXCEEDED = "memory-exceeded"
+
+
 def input_problem(kind: str, title: str, exc: InvalidInput) -> Problem:
     return Problem(422, kind, title, f"{exc.field}: {exc.rule}", field=exc.field, rule=exc.rule, location="body")
 
@@ -153,10 +163,22 @@ def problem_from_exception(exc: BaseException) -> Problem:
         )
     if isinstance(exc, PoolTimeout):
         return Problem(504, "budget-exceeded", "Time budget exceeded", str(exc))
+    if isinstance(exc, PoolShuttingDown):
+        return Problem(503, "shutting-down", "Service shutting down", str(exc), retry_after=SHUTDOWN_RETRY_AFTER_S)
     if isinstance(exc, PoolBusy):
         return Problem(503, "busy", "Service busy", str(exc), retry_after=1)
+    if isinstance(exc, WorkerOutOfMemory):
+        return Problem(422, MEMORY_EXCEEDED, "Memory limit exceeded", str(exc))
     if isinstance(exc, WorkerCrashed):
         return Problem(503, "worker-crashed", "Worker process died", str(exc), retry_after=1)
+    if isinstance(exc, MemoryError):
+        return Problem(
+            422,
+            MEMORY_EXCEEDED,
+            "Memory limit exceeded",
+            "the computation needs more memory than this deployment allows one analysis process "
+            "(KFIO_MEMORY_MB); a smaller request, or a larger limit, is needed",
+        )
     if isinstance(exc, NumericalFailure):
         return Problem(422, "numerical-failure", "Numerical step could not be certified", str(exc))
     if isinstance(exc, AnalyzerError):

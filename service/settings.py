@@ -20,6 +20,8 @@ from pydantic_settings import BaseSettings, SettingsConfigDict
 
 from kfio.model._limits import Limits
 
+from .watchdog import DEFAULT_MEMORY_MB
+
 
 def _default_workers() -> int:
     return max(1, min(4, os.cpu_count() or 1))
@@ -38,6 +40,14 @@ class Settings(BaseSettings):
     kill_grace_s:
         How long past its budget a worker may run (to raise ``BudgetExceeded``
         itself) before it is killed and replaced.
+    memory_mb:
+        Address-space limit (``RLIMIT_AS``, MiB) of each worker process once
+        its imports are done (they take about 430 MiB); a request that needs
+        more gets 422 ``memory-exceeded`` and its worker is replaced.  0: none.
+    shutdown_grace_s:
+        On SIGTERM, how long running requests may still finish; then they, and
+        every request still waiting for a worker at once, get 503
+        ``shutting-down`` with ``Retry-After``.
     max_queue:
         Requests allowed to wait for a free worker; beyond it the answer is
         503 at once.
@@ -72,6 +82,8 @@ class Settings(BaseSettings):
     workers: int = Field(default_factory=_default_workers, ge=1, le=64)
     time_budget_s: float = Field(30.0, gt=0, le=3600)
     kill_grace_s: float = Field(0.25, ge=0, le=60)
+    memory_mb: int = Field(DEFAULT_MEMORY_MB, ge=0)
+    shutdown_grace_s: float = Field(3.0, ge=0, le=600)
     max_queue: int = Field(64, ge=0)
     max_body_bytes: int = Field(1 << 20, ge=1)
     cache_entries: int = Field(512, ge=0)
@@ -87,6 +99,10 @@ class Settings(BaseSettings):
     job_retention: int = Field(64, ge=1)
     dask_scheduler: str | None = Field(None, pattern=r"^(tcp|tls|inproc)://[^\s]+$")
     max_sweep_points: int = Field(100_000, ge=1, le=1_000_000)
+
+    def memory_bytes(self) -> int | None:
+        """:attr:`memory_mb` in bytes, ``None`` for no limit."""
+        return self.memory_mb << 20 if self.memory_mb else None
 
     def limits(self) -> Limits:
         """The request size limits of this deployment."""

@@ -331,6 +331,10 @@ def parse_channel(obj: Any, system: System, limits: Limits = DEFAULT_LIMITS, whe
     return parse_markov_channel(obj, limits, where)
 
 
+#: Smallest ``options.time_budget_s`` (seconds): less cannot even hand a request to a worker.
+MIN_TIME_BUDGET_S = Fraction(1, 100)
+
+
 def parse_request(obj: Any, limits: Limits = DEFAULT_LIMITS) -> Request:
     """Validate a whole request (the JSON tree of :func:`load_json`)."""
     obj = _check_keys(obj, "", _TOP_KEYS, {"system", "channel"})
@@ -343,8 +347,11 @@ def parse_request(obj: Any, limits: Limits = DEFAULT_LIMITS) -> Request:
         for key, val in opts.items():
             if key == "time_budget_s":
                 t = parse_number(val, "/options/time_budget_s", limits.max_digits)
-                if not 0 < t <= 3600:
-                    raise InvalidInput("/options/time_budget_s", "time_budget_s must be in (0, 3600]")
+                if not MIN_TIME_BUDGET_S <= t <= 3600:
+                    raise InvalidInput(
+                        "/options/time_budget_s",
+                        f"time_budget_s must be in [{float(MIN_TIME_BUDGET_S):g}, 3600] seconds",
+                    )
                 time_budget = float(t)
             elif not isinstance(val, dict):
                 raise InvalidInput(f"/options/{key}", "expected a JSON object")

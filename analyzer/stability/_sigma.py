@@ -439,7 +439,7 @@ def _count(masks: np.ndarray) -> np.ndarray:
 
 
 def period_transfer_matrix(
-    period: int, blind_set: frozenset, channels: Sequence[MarkovChannel]
+    period: int, blind_set: frozenset, channels: Sequence[MarkovChannel], budget: Budget | None = None
 ) -> list[list[Fraction]]:
     """Exact one-period transfer matrix ``P_F`` over the joint channel history.
 
@@ -458,6 +458,9 @@ def period_transfer_matrix(
         Slots ``(n, g)``; phases are taken modulo ``period``.
     channels:
         One channel per row group.
+    budget:
+        Checked once per history and step (a Markov channel of order 10 has
+        1,024 histories: each step then costs about a million exact products).
 
     Examples
     --------
@@ -471,18 +474,23 @@ def period_transfer_matrix(
     result = [[Fraction(1)]]
     for g, ch in enumerate(channels):
         phases = {n % period for n, grp in blind_set if grp == g}
-        result = _kron(result, _group_period_matrix(ch, period, phases))
+        result = _kron(result, _group_period_matrix(ch, period, phases, budget))
     return result
 
 
-def _group_period_matrix(channel: MarkovChannel, period: int, phases: set[int]) -> list[list[Fraction]]:
+def _group_period_matrix(
+    channel: MarkovChannel, period: int, phases: set[int], budget: Budget | None = None
+) -> list[list[Fraction]]:
     """Exact product over ``period`` steps; each step has two non-zeros per row, so it costs ``O(k^2)``."""
     k = channel.n_histories
-    prod = [[Fraction(int(r == c)) for c in range(k)] for r in range(k)]
+    zero, one = Fraction(0), Fraction(1)  # shared (immutable): k^2 entries are not k^2 constructions
+    prod = [[one if r == c else zero for c in range(k)] for r in range(k)]
     for n in range(period):
         emissions = (0, 1) if n in phases else (0,)
-        nxt = [[Fraction(0)] * k for _ in range(k)]
+        nxt = [[zero] * k for _ in range(k)]
         for h in range(k):
+            if budget is not None:
+                budget.tick("exact transfer matrices", k)
             p1 = channel.arrival(h)
             for g in emissions:
                 w, h2 = (p1 if g else 1 - p1), channel.next_history(h, g)

@@ -275,7 +275,7 @@ def _analyze_block(
                 block.modulus_sq,
                 block.modulus_sq_float,
                 N,
-                period_transfer_matrix(N, F, channels),
+                period_transfer_matrix(N, F, channels, budget),
                 block.modulus_sq_ball,
             )
             signs.append(si)

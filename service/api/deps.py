@@ -6,7 +6,7 @@ from typing import Annotated
 
 from fastapi import Depends, Request
 
-from ..dispatch import Dispatcher, read_body
+from ..dispatch import Dispatcher, read_body, require_json
 from ..problems import Problem, ProblemError
 
 
@@ -22,7 +22,8 @@ DispatcherDep = Annotated[Dispatcher, Depends(get_dispatcher)]
 
 
 async def get_body(request: Request, dispatcher: DispatcherDep) -> bytes:
-    """The raw request body, at most ``settings.max_body_bytes`` (413 beyond)."""
+    """The raw request body: JSON (415 otherwise), at most ``settings.max_body_bytes`` (413 beyond)."""
+    require_json(request.headers.get("content-type"))
     return await read_body(request, dispatcher.settings.max_body_bytes)
 
 

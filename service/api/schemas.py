@@ -238,7 +238,8 @@ COMPONENTS: dict[str, dict[str, Any]] = {
         "examples": [1.25, "11/10", "2.5e-1"],
     },
     "Probability": {
-        "description": "An exact number in [0, 1].",
+        "description": "An exact number in [0, 1] (as text too: '9/25'; the validator checks the range of text "
+        "forms). A command may need more (its 422 names the rule).",
         "anyOf": [
             {"type": "number", "minimum": 0, "maximum": 1},
             {"type": "string", "pattern": _NUMBER_PATTERN, "maxLength": 816},
@@ -266,8 +267,16 @@ COMPONENTS: dict[str, dict[str, Any]] = {
         "properties": {
             "A": {**_ref("Matrix"), "description": "n x n state matrix"},
             "C": {**_ref("Matrix"), "description": "p x n output matrix"},
-            "Q": {**_ref("Matrix"), "description": "n x n process noise covariance, symmetric positive semidefinite"},
-            "R": {**_ref("Matrix"), "description": "p x p measurement noise covariance, symmetric positive definite"},
+            "Q": {
+                **_ref("Matrix"),
+                "description": "n x n process noise covariance, symmetric positive semidefinite (JSON Schema cannot "
+                "say symmetric or semidefinite: the validator checks both, exactly, and answers 422)",
+            },
+            "R": {
+                **_ref("Matrix"),
+                "description": "p x p measurement noise covariance, symmetric positive definite (checked exactly by "
+                "the validator, 422 otherwise)",
+            },
             "sensors": {"type": "array", "minItems": 1, "maxItems": 8, "items": _ref("Sensor")},
         },
         "required": ["A", "C"],
@@ -294,8 +303,12 @@ COMPONENTS: dict[str, dict[str, Any]] = {
             "order": {"type": "integer", "minimum": 0, "maximum": 10},
             "arrival_probability": {
                 "type": "object",
-                "description": "P(arrival | last `order` outcomes), keyed by the history as 0/1 text, oldest first.",
+                "description": "P(arrival | last `order` outcomes), keyed by the history as 0/1 text, oldest first. "
+                "Every key has exactly `order` characters and all 2^order histories are required (the validator "
+                "checks both).",
                 "propertyNames": {"pattern": "^[01]{0,10}$"},
+                "minProperties": 1,
+                "maxProperties": 1024,
                 "additionalProperties": _ref("Probability"),
             },
         },
@@ -308,7 +321,12 @@ COMPONENTS: dict[str, dict[str, Any]] = {
         {
             "channels": {
                 "type": "object",
-                "description": "One independent channel per sensor name (requires system.sensors).",
+                "description": "One independent channel per sensor name (requires system.sensors). The keys must "
+                "be exactly the names in system.sensors, each once (the validator checks it: an unknown or "
+                "missing name is 422).",
+                "propertyNames": {"minLength": 1, "maxLength": 64},
+                "minProperties": 1,
+                "maxProperties": 8,
                 "additionalProperties": _ref("PacketChannel"),
             }
         },
@@ -335,8 +353,12 @@ COMPONENTS: dict[str, dict[str, Any]] = {
         "description": "Per-command options (each command validates its own group) and the time budget.",
         "properties": {
             "time_budget_s": {
-                **_ref("ExactNumber"),
-                "description": "Seconds this request may take, in (0, 3600]; the deployment's budget caps it.",
+                "description": "Seconds this request may take, in [0.01, 3600] (an exact number; less cannot even "
+                "reach a worker, and is 422); the deployment's budget caps it.",
+                "anyOf": [
+                    {"type": "number", "minimum": 0.01, "maximum": 3600},
+                    {"type": "string", "pattern": _NUMBER_PATTERN, "maxLength": 816},
+                ],
             },
             "analyze": {
                 "type": "object",
@@ -562,10 +584,12 @@ def problem_responses(*statuses: int) -> dict[int | str, dict[str, Any]]:
         404: "No such job (unknown, forgotten after the retention limit, or the server restarted)",
         409: "The job is not in a state that allows this (already finished, or no result yet)",
         413: "Request body larger than the deployment's limit (1 MiB by default)",
-        422: "Invalid request: the problem names the field (JSON pointer) and the rule",
+        415: "The body was not sent as Content-Type: application/json",
+        422: "Invalid request: the problem names the field (JSON pointer) and the rule; or the "
+        "computation needs more memory than one analysis process may use (memory-exceeded)",
         429: "Too many jobs are queued (the deployment's `KFIO_MAX_JOBS`); retry later",
         501: "This part of the analyzer is not available in this build",
-        503: "No worker became free in time, or a worker died; retry later",
+        503: "No worker became free in time, a worker died, or the server is shutting down; retry later",
         504: "The computation did not finish within its time budget",
     }
     return {

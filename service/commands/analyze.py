@@ -6,7 +6,7 @@ import argparse
 import dataclasses
 
 from .. import exitcodes
-from ..io import add_request_arguments, dump_json, read_request_text, run_guarded
+from ..io import add_request_arguments, dump_json, run_request_command
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -14,7 +14,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "analyze",
         help="exact stability verdict (seed 001, Theorem 1)",
         description="Decide whether the expected error covariance stays bounded. "
-        "Exit 0 stable, 1 unstable, 3 boundary, 2 invalid input.",
+        "Exit 0 stable, 1 unstable, 3 boundary, 2 invalid input, 4 budget exceeded, 5 numerical failure.",
     )
     add_request_arguments(p)
     p.add_argument(
@@ -32,15 +32,14 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from kfio import analyze, load_request  # here, not at import: `kfio --help` stays fast
+    from kfio import Budget, Request, analyze  # here, not at import: `kfio --help` stays fast
 
-    def body() -> int:
-        request = load_request(read_request_text(args.file))
+    def work(request: Request, budget: Budget) -> int:
         grid = args.ge_grid if args.ge_grid is not None else (41 if args.ge_plot else None)
         if grid is not None:
             opts = {**request.options.get("analyze", {}), "ge_grid": grid}
             request = dataclasses.replace(request, options={**request.options, "analyze": opts})
-        report = analyze(request)
+        report = analyze(request, budget=budget)
         if args.ge_plot:
             from ..plots import _draw_ge_region
 
@@ -49,4 +48,4 @@ def _run(args: argparse.Namespace) -> int:
         print(dump_json(report.to_dict()) if args.json else report.summary())
         return exitcodes.BY_VERDICT[report.verdict]
 
-    return run_guarded(body)
+    return run_request_command(args, work)

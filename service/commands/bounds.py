@@ -10,7 +10,7 @@ from __future__ import annotations
 import argparse
 
 from .. import exitcodes
-from ..io import add_request_arguments, dump_json, read_request_text, run_guarded
+from ..io import add_request_arguments, dump_json, run_request_command
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -29,14 +29,13 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from kfio import load_request  # here, not at import: CVXPY takes seconds to load
+    from kfio import Budget, Request  # here, not at import: CVXPY takes seconds to load
     from kfio.mare._compute import compute_bounds
 
-    def body() -> int:
-        request = load_request(read_request_text(args.file))
+    def work(request: Request, budget: Budget) -> int:
         flags = {k: getattr(args, k) for k in ("grid", "horizon", "tolerance") if getattr(args, k) is not None}
-        report = compute_bounds(request, flags=flags)
+        report = compute_bounds(request, flags=flags, budget=budget)
         print(dump_json(report.to_dict()) if args.json else report.summary())
         return exitcodes.STABLE
 
-    return run_guarded(body)
+    return run_request_command(args, work)

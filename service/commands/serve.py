@@ -1,11 +1,25 @@
-"""``kfio serve [--host H] [--port P] [--workers N]``: the HTTP service (Uvicorn)."""
+"""``kfio serve [--host H] [--port P] [--workers N]``: the HTTP service (Uvicorn).
+
+On SIGTERM (or Ctrl-C) the server stops accepting connections and drains its
+worker pool: requests waiting for a worker are refused at once, running ones
+get ``shutdown_grace_s`` (``KFIO_SHUTDOWN_GRACE_S``) to finish, and whatever is
+still running then is answered 503 ``shutting-down`` with ``Retry-After``
+(problem+json, never Uvicorn's bare ``500 text/plain``).  If the server cannot
+start (the port is taken, ...), the exit code is 6, ``CANNOT_SERVE``.
+"""
 
 from __future__ import annotations
 
 import argparse
+import asyncio
+import socket
 import sys
+from typing import Any
 
 from .. import exitcodes
+
+#: Seconds Uvicorn waits for connections past the drain's grace period before it cancels them.
+UVICORN_MARGIN_S = 5.0
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -13,13 +27,30 @@ def register(sub: argparse._SubParsersAction) -> None:
         "serve",
         help="run the HTTP service",
         description="Serve the kfio HTTP API (docs at /docs). Every option also reads KFIO_<NAME> from the "
-        "environment (KFIO_TIME_BUDGET_S, KFIO_MAX_QUEUE, ...); command-line options win.",
+        "environment (KFIO_TIME_BUDGET_S, KFIO_MAX_QUEUE, KFIO_MEMORY_MB, ...); command-line options win. "
+        "Exit 6 when the server cannot start (e.g. the port is in use).",
     )
     p.add_argument("--host", help="interface to listen on (default 127.0.0.1)")
     p.add_argument("--port", type=int, help="TCP port (default 8000)")
     p.add_argument("--workers", type=int, help="analysis worker processes (default: CPU count, at most 4)")
     p.add_argument("--log-level", default="info", choices=["critical", "error", "warning", "info", "debug"])
     p.set_defaults(func=_run)
+
+
+def port_in_use(host: str, port: int) -> str | None:
+    """Why ``host:port`` cannot be bound now (``None`` if it can)."""
+    try:
+        infos = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM)
+    except OSError as exc:
+        return f"cannot resolve {host}: {exc.strerror or exc}"
+    family, kind, proto, _, address = infos[0]
+    with socket.socket(family, kind, proto) as s:
+        s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)  # as Uvicorn does
+        try:
+            s.bind(address)
+        except OSError as exc:
+            return f"cannot listen on {host}:{port}: {exc.strerror or exc}"
+    return None
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -36,13 +67,39 @@ def _run(args: argparse.Namespace) -> int:
         err = exc.errors()[0]
         print(f"kfio: invalid setting {'.'.join(map(str, err['loc']))}: {err['msg']}", file=sys.stderr)
         return exitcodes.INVALID_INPUT
+    if settings.port != 0:
+        reason = port_in_use(settings.host, settings.port)
+        if reason is not None:  # checked before the worker pool starts, for a clear message
+            print(f"kfio: {reason}", file=sys.stderr)
+            return exitcodes.CANNOT_SERVE
+    app = create_app(settings)
+
+    class DrainingServer(uvicorn.Server):
+        """Uvicorn's server, draining the worker pool while it waits for connections to finish."""
+
+        async def shutdown(self, sockets: Any = None) -> None:
+            dispatcher = getattr(app.state, "dispatcher", None)
+            drain = None
+            if dispatcher is not None:
+                drain = asyncio.create_task(dispatcher.pool.drain(settings.shutdown_grace_s))
+            await super().shutdown(sockets)
+            if drain is not None:
+                await asyncio.gather(drain, return_exceptions=True)
+
     # One server process: the analysis runs in the pool's worker processes, and
     # one process keeps one cache.
-    uvicorn.run(
-        create_app(settings),
+    config = uvicorn.Config(
+        app,
         host=settings.host,
         port=settings.port,
         log_level=args.log_level,
-        timeout_graceful_shutdown=5,
+        timeout_graceful_shutdown=int(settings.shutdown_grace_s + UVICORN_MARGIN_S),
     )
+    try:
+        DrainingServer(config).run()
+    except SystemExit as exc:  # Uvicorn exits 3 when it cannot bind or the app does not start
+        if exc.code in (0, None):
+            return exitcodes.STABLE
+        print("kfio: the server could not start (see the log above)", file=sys.stderr)
+        return exitcodes.CANNOT_SERVE
     return exitcodes.STABLE

@@ -14,9 +14,10 @@ import dataclasses
 from typing import TYPE_CHECKING, Any
 
 from .. import exitcodes
-from ..io import add_request_arguments, dump_json, read_request_text, run_guarded
+from ..io import add_request_arguments, dump_json, run_request_command
 
 if TYPE_CHECKING:
+    from kfio import Budget
     from kfio.model._types import Request
 
 #: ``--exact`` without ``options.simulate.exact_steps`` enumerates at most 2^16 sequences.
@@ -63,13 +64,11 @@ def with_overrides(request: Request, args: argparse.Namespace) -> Request:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from kfio import load_request  # here, not at import: `kfio --help` stays fast
-    from kfio.simulation._simulate import simulate
+    from kfio.simulation._simulate import simulate  # here, not at import: `kfio --help` stays fast
 
-    def body() -> int:
-        request = with_overrides(load_request(read_request_text(args.file)), args)
-        report = simulate(request)
+    def work(request: Request, budget: Budget) -> int:
+        report = simulate(with_overrides(request, args), budget=budget)
         print(dump_json(report.to_dict()) if args.json else report.summary())
         return exitcodes.STABLE
 
-    return run_guarded(body)
+    return run_request_command(args, work)

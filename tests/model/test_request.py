@@ -196,8 +196,10 @@ def test_options_groups():
     with pytest.raises(InvalidInput, match="unknown field") as e:
         load_request(body(options={"colour": {}}))
     assert e.value.field == "/options/colour"
-    with pytest.raises(InvalidInput, match=r"\(0, 3600\]"):
-        load_request(body(options={"time_budget_s": 0}))
+    for tiny in (0, "1e-199", 0.009):  # below the documented minimum of 0.01 s
+        with pytest.raises(InvalidInput, match=r"\[0.01, 3600\]"):
+            load_request(body(options={"time_budget_s": tiny}))
+    assert load_request(body(options={"time_budget_s": 0.01})).time_budget_s == 0.01
 
 
 def test_json_pointer_escapes_keys():

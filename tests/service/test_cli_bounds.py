@@ -150,6 +150,6 @@ def test_time_budget_exits_4(write, capsys) -> None:
         "Q": [[20, 0, 0], [0, 20, 0], [0, 0, 20]],
         "R": [[2.5]],
     }
-    req = {"system": three, "channel": bernoulli(0.37), "options": {"time_budget_s": 0.001, "bounds": {"horizon": 12}}}
+    req = {"system": three, "channel": bernoulli(0.37), "options": {"time_budget_s": 0.01, "bounds": {"horizon": 12}}}
     code, _, err = run(capsys, write(req))
     assert code == exitcodes.BUDGET and "budget exceeded" in err

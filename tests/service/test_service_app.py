@@ -15,13 +15,14 @@ from kfio.service.app import create_app
 from kfio.service.cli import main as cli_main
 from kfio.service.settings import Settings
 
+from support.live_server import JSON_HEADERS
+
 PROBLEM = "application/problem+json"
 SCALAR = REQUEST_EXAMPLES["seed004-scalar"]["value"]  # seed 004: lambda_c = 9/25
 
 
-def wait_ready(client: TestClient, timeout: float = 30.0) -> None:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
+def wait_ready(client: TestClient, polls: int = 1200) -> None:
+    for _ in range(polls):  # bounded by count, not by the clock
         if client.get("/readyz").status_code == 200:
             return
         time.sleep(0.05)
@@ -97,10 +98,10 @@ def test_numbers_stay_exact(client: TestClient) -> None:
 
 def test_identical_requests_are_answered_from_the_cache(client: TestClient) -> None:
     body = with_channel(SCALAR, arrival_probability=0.77)
-    first = client.post("/v1/analyze", content=json.dumps(body))
+    first = client.post("/v1/analyze", content=json.dumps(body), headers=JSON_HEADERS)
     # same canonical JSON: other key order, other whitespace
     reordered = json.dumps({"channel": body["channel"], "system": body["system"]}, indent=3)
-    second = client.post("/v1/analyze", content=reordered)
+    second = client.post("/v1/analyze", content=reordered, headers=JSON_HEADERS)
     assert (first.headers["x-cache"], second.headers["x-cache"]) == ("miss", "hit")
     assert first.content == second.content
 
@@ -128,7 +129,7 @@ def test_probability_out_of_range_names_its_pointer(client: TestClient) -> None:
     [(b'{"system": ', "/"), (b"\xff\xfe", "/"), (b'{"system": {}, "system": {}}', "/"), (b"[]", "/")],
 )
 def test_malformed_bodies_are_422(client: TestClient, content: bytes, field: str) -> None:
-    r = client.post("/v1/analyze", content=content)
+    r = client.post("/v1/analyze", content=content, headers=JSON_HEADERS)
     assert r.status_code == 422 and r.headers["content-type"] == PROBLEM
     assert r.json()["field"] == field
 
@@ -142,7 +143,7 @@ def test_query_parameters_are_validated_as_problems(client: TestClient) -> None:
 
 
 def test_body_over_1_mib_is_413(client: TestClient) -> None:
-    r = client.post("/v1/analyze", content=b" " * ((1 << 20) + 1))
+    r = client.post("/v1/analyze", content=b" " * ((1 << 20) + 1), headers=JSON_HEADERS)
     assert r.status_code == 413 and r.headers["content-type"] == PROBLEM
 
 

@@ -28,7 +28,7 @@ def free_port() -> int:
         return int(s.getsockname()[1])
 
 
-def wait_until_ready(base_url: str, timeout: float = 60.0, proc: subprocess.Popen[bytes] | None = None) -> None:
+def wait_until_ready(base_url: str, timeout: float = 180.0, proc: subprocess.Popen[bytes] | None = None) -> None:
     """Poll ``/readyz`` until it answers 200, at most ``timeout`` seconds.
 
     Raises
@@ -76,7 +76,7 @@ class LiveServer:
         env: dict[str, str] | None = None,
         workers: int | None = None,
         cwd: Path | None = None,
-        ready_timeout: float = 60.0,
+        ready_timeout: float = 180.0,
     ) -> None:
         self.port = free_port()
         self.url = f"http://127.0.0.1:{self.port}"
@@ -150,3 +150,7 @@ def slow_request(time_budget_s: float | None = None, seed: int = 1) -> bytes:
         "options": options,
     }
     return json.dumps(body).encode()
+
+
+#: Headers of a JSON POST sent with ``content=`` (the service refuses other media types with 415).
+JSON_HEADERS = {"Content-Type": "application/json"}
