@@ -46,7 +46,7 @@ from schemathesis.checks import (
 from support.live_server import OPENAPI_PATH as DEFAULT_PATH
 from support.live_server import LiveServer
 
-pytestmark = pytest.mark.slow  # a few minutes: .ci/run's second step
+pytestmark = pytest.mark.slow  # a few minutes
 
 DOC = json.loads(DEFAULT_PATH.read_text(encoding="utf-8"))
 SCHEMA = schemathesis.openapi.from_dict(DOC)
