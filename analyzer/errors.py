@@ -34,7 +34,7 @@ class AssumptionViolation(InvalidInput):
     """The request is well formed but outside the hypotheses of the theorem used.
 
     Example: a channel probability of exactly 0 or 1 violates Assumption 1 of
-    seed 001, so Theorem 1 gives no verdict for it.
+    Rohr, Marelli and Fu (2014), so Theorem 1 gives no verdict for it.
     """
 
 

@@ -62,7 +62,7 @@ CHANNELS = {
     ),
 }
 
-#: Orders of the roots of unity omega_j (all primitive ones of each order): ``(1, 2)`` is seed 001's
+#: Orders of the roots of unity omega_j (all primitive ones of each order): ``(1, 2)`` is Rohr, Marelli and Fu (2014)'s
 #: Example 1, ``(3, 4, 5)`` is 2 blkdiag(rotation of order 3, rotation of order 4, companion of Phi_5).
 BLOCKS = [(1, 2), (3, 4), (3, 5), (2, 8), (2, 3, 5), (4, 9), (3, 4, 5), (3, 4, 7)]
 

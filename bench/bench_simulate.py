@@ -1,6 +1,6 @@
 """Benchmark of ``kfio simulate`` (issue 5).  A script, not a test: ``python bench/bench_simulate.py``.
 
-1. The target: 10^5 trajectories x 200 steps of seed 004's 3x3 system (A = [[1.25,1,0],[0,0.9,7],
+1. The target: 10^5 trajectories x 200 steps of Sinopoli et al. (2004)'s 3x3 system (A = [[1.25,1,0],[0,0.9,7],
    [0,0,0.6]], C = [1 0 2], Q = 20 I, R = 2.5, Bernoulli lambda = 0.6) in under 10 s, vectorized.
 2. The same recursion as a per-trajectory Python loop (textbook formula, NumPy 3x3 operations), run on
    a subset of trajectories and *extrapolated* linearly to 10^5 (the loop's cost is linear in the

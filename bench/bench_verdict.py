@@ -61,11 +61,11 @@ def cases():
     bern = {"model": "bernoulli", "arrival_probability": "1/2"}
     ge = {"model": "gilbert_elliott", "failure_rate": "1/10", "recovery_rate": "3/10"}
     out = [
-        ("seed 004 scalar", [["-5/4"]], [[1]], bern),
-        ("seed 004 3x3", [["5/4", 1, 0], [0, "9/10", 7], [0, 0, "3/5"]], [[1, 0, 2]], bern),
-        ("seed 004/002 2x2", [["5/4", 0], [1, "11/10"]], [[1, 1]], bern),
-        ("seed 001 Ex. 1, Bernoulli", [[2, 0], [0, -2]], [[1, 1]], bern),
-        ("seed 001 Ex. 2, Gilbert-Elliott", [[2, 0], [0, -2]], [[1, 1]], ge),
+        ("Sinopoli et al. (2004) scalar", [["-5/4"]], [[1]], bern),
+        ("Sinopoli et al. (2004) 3x3", [["5/4", 1, 0], [0, "9/10", 7], [0, 0, "3/5"]], [[1, 0, 2]], bern),
+        ("Sinopoli et al. (2004)/002 2x2", [["5/4", 0], [1, "11/10"]], [[1, 1]], bern),
+        ("Rohr, Marelli and Fu (2014) Ex. 1, Bernoulli", [[2, 0], [0, -2]], [[1, 1]], bern),
+        ("Rohr, Marelli and Fu (2014) Ex. 2, Gilbert-Elliott", [[2, 0], [0, -2]], [[1, 1]], ge),
     ]
     A4, C4 = random_irreducible(4, 4)
     out.append(("random 4x4, irreducible quartic", A4, C4, bern))

@@ -1,11 +1,11 @@
-"""CVXPY problems for the bounds of MATH.md section 3: the stability LMI and the ``V_bar`` SDP.
+"""CVXPY problems for the bounds of docs/theory.md: the stability LMI and the ``V_bar`` SDP.
 
-* :class:`StabilityLMI` is seed 004's Theorem 5(c) LMI ``Psi_lambda(Y, Z) > 0,
-  0 < Y <= I`` and its ``m``-packet generalization (seed 000, eq. 20 is
+* :class:`StabilityLMI` is Sinopoli et al. (2004)'s Theorem 5(c) LMI ``Psi_lambda(Y, Z) > 0,
+  0 < Y <= I`` and its ``m``-packet generalization (Liu and Goldsmith (2004), eq. 20 is
   ``m = 2``), built once with CVXPY parameters and re-solved at every
   bisection step (DPP: each parameter multiplies a variable exactly once).
-* :func:`v_bar_sdp` is Theorem 6(b) of seed 004 (with the ``Q`` that its
-  printed block omits, a typo; seed 000 eq. 21 has it) for ``m`` packets.
+* :func:`v_bar_sdp` is Theorem 6(b) of Sinopoli et al. (2004) (with the ``Q`` that its
+  printed block omits, a typo; Liu and Goldsmith (2004) eq. 21 has it) for ``m`` packets.
 
 Solver answers are hypotheses: :mod:`kfio.mare._certificate` re-checks
 them.  The solver is Clarabel (interior point; CVXPY's ``warm_start`` only
@@ -64,7 +64,7 @@ class LMISolution:
     Z: tuple[np.ndarray, ...] | None
 
     def gains(self) -> tuple[np.ndarray, ...] | None:
-        """``K_S = Y^-1 Z_S``: then ``Y(A + K_S C_S) = Y A + Z_S C_S`` (seed 004, proof of Theorem 5)."""
+        """``K_S = Y^-1 Z_S``: then ``Y(A + K_S C_S) = Y A + Z_S C_S`` (Sinopoli et al. (2004), proof of Theorem 5)."""
         if self.Y is None or self.Z is None:
             return None
         try:
@@ -74,7 +74,7 @@ class LMISolution:
 
 
 class StabilityLMI:
-    r"""The LMI whose feasibility defines ``lambda_upper`` (seed 004, Theorem 5(c); seed 000, eq. 20).
+    r"""The LMI whose feasibility defines ``lambda_upper`` (Sinopoli et al. (2004), Theorem 5(c); Liu and Goldsmith (2004), eq. 20).
 
     For ``m`` packets with pattern probabilities ``pi(S)``:
 
@@ -167,7 +167,7 @@ class SDPSolution:
 
 
 def v_bar_sdp(model: ArrivalModel) -> SDPSolution:
-    r"""``V_bar`` as the SDP of seed 004 Theorem 6(b), generalized to ``m`` packets (seed 000, eq. 21).
+    r"""``V_bar`` as the SDP of Sinopoli et al. (2004) Theorem 6(b), generalized to ``m`` packets (Liu and Goldsmith (2004), eq. 21).
 
     .. math::
 
@@ -179,8 +179,8 @@ def v_bar_sdp(model: ArrivalModel) -> SDPSolution:
         \end{bmatrix} \succeq 0,\quad V \succeq 0.
 
     The Schur complement of the constraint is ``g(V) - V >= 0``; ``V_bar`` is
-    the greatest element of that set (seed 004, proof of Theorem 6), so it
-    maximizes the trace.  Seed 004 prints the top-left block without ``Q``:
+    the greatest element of that set (Sinopoli et al. (2004), proof of Theorem 6), so it
+    maximizes the trace.  Sinopoli et al. (2004) prints the top-left block without ``Q``:
     a typo (without ``Q`` the SDP is homogeneous and its answer is 0 or
     unbounded).
     """

@@ -3,7 +3,7 @@
 The request parser (:mod:`kfio.model._request`) has already checked shapes,
 ``Q >= 0``, ``R > 0`` and that sensors partition the rows of ``C``.  Here:
 ``Q`` and ``R`` must be present, every packet's channel must be i.i.d.
-(the bounds of seeds 004 and 000 are about Bernoulli losses), the LMI must
+(the bounds of Sinopoli et al. (2004) and Liu and Goldsmith (2004) are about Bernoulli losses), the LMI must
 fit the size limit, and ``request.options["bounds"]`` is checked key by key.
 Every error names its field as a JSON pointer.
 """
@@ -48,7 +48,7 @@ class BoundsOptions:
     tolerance:
         Bisection tolerance for ``lambda_upper``.
     horizon:
-        Largest ``N`` of seed 002's ``P_hat_N`` (one packet only), else ``None``.
+        Largest ``N`` of Rohr, Marelli and Fu (2010)'s ``P_hat_N`` (one packet only), else ``None``.
     grid:
         Side ``K`` of the region map (two packets only), or ``None``.
     """

@@ -1,7 +1,7 @@
-"""Seed 002's sequence of tighter upper bounds ``P_hat_N`` (Rohr, Marelli, Fu).
+"""Rohr, Marelli and Fu (2010)'s sequence of tighter upper bounds ``P_hat_N``.
 
 ``g_N(X) = sum over arrival sequences S of length N of P(S) phi(X, S)``
-(seed 002, eq. 11), where ``phi`` applies ``Phi_0(X) = A X A' + Q`` (lost) or
+(Rohr, Marelli and Fu (2010), eq. 11), where ``phi`` applies ``Phi_0(X) = A X A' + Q`` (lost) or
 ``Phi_1(X) = Phi_0(X) - A X C'(C X C' + R)^-1 C X A'`` (arrived) once per step
 (eqs. 3-4).  ``P_hat_N`` is the fixed point of ``g_N`` (eq. 15) and
 
@@ -12,7 +12,7 @@
 half-vectorized matrices (``vech``), so every step is a handful of GEMMs on a
 batch instead of ``2^N`` separate recursions.  Two savings: ``Phi_0`` and
 ``Phi_1`` share ``A X A'``; and the last level needs only weighted sums
-because ``Phi_0`` is affine (seed 002, Lemma 1, eq. 7).  The bottom
+because ``Phi_0`` is affine (Rohr, Marelli and Fu (2010), Lemma 1, eq. 7).  The bottom
 ``CHUNK_LEVELS`` levels are processed in chunks of at most ``2^CHUNK_LEVELS``
 matrices, so memory stays bounded (and in cache) whatever ``N`` is.
 """
@@ -95,7 +95,7 @@ class BatchedMare:
         return np.einsum("bki,bki->bi", G[:, :, self._iu], G[:, :, self._ju])
 
     def g_n(self, h: np.ndarray, N: int) -> np.ndarray:
-        """``vech(g_N(X))`` for one ``h = vech(X)`` (seed 002, eq. 11)."""
+        """``vech(g_N(X))`` for one ``h = vech(X)`` (Rohr, Marelli and Fu (2010), eq. 11)."""
         if N < 1:
             raise InvalidInput("/options/bounds/horizon", "N must be at least 1")
         return self._descend(h[None, :], np.ones(1), N)
@@ -122,7 +122,7 @@ class BatchedMare:
 
 @dataclass(frozen=True)
 class PHat:
-    """One element of seed 002's sequence.
+    """One element of Rohr, Marelli and Fu (2010)'s sequence.
 
     Attributes
     ----------
@@ -192,7 +192,7 @@ def p_hat_sequence(
     """``P_hat_N`` for every ``N`` in ``horizons`` (plus the divisors used as warm starts).
 
     ``P_hat_1 = V_bar`` (:func:`kfio.mare._riccati.v_bar`).  For ``N > 1`` the
-    iteration ``X_{k+1} = g_N(X_k)`` (seed 002, eq. 22) starts at
+    iteration ``X_{k+1} = g_N(X_k)`` (Rohr, Marelli and Fu (2010), eq. 22) starts at
     ``P_hat_d`` for the largest proper divisor ``d`` of ``N``: since
     ``g_N <= g_d^{N/d}`` (Lemma 2, eq. 12), ``g_N(P_hat_d) <= P_hat_d`` and the
     iterates decrease monotonically to ``P_hat_N``, every one of them an

@@ -1,9 +1,9 @@
 """Riccati and Lyapunov maps behind the classical bounds (docs/theory.md).
 
-The modified algebraic Riccati equation (MARE) of seed 004 (eq. 17) and its
-partial-loss generalization of seed 000 (eq. 12, for any number ``m`` of
+The modified algebraic Riccati equation (MARE) of Sinopoli et al. (2004) (eq. 17) and its
+partial-loss generalization of Liu and Goldsmith (2004) (eq. 12, for any number ``m`` of
 independent Bernoulli packets), the Lyapunov lower bound ``S_bar`` and the
-MARE fixed point ``V_bar`` (seed 004, Theorems 3, 4 and 6(a); seed 000,
+MARE fixed point ``V_bar`` (Sinopoli et al. (2004), Theorems 3, 4 and 6(a); Liu and Goldsmith (2004),
 Theorem 4).  The tighter bounds ``P_hat_N`` of Rohr, Marelli and Fu (2010)
 build on this module and live in :mod:`kfio.mare._phat`.
 
@@ -112,7 +112,7 @@ def arrival_model(
 
 
 def one_packet_model(A: np.ndarray, C: np.ndarray, Q: np.ndarray, R: np.ndarray, lam: float) -> ArrivalModel:
-    """The single-packet (seed 004) case of :func:`arrival_model`."""
+    """The single-packet (Sinopoli et al. (2004)) case of :func:`arrival_model`."""
     C = np.atleast_2d(np.asarray(C, float))
     return arrival_model(A, C, Q, np.atleast_2d(R), [list(range(C.shape[0]))], [lam])
 
@@ -130,14 +130,14 @@ def _sym(X: np.ndarray) -> np.ndarray:
 
 
 def g_partial(X: np.ndarray, model: ArrivalModel) -> np.ndarray:
-    r"""The generalized MARE of seed 000, eq. 12, for ``m`` packets.
+    r"""The generalized MARE of Liu and Goldsmith (2004), eq. 12, for ``m`` packets.
 
     .. math::
 
         g(X) = A X A' + Q - \sum_{S \ne \emptyset} \pi(S)\,
                A X C_S' (C_S X C_S' + R_{SS})^{-1} C_S X A'
 
-    With one packet this is seed 004's ``g_lambda`` (eq. 17).
+    With one packet this is Sinopoli et al. (2004)'s ``g_lambda`` (eq. 17).
     """
     A = model.A
     AX = A @ X
@@ -149,7 +149,7 @@ def g_partial(X: np.ndarray, model: ArrivalModel) -> np.ndarray:
 
 
 def g_lambda(X: np.ndarray, A: np.ndarray, C: np.ndarray, Q: np.ndarray, R: np.ndarray, lam: float) -> np.ndarray:
-    r"""Seed 004's MARE, eq. 17: :math:`g_\lambda(X) = AXA' + Q - \lambda AXC'(CXC'+R)^{-1}CXA'`.
+    r"""Sinopoli et al. (2004)'s MARE, eq. 17: :math:`g_\lambda(X) = AXA' + Q - \lambda AXC'(CXC'+R)^{-1}CXA'`.
 
     Examples
     --------
@@ -163,10 +163,10 @@ def g_lambda(X: np.ndarray, A: np.ndarray, C: np.ndarray, Q: np.ndarray, R: np.n
 
 
 def gains(X: np.ndarray, model: ArrivalModel) -> tuple[np.ndarray, ...]:
-    """Optimal gains ``K_S = -A X C_S' (C_S X C_S' + R_SS)^-1`` (seed 000, after eq. 16).
+    """Optimal gains ``K_S = -A X C_S' (C_S X C_S' + R_SS)^-1`` (Liu and Goldsmith (2004), after eq. 16).
 
     One gain per non-empty pattern, in mask order; ``g(X) = phi(K, X)`` with
-    these gains (seed 004, Lemma 1(a); seed 000, eq. 17).
+    these gains (Sinopoli et al. (2004), Lemma 1(a); Liu and Goldsmith (2004), eq. 17).
     """
     AX = model.A @ X
     return tuple(-np.linalg.solve(C @ X @ C.T + R, C @ AX.T).T for C, R in zip(model.C_S, model.R_S))
@@ -175,7 +175,7 @@ def gains(X: np.ndarray, model: ArrivalModel) -> tuple[np.ndarray, ...]:
 def closed_loop_operator(model: ArrivalModel, K: Sequence[np.ndarray]) -> np.ndarray:
     r"""Matrix of :math:`\mathcal L_K(X) = \pi(\emptyset) A X A' + \sum_S \pi(S) F_S X F_S'` on ``vech``.
 
-    ``F_S = A + K_S C_S``: seed 004, Lemma 3; seed 000, the linear part of eq. 16.
+    ``F_S = A + K_S C_S``: Sinopoli et al. (2004), Lemma 3; Liu and Goldsmith (2004), the linear part of eq. 16.
     """
     L = model.weights[0] * congruence_matrix(model.A)
     for w, Ks, C in zip(model.weights[1:], K, model.C_S):
@@ -192,7 +192,7 @@ def policy_evaluation(model: ArrivalModel, K: Sequence[np.ndarray]) -> np.ndarra
     ``Y = L_K(Y) + I`` and testing ``Y > 0`` (for a positive operator,
     ``Y = sum_k L_K^k(I) > 0`` exists iff ``rho(L_K) < 1``).  When it is, the
     solution satisfies ``X = phi(K, X) >= g(X)``, so ``X >= V_bar``
-    (seed 004, Theorem 1 and Lemma 1(b)): an upper bound.
+    (Sinopoli et al. (2004), Theorem 1 and Lemma 1(b)): an upper bound.
     """
     n = model.n
     W = model.Q.copy()
@@ -213,19 +213,19 @@ def policy_evaluation(model: ArrivalModel, K: Sequence[np.ndarray]) -> np.ndarra
 
 
 def s_bar(A: np.ndarray, Q: np.ndarray, loss_probability: float) -> np.ndarray | None:
-    r"""Seed 004's lower bound ``S_bar``: the solution of :math:`S = p\, A S A' + Q`.
+    r"""Sinopoli et al. (2004)'s lower bound ``S_bar``: the solution of :math:`S = p\, A S A' + Q`.
 
     ``p`` is the probability that nothing arrives (``1 - lambda`` for one
-    packet, ``prod_s (1 - lambda_s)`` for independent packets, seed 000
+    packet, ``prod_s (1 - lambda_s)`` for independent packets, Liu and Goldsmith (2004)
     Theorem 4).  The solution is the limit of ``S_{t+1} = p A S_t A' + Q``
-    from ``S_0 = 0`` and lower-bounds ``lim E[P_t]`` (seed 004, Theorem 4).
+    from ``S_0 = 0`` and lower-bounds ``lim E[P_t]`` (Sinopoli et al. (2004), Theorem 4).
 
     Returns
     -------
     numpy.ndarray or None
         ``None`` when ``p rho(A)^2 >= 1``: the Lyapunov operator is not
         stable, the sequence ``S_t`` diverges (whenever ``(A, Q^1/2)`` is
-        controllable) and so does ``E[P_t]`` (seed 004, Theorem 3).
+        controllable) and so does ``E[P_t]`` (Sinopoli et al. (2004), Theorem 3).
 
     Examples
     --------
@@ -291,7 +291,7 @@ def _newton_from(model: ArrivalModel, V: np.ndarray, max_steps: int = 60) -> tup
 
     Each step evaluates the current gains (:func:`policy_evaluation`) and
     re-optimizes them; the iterates decrease monotonically to ``V_bar``
-    (seed 004, Lemma 1(b) and the proof of Theorem 1).
+    (Sinopoli et al. (2004), Lemma 1(b) and the proof of Theorem 1).
     """
     X = policy_evaluation(model, gains(V, model))
     if X is None:
@@ -317,8 +317,8 @@ def solve_v_bar(
     """``V_bar``, the fixed point of :func:`g_partial`, by monotone iteration.
 
     The iteration ``V_{k+1} = g(V_k)`` from ``V_0 = 0`` increases
-    monotonically to ``V_bar`` when it exists (seed 004, Theorem 6(a) and the
-    proof of Theorem 1; seed 000, Theorem 6(a)).  Near the critical
+    monotonically to ``V_bar`` when it exists (Sinopoli et al. (2004), Theorem 6(a) and the
+    proof of Theorem 1; Liu and Goldsmith (2004), Theorem 6(a)).  Near the critical
     probability it converges slowly, so at ``k = 16, 32, 64, ...`` the gains
     of ``V_k`` seed a policy iteration from above (Newton's method), which
     decreases monotonically to ``V_bar``.  The two sequences bracket
@@ -327,7 +327,7 @@ def solve_v_bar(
 
     Returns a :class:`VBarIteration` whose ``matrix`` is ``None`` when the
     iteration diverges: at once when ``pi(empty) rho(A)^2 >= 1`` (then
-    ``V_k >= S_k`` diverges, seed 004 Lemma 1(f)), or when the trace
+    ``V_k >= S_k`` diverges, Sinopoli et al. (2004) Lemma 1(f)), or when the trace
     explodes, or when ``max_iter`` steps neither converge nor diverge.
     """
     p0 = model.loss_probability
@@ -359,7 +359,7 @@ def solve_v_bar(
 
 
 def v_bar(A: np.ndarray, C: np.ndarray, Q: np.ndarray, R: np.ndarray, lam: float) -> np.ndarray | None:
-    """Seed 004's upper bound ``V_bar = g_lambda(V_bar)`` (Theorem 4), or ``None`` if it diverges.
+    """Sinopoli et al. (2004)'s upper bound ``V_bar = g_lambda(V_bar)`` (Theorem 4), or ``None`` if it diverges.
 
     Thin wrapper of :func:`solve_v_bar` for one packet arriving with
     probability ``lam``; see there for the algorithm and the divergence test.

@@ -385,7 +385,7 @@ def load_request(text: str | bytes, limits: Limits = DEFAULT_LIMITS) -> Request:
 def require_assumption_1(channel: Channel) -> None:
     """Raise :class:`AssumptionViolation` if a channel probability is 0 or 1.
 
-    Seed 001, Assumption 1: ``0 < P(g_t = 1 | history) < 1`` for every history.
+    Rohr, Marelli and Fu (2014), Assumption 1: ``0 < P(g_t = 1 | history) < 1`` for every history.
     Theorem 1 says nothing outside it, so no verdict is returned.
     """
     from ..errors import AssumptionViolation

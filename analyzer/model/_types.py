@@ -40,7 +40,7 @@ class Sensor:
 
 @dataclass(frozen=True)
 class System:
-    """The plant ``x[t+1] = A x + w``, ``y = C x + v`` (MATH.md section 1)."""
+    """The plant ``x[t+1] = A x + w``, ``y = C x + v`` (docs/theory.md)."""
 
     A: Matrix
     C: Matrix
@@ -59,7 +59,7 @@ class System:
 
 @dataclass(frozen=True)
 class MarkovChannel:
-    """A finite-state Markov packet channel of order ``nu`` (seed 001, Def. 2).
+    """A finite-state Markov packet channel of order ``nu`` (Rohr, Marelli and Fu (2014), Def. 2).
 
     ``table[h]`` is ``P(g_t = 1 | history h)`` where ``h`` is the integer whose
     ``nu`` bits, most significant first, are ``g[t-nu], ..., g[t-1]`` (the
@@ -88,7 +88,7 @@ class MarkovChannel:
 
     @property
     def recovery_after_losses(self) -> Fraction:
-        """``P(g = 0 | nu zeros)``: seed 001, Lemma 2."""
+        """``P(g = 0 | nu zeros)``: Rohr, Marelli and Fu (2014), Lemma 2."""
         return 1 - self.table[0]
 
     @property
@@ -132,7 +132,7 @@ class MarkovChannel:
 
 @dataclass(frozen=True)
 class PerSensorChannel:
-    """One independent channel per sensor packet (seeds 000/003, generalized)."""
+    """One independent channel per sensor packet (Liu and Goldsmith (2004), generalized)."""
 
     channels: tuple[tuple[str, MarkovChannel], ...]
 

@@ -1,6 +1,6 @@
 """The packet channels of a request as one vectorized Markov chain.
 
-Packet ``s`` has a Markov channel of order ``nu_s`` (seed 001, Definition 2;
+Packet ``s`` has a Markov channel of order ``nu_s`` (Rohr, Marelli and Fu (2014), Definition 2;
 Bernoulli is ``nu = 0``, Gilbert-Elliott ``nu = 1`` with table ``(q, 1 - p)``).
 Its state is the history ``h_s`` of its last ``nu_s`` arrivals, encoded as in
 :class:`kfio.model._types.MarkovChannel` (oldest bit most significant).  Packets

@@ -256,7 +256,7 @@ def critical_parameter(
 
     Examples
     --------
-    Seed 001's degenerate pair ``(5/4) diag(1, -1)``, ``C = [1 1]`` over a
+    Rohr, Marelli and Fu (2014)'s degenerate pair ``(5/4) diag(1, -1)``, ``C = [1 1]`` over a
     Gilbert-Elliott channel: at ``q = 1/2`` the failure rate must stay below
     ``2 (256/625 - 1/4) = 399/1250``.
 

@@ -1,4 +1,4 @@
-"""Exact comparisons of ``rate = |alpha|^2 sigma`` with 1 (seed 001, Theorem 1).
+"""Exact comparisons of ``rate = |alpha|^2 sigma`` with 1 (Rohr, Marelli and Fu (2014), Theorem 1).
 
 Three situations, all decided in exact arithmetic where the inputs allow:
 

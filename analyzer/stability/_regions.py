@@ -1,11 +1,11 @@
-"""Exact stable regions of independent Bernoulli sensors: an **extension** of seed 001, Theorem 1.
+"""Exact stable regions of independent Bernoulli sensors: an **extension** of Rohr, Marelli and Fu (2014), Theorem 1.
 
-Seed 000 (Liu and Goldsmith) brackets the stable throughput region of a
+Liu and Goldsmith (2004) (Liu and Goldsmith) brackets the stable throughput region of a
 multi-sensor Kalman filter between a lower bound (``prod_s (1 - lambda_s)
 rho(A)^2 >= 1`` is unstable, its Theorem 3) and an LMI upper bound (its
-eq. (20), Theorem 5), and leaves the band in between undecided.  Seed 001's
+eq. (20), Theorem 5), and leaves the band in between undecided.  Rohr, Marelli and Fu (2014)'s
 FMO construction (Theorem 1, Lemma 3, Corollary 2) carries over to packets
-lost separately (MATH.md section 3, "Beyond the seeds"): per FMO block ``k``,
+lost separately (docs/theory.md, "Beyond the seeds"): per FMO block ``k``,
 
 .. math::
 
@@ -17,8 +17,8 @@ phases at which sensor ``s`` is not in ``F``
 (:mod:`kfio.stability._regions_constraints`).  The filter is stable iff every block
 has rate ``< 1``, unstable if one has ``> 1``, and ``= 1`` is the theorem's
 gap (``boundary``).  **This is not a theorem of the seeds**; every result
-here carries ``"basis": "extension"``.  The tests check it against seed 000's
-bounds (it must lie between them), seed 000's cases with a known answer, a
+here carries ``"basis": "extension"``.  The tests check it against Liu and Goldsmith (2004)'s
+bounds (it must lie between them), Liu and Goldsmith (2004)'s cases with a known answer, a
 brute-force blind probability, and simulation.
 
 What this module adds to the per-block verdict of :func:`analyzer.analyze`:
@@ -28,9 +28,9 @@ What this module adds to the per-block verdict of :func:`analyzer.analyze`:
   ``lambda_{s,c} = max(0, max_{k,F: z_s > 0} 1 - (beta_k^{N_k}
   prod_{r != s} (1 - lambda_r)^{z_r})^{-1/z_s})``, or none when a pattern
   with ``z_s = 0`` already has rate ``>= 1`` (no ``lambda_s`` helps);
-  for one sensor this is seed 001's ``1 - beta^{-N/z*}``;
+  for one sensor this is Rohr, Marelli and Fu (2014)'s ``1 - beta^{-N/z*}``;
 * :func:`exact_region_grid`: for two sensors, the ``K x K`` square labelled
-  exactly (the grid of seed 000's Figs. 4-5 and of ``kfio bounds --grid K``)
+  exactly (the grid of Liu and Goldsmith (2004)'s Figs. 4-5 and of ``kfio bounds --grid K``)
   and the closed-form boundary curve (:mod:`kfio.stability._regions_curve`);
 * :func:`region_report`: the JSON block for the ``analyze`` report.
 """
@@ -277,7 +277,7 @@ def sensor_thresholds(
 
     and ``"none"`` when a pattern with ``z_s(F) = 0`` has
     ``beta_k^{N_k} prod_{r != s} (1 - lambda_r)^{z_r} >= 1``.  With one sensor
-    this is seed 001's ``lambda_c = 1 - beta^{-N/z*}`` (Corollary 2 with
+    this is Rohr, Marelli and Fu (2014)'s ``lambda_c = 1 - beta^{-N/z*}`` (Corollary 2 with
     Theorem 1), and the ``analyze`` report's
     ``critical_arrival_probability``.
 
@@ -305,11 +305,11 @@ def sensor_thresholds(
     InvalidInput
         A channel with memory.
     AssumptionViolation
-        An arrival probability of 0 or 1 (seed 001, Assumption 1).
+        An arrival probability of 0 or 1 (Rohr, Marelli and Fu (2014), Assumption 1).
 
     Examples
     --------
-    Seed 000, Case 1 (``C_1 = I``, ``C_2`` invertible): ``lambda_2c = 1 - 1 / (1.25^2 (1 - lambda_1))``.
+    Liu and Goldsmith (2004), Case 1 (``C_1 = I``, ``C_2`` invertible): ``lambda_2c = 1 - 1 / (1.25^2 (1 - lambda_1))``.
 
     >>> from kfio import load_request
     >>> req = load_request('{"system": {"A": [[1.25, 0], [1, 1.1]], "C": [[1, 0], [0, 1], [1, 0], [1, 1]],'
@@ -427,7 +427,7 @@ def exact_region_grid(
 
     Examples
     --------
-    Seed 000, Section VI.B: ``A = diag(2.5, 1.5)``, exact region ``lambda_1 > 21/25``, ``lambda_2 > 5/9``.
+    Liu and Goldsmith (2004), Section VI.B: ``A = diag(2.5, 1.5)``, exact region ``lambda_1 > 21/25``, ``lambda_2 > 5/9``.
 
     >>> from kfio import load_request
     >>> req = load_request('{"system": {"A": [[2.5, 0], [0, 1.5]], "C": [[1, 0], [0, 1]],'

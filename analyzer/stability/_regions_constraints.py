@@ -1,6 +1,6 @@
-"""Blind-pattern constraints of the exact partial-loss region (an *extension* of seed 001).
+"""Blind-pattern constraints of the exact partial-loss region (an *extension* of Rohr, Marelli and Fu (2014)).
 
-Seed 001, Theorem 1 decides stability for one packet.  MATH.md section 3
+Rohr, Marelli and Fu (2014), Theorem 1 decides stability for one packet.  docs/theory.md
 ("Beyond the seeds: exact partial-loss regions") carries its construction over
 to ``m`` packets lost separately: for FMO block ``k`` with
 ``beta_k = |alpha_k|^2`` and period ``N_k``, a set ``F`` of (phase, sensor)
@@ -15,8 +15,8 @@ slots is blind when the stacked rows ``C_hat_{s,k} diag(omega^n)``,
 with ``z_s(F)`` the phases in ``[0, N_k)`` at which sensor ``s`` is *not* in
 ``F``.  This is the Bernoulli case of :func:`kfio.stability._sigma.compute_sigma`
 (the ``rho(P_F) = prod_s (1 - lambda_s)^{z_s}`` of its Kronecker structure;
-seed 001, Corollary 2 for one packet).  It is **not** a theorem of the seeds:
-seed 000 only brackets the region between two bounds.
+Rohr, Marelli and Fu (2014), Corollary 2 for one packet).  It is **not** a theorem of the seeds:
+Liu and Goldsmith (2004) only brackets the region between two bounds.
 
 In the coordinates ``u_s = -log(1 - lambda_s) >= 0`` each pair ``(k, F)`` is a
 half-space: block ``k`` is stable iff for every ``F``
@@ -62,7 +62,7 @@ SEPARATION = mpmath.mpf(10) ** -40
 # compute_sigma needs a channel to run; the blind structure does not depend on
 # it (only the scores do), and every maximal blind set is enumerated when there
 # are several sensors.  For one sensor the largest blind set is what is found,
-# which is the only one that matters for Bernoulli (seed 001, Corollary 2).
+# which is the only one that matters for Bernoulli (Rohr, Marelli and Fu (2014), Corollary 2).
 _PROBE = MarkovChannel("bernoulli", 0, (Fraction(1, 2),), {"arrival_probability": Fraction(1, 2)})
 
 
@@ -242,7 +242,7 @@ def block_constraints(
 
     Examples
     --------
-    Seed 000, Section VI.B: ``A = diag(5/2, 3/2)``, one sensor per state.
+    Liu and Goldsmith (2004), Section VI.B: ``A = diag(5/2, 3/2)``, one sensor per state.
 
     >>> from fractions import Fraction as F
     >>> from kfio.model._types import Sensor

@@ -1,4 +1,4 @@
-"""The exact boundary curve ``lambda_2 = h(lambda_1)`` of two Bernoulli sensors (extension of seed 001).
+"""The exact boundary curve ``lambda_2 = h(lambda_1)`` of two Bernoulli sensors (extension of Rohr, Marelli and Fu (2014)).
 
 With ``u_s = -log(1 - lambda_s)`` every pair (FMO block ``k``, binding blind
 pattern ``F``) of :mod:`kfio.stability._regions_constraints` is the half-plane
@@ -31,8 +31,8 @@ Breakpoints have closed forms: lines ``i`` and ``j`` cross at
 
 and line ``i`` meets ``h = 0`` at ``1 - lambda_1 = beta_i^{-N_i / z_{1,i}}``.
 
-Seed 000 draws only bounds on this curve (its Figs. 4-5); the curve itself is
-the Bernoulli case of MATH.md section 3, "Beyond the seeds", not a theorem of
+Liu and Goldsmith (2004) draws only bounds on this curve (its Figs. 4-5); the curve itself is
+the Bernoulli case of docs/theory.md, "Beyond the seeds", not a theorem of
 the seeds.
 """
 
@@ -231,7 +231,7 @@ def envelope(pieces: Sequence[BoundaryPiece]) -> Envelope:
 
     Examples
     --------
-    Seed 000, Case 1: one piece ``lambda_2 = 1 - 16 / (25 (1 - lambda_1))``,
+    Liu and Goldsmith (2004), Case 1: one piece ``lambda_2 = 1 - 16 / (25 (1 - lambda_1))``,
     active until it meets ``h = 0`` at ``lambda_1 = 9/25``.
 
     >>> import mpmath

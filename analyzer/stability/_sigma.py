@@ -1,4 +1,4 @@
-"""``sigma_k``: the decay rate of the probability of staying blind (seed 001, Lemma 3).
+"""``sigma_k``: the decay rate of the probability of staying blind (Rohr, Marelli and Fu (2014), Lemma 3).
 
 For one reduced FMO block in phase form (:class:`~kfio.structure._phases.PhaseBlock`)
 and one channel per row group,
@@ -8,17 +8,17 @@ and one channel per row group,
     \\sigma = \\limsup_{t\\to\\infty} P(\\text{blind after } t \\text{ steps})^{1/t}
            = \\max_{F \\text{ maximal blind}} \\rho(M_F),
 
-seed 001, eq. (33), in the per-step form of MATH.md section 2: ``M_F`` acts
+Rohr, Marelli and Fu (2014), eq. (33), in the per-step form of docs/theory.md: ``M_F`` acts
 on states (phase ``n`` in ``[0, N)``, joint history ``h``); from ``(n, h)``
 each group ``g`` emits ``g_t`` with probability ``P(g_t | h_g)``, emitting 1 at
 slot ``(n, g)`` only if ``(n, g)`` is in ``F``.  Its ``N``-step product is the
 one-period matrix ``P_F`` of :func:`period_transfer_matrix` and
-``rho(P_F) = rho(M_F)^N = sigma_F^N`` (the ``p_i`` of seed 001, eq. (31)).
+``rho(P_F) = rho(M_F)^N = sigma_F^N`` (the ``p_i`` of Rohr, Marelli and Fu (2014), eq. (31)).
 
 Groups are independent, so ``P_F`` is the Kronecker product of one matrix per
 group (mixed-product property) and ``rho(P_F) = prod_g rho(P_{F,g})``.  For a
 Bernoulli group ``rho(P_{F,g}) = (1 - lambda_g)^{z_g}`` with ``z_g`` the phases
-where ``g`` is not in ``F`` (seed 001, Corollary 2); for a Gilbert-Elliott
+where ``g`` is not in ``F`` (Rohr, Marelli and Fu (2014), Corollary 2); for a Gilbert-Elliott
 group it is a product over the missed phases (:class:`_RenewalScore`).  Blind
 sets themselves come from :mod:`kfio.stability._blind`; with one Markov packet
 :class:`_WindowBound` sharpens its window bound.
@@ -57,13 +57,13 @@ class SigmaResult:
         ``N``: the smallest multiple of ``block.base_period`` that is
         ``>= max(nu, 1)``, ``nu`` the largest channel order.
     sigma:
-        ``limsup_t P(blind after t steps)^(1/t)`` (seed 001, eq. (33)).
+        ``limsup_t P(blind after t steps)^(1/t)`` (Rohr, Marelli and Fu (2014), eq. (33)).
     rho_period:
         ``sigma ** N``: spectral radius of the one-period transfer matrix of
         :attr:`worst_blind_set`.
     degenerate:
         The phase-0 rows of all groups stacked lack full column rank ``L``
-        (seed 001, Definition 5).
+        (Rohr, Marelli and Fu (2014), Definition 5).
     fully_blind:
         All slots together are rank-deficient (an unobservable mode); then
         ``sigma = 1``.
@@ -448,7 +448,7 @@ def period_transfer_matrix(
     ``blind_set`` and end in joint history ``h'``.  The joint history is
     ``h = (h_0, ..., h_{G-1})`` with group 0 most significant (Kronecker
     order), each ``h_g`` in the bit convention of :class:`MarkovChannel`.
-    ``rho(P_F) = sigma_F^N`` (seed 001, eqs. (30)-(31) in per-step form).
+    ``rho(P_F) = sigma_F^N`` (Rohr, Marelli and Fu (2014), eqs. (30)-(31) in per-step form).
 
     Parameters
     ----------
@@ -464,7 +464,7 @@ def period_transfer_matrix(
 
     Examples
     --------
-    Gilbert-Elliott (``q = 1/4``, ``p = 1/2``) on seed 001's Example 1 with
+    Gilbert-Elliott (``q = 1/4``, ``p = 1/2``) on Rohr, Marelli and Fu (2014)'s Example 1 with
     the blind set ``{phase 0}``: ``rho = (1 - q)^2 + p q``.
 
     >>> ch = MarkovChannel("gilbert_elliott", 1, (Fraction(1, 4), Fraction(1, 2)))
@@ -607,7 +607,7 @@ def _bernoulli_exponents(space: SlotSpace, mask: np.ndarray, channels: Sequence[
 def _sigma_values(
     space: SlotSpace, found: _Found, channels: Sequence[MarkovChannel], period: int, exponents: tuple | None
 ) -> tuple[float, float]:
-    """``(sigma, rho_period)``, in closed form where seed 001 gives one (Lemma 2, Corollary 2)."""
+    """``(sigma, rho_period)``, in closed form where Rohr, Marelli and Fu (2014) gives one (Lemma 2, Corollary 2)."""
     if found.worst.all():
         return 1.0, 1.0
     if exponents is not None:
@@ -621,7 +621,7 @@ def _sigma_values(
 
 
 def compute_sigma(block: PhaseBlock, channels: Sequence[MarkovChannel], budget: Budget | None = None) -> SigmaResult:
-    """``sigma_k`` of a reduced FMO block (seed 001, Lemmas 2-3, Corollary 2).
+    """``sigma_k`` of a reduced FMO block (Rohr, Marelli and Fu (2014), Lemmas 2-3, Corollary 2).
 
     .. math::
 
@@ -655,7 +655,7 @@ def compute_sigma(block: PhaseBlock, channels: Sequence[MarkovChannel], budget: 
     InvalidInput
         Wrong number of channels, or a block without columns.
     AssumptionViolation
-        An arrival probability of 0 or 1 (seed 001, Assumption 1).
+        An arrival probability of 0 or 1 (Rohr, Marelli and Fu (2014), Assumption 1).
     BudgetExceeded
         The closure search or the exact checks need more than ``budget``.
     NumericalFailure
@@ -663,7 +663,7 @@ def compute_sigma(block: PhaseBlock, channels: Sequence[MarkovChannel], budget: 
 
     Examples
     --------
-    Seed 001, Example 3: ``A = alpha diag(1, -1)``, ``C = [1 1]``, i.i.d.
+    Rohr, Marelli and Fu (2014), Example 3: ``A = alpha diag(1, -1)``, ``C = [1 1]``, i.i.d.
     arrivals with ``lambda = 3/4``: ``sigma = (1 - lambda)^(1/2)``.
 
     >>> blk = PhaseBlock(2, (0, 1), np.array([[1.0, 1.0]]), ((0,),))

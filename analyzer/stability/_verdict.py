@@ -1,8 +1,8 @@
-"""Seed 001, Theorem 1: the exact stability verdict for any ``A`` and Markov channel.
+"""Rohr, Marelli and Fu (2014), Theorem 1: the exact stability verdict for any ``A`` and Markov channel.
 
 The expected error covariance stays bounded iff ``|alpha_k|^2 sigma_k < 1``
 for every FMO block ``k``, and diverges if some block has ``> 1``; ``= 1`` is
-the theorem's gap, reported as ``boundary``.  Pipeline (MATH.md section 2):
+the theorem's gap, reported as ``boundary``.  Pipeline (docs/theory.md):
 exact eigenstructure (:mod:`kfio.structure._eigen`), FMO blocks in phase form
 (:mod:`kfio.structure._fmo`), ``sigma_k`` over maximal blind phase sets
 (:mod:`kfio.stability._sigma`), exact comparison with 1 (:mod:`kfio.stability._decide`).
@@ -311,7 +311,7 @@ def _bernoulli_exponents(F: frozenset, N: int, groups: int) -> tuple[Fraction, .
 def _critical_probability(
     blocks: Sequence[BlockReport], display: dict[str, str]
 ) -> tuple[float | None, str | None, list[str]]:
-    """Seed 001, Corollary 2 + Theorem 1: ``lambda_c = max_k 1 - beta_k^(-N_k / z_k)``.
+    """Rohr, Marelli and Fu (2014), Corollary 2 + Theorem 1: ``lambda_c = max_k 1 - beta_k^(-N_k / z_k)``.
 
     Exact arithmetic only: for a rational ``beta_k`` the term is ``1 - r`` with
     ``r = beta_k^(-N_k/z_k)`` a :class:`RealRadical` (a rational when it is one,
@@ -395,7 +395,7 @@ def _with_ge_region(
 def analyze(
     request: Request, budget: Budget | None = None, *, fmo: Sequence[FmoBlock] | None = None
 ) -> StabilityReport:
-    """Decide stability of the expected error covariance (seed 001, Theorem 1).
+    """Decide stability of the expected error covariance (Rohr, Marelli and Fu (2014), Theorem 1).
 
     Parameters
     ----------
@@ -418,7 +418,7 @@ def analyze(
     Raises
     ------
     AssumptionViolation
-        A channel probability of 0 or 1 (seed 001, Assumption 1).
+        A channel probability of 0 or 1 (Rohr, Marelli and Fu (2014), Assumption 1).
     BudgetExceeded
         The blind-set search did not finish within the budget.
 
@@ -484,7 +484,7 @@ def analyze(
     if basis != "extension":
         return report
     # per-sensor Bernoulli channels: exact critical probability of each sensor, and for two
-    # sensors the boundary curve (issue 6; an extension of seed 001, see docs/regions.md)
+    # sensors the boundary curve (issue 6; an extension of Rohr, Marelli and Fu (2014), see docs/regions.md)
     regions = region_report(request, budget, report=report, fmo=fmo, sigma=[res for _, res in analyzed])
     return dataclasses.replace(report, regions=regions)
 

@@ -1,4 +1,4 @@
-"""Exact eigenstructure of a rational matrix (MATH.md section 2, step 1).
+"""Exact eigenstructure of a rational matrix (docs/theory.md, step 1).
 
 Everything stays over ``Q`` or a number field ``Q(theta) = Q[x]/(f)``:
 

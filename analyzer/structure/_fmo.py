@@ -1,4 +1,4 @@
-"""FMO blocks (seed 001, Definitions 3-5) and their phase form.
+"""FMO blocks (Rohr, Marelli and Fu (2014), Definitions 3-5) and their phase form.
 
 Eigenvalues ``theta_i ~ theta_j`` when ``theta_i / theta_j`` is a root of
 unity (they have a *finite multiplicative order* up to a constant).  A class
@@ -533,7 +533,7 @@ def build_block(
     certified: bool,
     notes: Sequence[str],
 ) -> FmoBlock:
-    """Reduced FMO block (seed 001, Definition 4) of one class, in phase form."""
+    """Reduced FMO block (Rohr, Marelli and Fu (2014), Definition 4) of one class, in phase form."""
     head = members[0]
     fi0, ri0 = head
     texts = tuple(_eigen_text(factors[fi], ri) for fi, ri in members)

@@ -1,12 +1,12 @@
 """A reduced FMO block in phase form: the input of the sigma computation.
 
-Seed 001, Definition 4 reduces an FMO block to ``(A_hat, C_hat)`` with
+Rohr, Marelli and Fu (2014), Definition 4 reduces an FMO block to ``(A_hat, C_hat)`` with
 ``A_hat = alpha * diag(omega_1, ..., omega_L)``, one ``omega_j`` per Jordan
 chain, every ``omega_j`` a root of unity.  With ``N0`` the least common order
 of the ``omega_j``, write ``omega_j = exp(2 pi i e_j / N0)``.  The row block
 seen at phase ``n`` (time ``t = n mod N``) is
 
-    r_n = C_hat diag(omega^n)           (MATH.md section 2, "sigma_k")
+    r_n = C_hat diag(omega^n)           (docs/theory.md, "sigma_k")
 
 and a set ``F`` of (phase, row group) slots is *blind* when the stacked rows
 ``{r_n[group rows] : (n, group) in F}`` do not have full column rank ``L``.
@@ -36,7 +36,7 @@ class PhaseBlock:
     ----------
     base_period:
         ``N0 >= 1``, the least common multiple of the orders of the ``omega_j``.
-        The period ``N`` of seed 001 is the smallest multiple of ``N0`` that is
+        The period ``N`` of Rohr, Marelli and Fu (2014) is the smallest multiple of ``N0`` that is
         ``>= max(nu, 1)``; rows depend on ``n mod N0`` only.
     exponents:
         ``e_j`` in ``[0, N0)``, one per column of ``c_hat``.

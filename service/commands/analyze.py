@@ -1,4 +1,4 @@
-"""``kfio analyze FILE [--json] [--ge-grid K] [--ge-plot PNG]``: the exact verdict of seed 001, Theorem 1."""
+"""``kfio analyze FILE [--json] [--ge-grid K] [--ge-plot PNG]``: the exact verdict of Rohr, Marelli and Fu (2014), Theorem 1."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ from ..io import add_request_arguments, dump_json, run_request_command
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "analyze",
-        help="exact stability verdict (seed 001, Theorem 1)",
+        help="exact stability verdict (Rohr, Marelli and Fu (2014), Theorem 1)",
         description="Decide whether the expected error covariance stays bounded. "
         "Exit 0 stable, 1 unstable, 3 boundary, 2 invalid input, 4 budget exceeded, 5 numerical failure.",
     )

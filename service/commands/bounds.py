@@ -1,4 +1,4 @@
-"""``kfio bounds FILE [--json] [--grid K] [--horizon N] [--tolerance T]``: the bounds of MATH.md section 3.
+"""``kfio bounds FILE [--json] [--grid K] [--horizon N] [--tolerance T]``: the bounds of docs/theory.md
 
 Takes the same request JSON as ``kfio analyze``.  Flags override
 ``options.bounds`` of the request.  Exit 0 on success, 2 on invalid input
@@ -16,9 +16,9 @@ from ..io import add_request_arguments, dump_json, run_request_command
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "bounds",
-        help="bounds on the critical arrival probability and the expected error covariance (seeds 004, 000, 002)",
+        help="bounds on the critical arrival probability and the expected error covariance (Sinopoli et al. 2004; Liu and Goldsmith 2004; Rohr, Marelli and Fu 2010)",
         description="Lower and upper bounds on the critical arrival probability (closed form and LMI, "
-        "certificates re-checked), S_bar <= lim E[P] <= V_bar at the operating point, seed 002's P_hat_N, "
+        "certificates re-checked), S_bar <= lim E[P] <= V_bar at the operating point, Rohr, Marelli and Fu (2010)'s P_hat_N, "
         "and for two sensors a region map. Exit 0 on success, 2 invalid input, 4 budget exceeded.",
     )
     add_request_arguments(p)

@@ -1,7 +1,7 @@
 """``kfio simulate FILE [--steps T] [--trajectories M] [--seed S] [--json] [--exact]``.
 
-Monte Carlo of the stochastic Riccati recursion (seed 001, eq. (2)) and,
-with ``--exact``, the exact ``E[P_t]`` of seed 001, eq. (7) for small ``t``.
+Monte Carlo of the stochastic Riccati recursion (Rohr, Marelli and Fu (2014), eq. (2)) and,
+with ``--exact``, the exact ``E[P_t]`` of Rohr, Marelli and Fu (2014), eq. (7) for small ``t``.
 Flags override ``options.simulate`` of the request; an invalid value is
 reported at its JSON pointer there (``/options/simulate/steps`` for
 ``--steps``).  Exit 0 ok, 2 invalid input, 4 budget exceeded.

@@ -1,4 +1,4 @@
-"""The bounds report on the reference cases of MATH.md section 4, and its soundness against the exact verdict.
+"""The bounds report on the reference cases of docs/theory.md, and its soundness against the exact verdict.
 
 Sources are given per case.  Tolerances: the bisection runs to 1e-6; "the bounds
 coincide" is asserted as ``lambda_upper - lambda_lower <= 1e-4`` (issue 3).
@@ -16,9 +16,9 @@ from kfio import Budget, BudgetExceeded, analyze, load_request
 from kfio.mare._compute import compute_bounds
 
 Q2, Q3 = [[20, 0], [0, 20]], [[20, 0, 0], [0, 20, 0], [0, 0, 20]]
-SCALAR = {"A": [[-1.25]], "C": [[1]], "Q": [[1]], "R": [[2.5]]}  # seed 004 Fig. 1, seed 002 eq. 35
-THREE = {"A": [[1.25, 1, 0], [0, 0.9, 7], [0, 0, 0.6]], "C": [[1, 0, 2]], "Q": Q3, "R": [[2.5]]}  # seed 004 Fig. 2
-TWO = {"A": [[1.25, 0], [1, 1.1]], "C": [[1, 1]], "Q": Q2, "R": [[2.5]]}  # seed 004 Fig. 3, seed 002 eq. 37
+SCALAR = {"A": [[-1.25]], "C": [[1]], "Q": [[1]], "R": [[2.5]]}  # Sinopoli et al. (2004) Fig. 1, Rohr, Marelli and Fu (2010) eq. 35
+THREE = {"A": [[1.25, 1, 0], [0, 0.9, 7], [0, 0, 0.6]], "C": [[1, 0, 2]], "Q": Q3, "R": [[2.5]]}  # Sinopoli et al. (2004) Fig. 2
+TWO = {"A": [[1.25, 0], [1, 1.1]], "C": [[1, 1]], "Q": Q2, "R": [[2.5]]}  # Sinopoli et al. (2004) Fig. 3, Rohr, Marelli and Fu (2010) eq. 37
 
 
 def bernoulli(lam) -> dict:
@@ -53,12 +53,12 @@ def interval(rep, s: int = 0) -> tuple[float, float | None]:
     return c.lower, None if c.upper.value is None else float(c.upper.value)
 
 
-# --- one packet: seed 004, seed 002 ------------------------------------------------------------
+# --- one packet: Sinopoli et al. (2004), Rohr, Marelli and Fu (2010) ------------------------------------------------------------
 
 
 @pytest.mark.parametrize("system", [SCALAR, THREE], ids=["scalar", "3x3"])
 def test_bounds_coincide_at_036(system) -> None:
-    # Seed 004 Sec. IV: "C is invertible" (scalar) and "A has a single unstable eigenvalue" (3x3): lambda_c = 0.36.
+    # Sinopoli et al. (2004) Sec. IV: "C is invertible" (scalar) and "A has a single unstable eigenvalue" (3x3): lambda_c = 0.36.
     rep = compute_bounds(request(system, bernoulli(0.4), horizon=2))
     lower, upper = interval(rep)
     assert lower == pytest.approx(0.36, abs=1e-12)
@@ -68,13 +68,13 @@ def test_bounds_coincide_at_036(system) -> None:
 
 
 def test_three_state_variance_threshold() -> None:
-    # Seed 002 Sec. VI-C: "if lambda is smaller than 0.59 ... sigma_N^2 ... infinite": 1 - 1/1.25^4 = 0.5904.
+    # Rohr, Marelli and Fu (2010) Sec. VI-C: "if lambda is smaller than 0.59 ... sigma_N^2 ... infinite": 1 - 1/1.25^4 = 0.5904.
     rep = compute_bounds(request(THREE, bernoulli(0.4), horizon=1))
     assert rep.variance_threshold == pytest.approx(0.5904, abs=1e-12)
 
 
 def test_two_state_bounds_differ() -> None:
-    # Seed 004 Fig. 3; seed 002 Sec. VI-A reads the upper bound as "0.48". We find 0.471075, confirmed by the
+    # Sinopoli et al. (2004) Fig. 3; Rohr, Marelli and Fu (2010) Sec. VI-A reads the upper bound as "0.48". We find 0.471075, confirmed by the
     # solver-free route in tests/test_lmi.py (min over K of rho(L_K) crosses 1 there).
     lower, upper = interval(compute_bounds(request(TWO, bernoulli(0.5), horizon=1)))
     assert lower == pytest.approx(0.36, abs=1e-12)
@@ -82,8 +82,8 @@ def test_two_state_bounds_differ() -> None:
 
 
 def test_p_hat_percentages_of_seed002() -> None:
-    # Seed 002 Sec. VI-A: improvement of P_hat_20 over P_hat_1. System (35) at lambda = 0.4: the seed says 12%,
-    # we find 12.13%. Systems (36) at 0.4 and (37) at 0.5 do NOT reproduce (MATH.md): the seed says 73% and 68%,
+    # Rohr, Marelli and Fu (2010) Sec. VI-A: improvement of P_hat_20 over P_hat_1. System (35) at lambda = 0.4: the seed says 12%,
+    # we find 12.13%. Systems (36) at 0.4 and (37) at 0.5 do NOT reproduce (docs/theory.md): the seed says 73% and 68%,
     # we find 61.29% and 81.55% (traces 1988950.8 -> 769951.8 and 7463.85 -> 1377.47; docs/bounds.md).
     # Here horizon 8 for speed (the 20 cases are in the slow test below): 10.25%, 54.90%, 78.82%.
     for system, lam, pct in [(SCALAR, 0.4, 10.246), (THREE, 0.4, 54.905), (TWO, 0.5, 78.822)]:
@@ -108,7 +108,7 @@ CONTAINMENT = {
     "scalar": SCALAR,
     "3x3": THREE,
     "2x2": TWO,
-    # MATH.md section 4: A = alpha diag(1, -1), C = [1 1] is degenerate, lambda_c = 1 - alpha^-4 > 1 - alpha^-2.
+    # docs/theory.md: A = alpha diag(1, -1), C = [1 1] is degenerate, lambda_c = 1 - alpha^-4 > 1 - alpha^-2.
     "degenerate": {"A": [[1.1, 0], [0, -1.1]], "C": [[1, 1]], "Q": [[1, 0], [0, 1]], "R": [[1]]},
     # rotation by 90 degrees, only the first coordinate measured: degenerate with period 2 as well.
     "rotation": {"A": [[0, -1.2], [1.2, 0]], "C": [[1, 0]], "Q": [[1, 0], [0, 1]], "R": [[1]]},
@@ -137,14 +137,14 @@ def test_degenerate_example_bounds_are_strict() -> None:
     assert upper >= 1 - 1.1**-4
 
 
-# --- several packets: seed 000 -------------------------------------------------------------------
+# --- several packets: Liu and Goldsmith (2004) -------------------------------------------------------------------
 
 A_CASE = [[1.25, 0], [1, 1.1]]
 
 
 @pytest.mark.parametrize("l1", ["0", "0.2", "0.5"])
 def test_seed000_case1_bounds_coincide_with_the_closed_form(l1) -> None:
-    # Seed 000 Sec. VI-A Case 1 (C_1, C_2 invertible): lambda_2c = max(0, 1 - 1/(1.25^2 (1 - lambda_1))).
+    # Liu and Goldsmith (2004) Sec. VI-A Case 1 (C_1, C_2 invertible): lambda_2c = max(0, 1 - 1/(1.25^2 (1 - lambda_1))).
     rep = compute_bounds(two_sensors(A_CASE, [[1, 0], [0, 1]], [[1, 0], [1, 1]], l1, "0.5"))
     closed = max(0.0, 1 - 1 / (1.5625 * (1 - float(Fraction(l1)))))
     lower, upper = interval(rep, 1)
@@ -153,7 +153,7 @@ def test_seed000_case1_bounds_coincide_with_the_closed_form(l1) -> None:
 
 
 def test_seed000_case2_single_unstable_mode_bounds_meet() -> None:
-    # Seed 000 Sec. VI-A Case 2: A = [[1.25, 0], [1, 0.9]], C_1 = [1 0], C_2 = [0 1].
+    # Liu and Goldsmith (2004) Sec. VI-A Case 2: A = [[1.25, 0], [1, 0.9]], C_1 = [1 0], C_2 = [0 1].
     rep = compute_bounds(two_sensors([[1.25, 0], [1, 0.9]], [[1, 0]], [[0, 1]], "0.2", "0.3"))
     for s in (0, 1):
         lower, upper = interval(rep, s)
@@ -161,7 +161,7 @@ def test_seed000_case2_single_unstable_mode_bounds_meet() -> None:
 
 
 def test_seed000_diagonal_lmi_tight_lower_bound_loose() -> None:
-    # Seed 000 Sec. VI-B: A = diag(2.5, 1.5), C = I split by rows: the exact region is lambda_1 > 0.84, lambda_2 > 5/9;
+    # Liu and Goldsmith (2004) Sec. VI-B: A = diag(2.5, 1.5), C = I split by rows: the exact region is lambda_1 > 0.84, lambda_2 > 5/9;
     # the LMI bound is tight there, the lower bound is not.
     rep = compute_bounds(two_sensors([[2.5, 0], [0, 1.5]], [[1, 0]], [[0, 1]], "0.9", "0.9"))
     lower1, upper1 = interval(rep, 0)
@@ -172,7 +172,7 @@ def test_seed000_diagonal_lmi_tight_lower_bound_loose() -> None:
 
 
 def test_seed000_undecided_point() -> None:
-    # Seed 000 Sec. VI-C: A = [[1.25, 0], [1, 1.1]], C_1 = [1 0], C_2 = [1 1], lambda_1 = lambda_2 = 0.25 is undecided.
+    # Liu and Goldsmith (2004) Sec. VI-C: A = [[1.25, 0], [1, 1.1]], C_1 = [1 0], C_2 = [1 1], lambda_1 = lambda_2 = 0.25 is undecided.
     rep = compute_bounds(two_sensors(A_CASE, [[1, 0]], [[1, 1]], "0.25", "0.25"))
     assert rep.verdict == "undecided"
     assert rep.to_dict()["operating_point"]["certificate"] is None

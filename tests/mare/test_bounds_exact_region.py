@@ -23,5 +23,5 @@ def test_bounds_grid_has_exact_labels_consistent_with_the_bounds():
                 assert e in ("unstable", "boundary")
             decided += b != "undecided"
     assert decided < 36 and all(e in ("stable", "unstable", "boundary") for r in exact["labels"] for e in r)
-    # seed 000 Sec. VI-B: exactly stable iff lambda_1 > 21/25 and lambda_2 > 5/9
+    # Liu and Goldsmith (2004) Sec. VI-B: exactly stable iff lambda_1 > 21/25 and lambda_2 > 5/9
     assert exact["boundary"]["envelope"]["lambda_1_min_exact"] == "21/25"

@@ -41,7 +41,7 @@ def test_lmi_is_dpp_and_has_the_theorem5_size() -> None:
     lmi = StabilityLMI(3, [1])
     assert lmi.is_dpp()
     assert lmi.size == 9  # [Y, sqrt(lam)(YA + ZC), sqrt(1-lam) YA] over three block rows
-    assert StabilityLMI(2, [1, 1, 2]).size == 2 * 5  # seed 000 eq. 20: 2^2 + 1 blocks
+    assert StabilityLMI(2, [1, 1, 2]).size == 2 * 5  # Liu and Goldsmith (2004) eq. 20: 2^2 + 1 blocks
 
 
 def test_balancing_scaling_is_powers_of_two_and_balances() -> None:
@@ -91,7 +91,7 @@ def test_exact_check_sees_what_rounding_hides() -> None:
 
 @pytest.mark.parametrize("recenter", [True, False])
 def test_coinciding_bounds_within_1e4_on_seed004_3x3(recenter) -> None:
-    # Seed 004 Sec. IV, "A has a single unstable eigenvalue": lambda_c = 0.36 and the bounds coincide.
+    # Sinopoli et al. (2004) Sec. IV, "A has a single unstable eigenvalue": lambda_c = 0.36 and the bounds coincide.
     s = search_one(THREE_A, THREE_C, recenter=recenter)
     ub = s.bisect([Fraction(1)], 0, 0.36, 1e-6)
     assert ub.certificate.method == "exact_rational"
@@ -120,8 +120,8 @@ def min_closed_loop_radius(A, C, lam, starts=40, seed=0) -> float:
 
 
 def test_lambda_upper_of_seed004_2x2_by_an_independent_route() -> None:
-    # Seed 004 Fig. 3 / seed 002 Sec. VI: A = [[1.25, 0], [1, 1.1]], C = [1 1]; seed 002 reads lambda_upper ~ 0.48.
-    # The LMI is feasible iff some K makes L_K(X) = (1-lam) A X A' + lam F X F' Schur stable (seed 004 Thm 5(b)),
+    # Sinopoli et al. (2004) Fig. 3 / Rohr, Marelli and Fu (2010) Sec. VI: A = [[1.25, 0], [1, 1.1]], C = [1 1]; Rohr, Marelli and Fu (2010) reads lambda_upper ~ 0.48.
+    # The LMI is feasible iff some K makes L_K(X) = (1-lam) A X A' + lam F X F' Schur stable (Sinopoli et al. (2004) Thm 5(b)),
     # so minimizing rho(L_K) over K directly (no LMI, no solver) must cross 1 at the same lambda: 0.47107.
     ub = search_one(TWO_A, TWO_C).bisect([Fraction(1)], 0, 0.36, 1e-6)
     lam_up = float(ub.value)
@@ -148,7 +148,7 @@ def test_v_bar_sdp_agrees_with_the_iteration(A, C, Q, R, lam) -> None:
 
 
 def test_v_bar_sdp_two_packets_agrees_with_the_iteration() -> None:
-    # Seed 000 eq. 21 (Case 1 system of Sec. VI-A) at (lambda_1, lambda_2) = (0.3, 0.4).
+    # Liu and Goldsmith (2004) eq. 21 (Case 1 system of Sec. VI-A) at (lambda_1, lambda_2) = (0.3, 0.4).
     A = TWO_A
     C = np.array([[1.0, 0], [0, 1], [1, 0], [1, 1]])
     model = riccati.arrival_model(A, C, 20 * np.eye(2), 2.5 * np.eye(4), [[0, 1], [2, 3]], [0.3, 0.4])
@@ -158,7 +158,7 @@ def test_v_bar_sdp_two_packets_agrees_with_the_iteration() -> None:
 
 
 def test_seed004_theorem6_block_without_q_is_a_typo() -> None:
-    # As printed: [[A V A' - V, sqrt(lam) A V C'], [., C V C' + R]] >= 0. Without Q it is not V_bar (seed 000 has Q).
+    # As printed: [[A V A' - V, sqrt(lam) A V C'], [., C V C' + R]] >= 0. Without Q it is not V_bar (Liu and Goldsmith (2004) has Q).
     A, C, R, lam = np.array([[-1.25]]), np.array([[1.0]]), np.array([[2.5]]), 0.4
     V = cp.Variable((1, 1), symmetric=True)
     s = np.sqrt(lam)
@@ -170,7 +170,7 @@ def test_seed004_theorem6_block_without_q_is_a_typo() -> None:
 
 
 def test_two_packet_search_matches_seed000_case1_closed_form() -> None:
-    # Seed 000 Sec. VI-A Case 1: C_1 = I, C_2 = [[1, 0], [1, 1]] both invertible, lambda_2c = max(0, 1 - 1/(1.25^2 (1 - lambda_1))).
+    # Liu and Goldsmith (2004) Sec. VI-A Case 1: C_1 = I, C_2 = [[1, 0], [1, 1]] both invertible, lambda_2c = max(0, 1 - 1/(1.25^2 (1 - lambda_1))).
     C = np.array([[1.0, 0], [0, 1], [1, 0], [1, 1]])
     Cq = exact(C)
     groups = [[0, 1], [2, 3]]

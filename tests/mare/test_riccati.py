@@ -2,8 +2,8 @@
 
 Four kinds of checks: substitute-back (residuals), closed forms worked by hand,
 agreement between independent routes (SciPy's DARE, a literal transcription
-of seed 000 eq. 12, a per-sequence recursion of seed 002 eq. 4), and the
-monotonicity facts the seeds prove (seed 004 Lemma 1, seed 002 Theorem 1).
+of Liu and Goldsmith (2004) eq. 12, a per-sequence recursion of Rohr, Marelli and Fu (2010) eq. 4), and the
+monotonicity facts the seeds prove (Sinopoli et al. (2004) Lemma 1, Rohr, Marelli and Fu (2010) Theorem 1).
 """
 
 from __future__ import annotations
@@ -63,12 +63,12 @@ def test_v_bar_is_a_fixed_point_of_the_mare(system, lam) -> None:
     scale = np.linalg.norm(V)
     assert np.linalg.norm(riccati.g_lambda(V, A, C, Q, R, lam) - V) <= 1e-11 * scale
     assert np.allclose(V, V.T)
-    assert np.linalg.eigvalsh(V)[0] > 0  # seed 004 Lemma 1(g)
+    assert np.linalg.eigvalsh(V)[0] > 0  # Sinopoli et al. (2004) Lemma 1(g)
 
 
 @pytest.mark.parametrize("system", [SCALAR, THREE, TWO, TWO_OUT])
 def test_v_bar_at_lambda_one_is_the_kalman_dare(system) -> None:
-    # Every packet arrives: the MARE is the ordinary filter Riccati equation (seed 004, proof of Theorem 2).
+    # Every packet arrives: the MARE is the ordinary filter Riccati equation (Sinopoli et al. (2004), proof of Theorem 2).
     A, C, Q, R = system
     P = scipy.linalg.solve_discrete_are(A.T, C.T, Q, R)
     np.testing.assert_allclose(riccati.v_bar(A, C, Q, R, 1.0), P, rtol=1e-9)
@@ -92,7 +92,7 @@ def test_v_bar_is_none_below_the_lower_bound() -> None:
 
 
 def test_v_bar_is_none_when_the_iteration_diverges_between_the_bounds() -> None:
-    # The 2x2 system of seed 004 Fig. 3: lambda_upper ~ 0.471 > 0.45 > 0.36 = lambda_lower.
+    # The 2x2 system of Sinopoli et al. (2004) Fig. 3: lambda_upper ~ 0.471 > 0.45 > 0.36 = lambda_lower.
     A, C, Q, R = TWO
     res = riccati.solve_v_bar(riccati.one_packet_model(A, C, Q, R, 0.45))
     assert res.matrix is None and "diverges" in res.reason
@@ -107,7 +107,7 @@ def test_v_bar_iteration_brackets_the_fixed_point() -> None:
 
 @pytest.mark.parametrize("system,lam", [(SCALAR, 0.4), (THREE, 0.4), (TWO, 0.5)])
 def test_s_bar_below_v_bar(system, lam) -> None:
-    # Seed 004 Theorem 4: S_bar <= lim E[P_t] <= V_bar.
+    # Sinopoli et al. (2004) Theorem 4: S_bar <= lim E[P_t] <= V_bar.
     A, C, Q, R = system
     assert psd_order(riccati.s_bar(A, Q, 1 - lam), riccati.v_bar(A, C, Q, R, lam))
 
@@ -122,11 +122,11 @@ def test_policy_evaluation_is_an_upper_bound_of_v_bar() -> None:
     assert riccati.policy_evaluation(model, (np.zeros((3, 1)),)) is None  # open loop at 0.5 is not stable
 
 
-# --- the partial-loss map (seed 000) ----------------------------------------------------------
+# --- the partial-loss map (Liu and Goldsmith (2004)) ----------------------------------------------------------
 
 
 def seed000_eq12(X, A, C1, C2, Q, R, l1, l2):
-    """Seed 000 eq. 12 transcribed literally (two packets)."""
+    """Liu and Goldsmith (2004) eq. 12 transcribed literally (two packets)."""
     C = np.vstack([C1, C2])
     m1 = C1.shape[0]
     R11, R22 = R[:m1, :m1], R[m1:, m1:]
@@ -176,7 +176,7 @@ _small = st.floats(-1.5, 1.5, allow_nan=False)
     lam2=st.floats(0, 1),
 )
 def test_g_is_monotone_in_x_and_decreasing_in_lambda(a, x, d, lam, lam2) -> None:
-    # Seed 004 Lemma 1(c) and 1(d); seed 000 Lemmas 2-3.
+    # Sinopoli et al. (2004) Lemma 1(c) and 1(d); Liu and Goldsmith (2004) Lemmas 2-3.
     A = np.array(a).reshape(2, 2)
     C = np.array([[1.0, 0.5]])
     Q, R = np.eye(2), np.array([[1.0]])
@@ -189,11 +189,11 @@ def test_g_is_monotone_in_x_and_decreasing_in_lambda(a, x, d, lam, lam2) -> None
     assert psd_order(riccati.g_lambda(Y, A, C, Q, R, hi), riccati.g_lambda(Y, A, C, Q, R, lo), 1e-9)
 
 
-# --- seed 002: g_N and P_hat_N ---------------------------------------------------------------
+# --- Rohr, Marelli and Fu (2010): g_N and P_hat_N ---------------------------------------------------------------
 
 
 def g_n_by_recursion(X, A, C, Q, R, lam, N):
-    """Seed 002 eqs. 4 and 11, one arrival sequence at a time (the naive route)."""
+    """Rohr, Marelli and Fu (2010) eqs. 4 and 11, one arrival sequence at a time (the naive route)."""
     total = np.zeros_like(X)
     for seq in itertools.product((0, 1), repeat=N):
         P, prob = X, 1.0
@@ -235,7 +235,7 @@ def test_p_hat_one_is_v_bar_and_p_hat_is_a_fixed_point() -> None:
 
 @pytest.mark.parametrize("system,lam", [(SCALAR, 0.4), (THREE, 0.4), (TWO, 0.5), (TWO_OUT, 0.6)])
 def test_p_hat_monotone_subsequences(system, lam) -> None:
-    # Seed 002 Theorem 1, eq. 18: P_hat_{cN} <= P_hat_N <= P_hat_1.
+    # Rohr, Marelli and Fu (2010) Theorem 1, eq. 18: P_hat_{cN} <= P_hat_N <= P_hat_1.
     A, C, Q, R = system
     seq = p_hat_sequence(A, C, Q, R, lam, [1, 2, 3, 4, 6, 8])
     for N, cN in [(1, 2), (2, 4), (4, 8), (1, 3), (3, 6), (2, 6), (1, 8)]:
@@ -243,7 +243,7 @@ def test_p_hat_monotone_subsequences(system, lam) -> None:
 
 
 def test_p_hat_scalar_improvement_at_20_matches_seed002() -> None:
-    # Seed 002, Section VI-A, system (35) at lambda = 0.4: "the improvement of P_hat_20 over P_hat_1 is 12%".
+    # Rohr, Marelli and Fu (2010), Section VI-A, system (35) at lambda = 0.4: "the improvement of P_hat_20 over P_hat_1 is 12%".
     # We find 12.13% (trace 39.5123 -> 34.7181); cross-checked in tests/test_bounds.py against the report.
     A, C, Q, R = SCALAR
     seq = p_hat_sequence(A, C, Q, R, 0.4, [1, 20])

@@ -18,7 +18,7 @@ from kfio.service.settings import Settings
 from support.live_server import JSON_HEADERS
 
 PROBLEM = "application/problem+json"
-SCALAR = REQUEST_EXAMPLES["seed004-scalar"]["value"]  # seed 004: lambda_c = 9/25
+SCALAR = REQUEST_EXAMPLES["seed004-scalar"]["value"]  # Sinopoli et al. (2004): lambda_c = 9/25
 
 
 def wait_ready(client: TestClient, polls: int = 1200) -> None:
@@ -85,7 +85,7 @@ def test_answer_is_exactly_the_cli_report(
 
 
 def test_numbers_stay_exact(client: TestClient) -> None:
-    # lambda = 0.36 is exactly lambda_c = 9/25 for seed 004's scalar system; read
+    # lambda = 0.36 is exactly lambda_c = 9/25 for Sinopoli et al. (2004)'s scalar system; read
     # as a double (0.35999999999999998668...) it would be a different verdict.
     for lam in (0.36, "9/25", "0.360"):
         r = client.post("/v1/analyze", json=with_channel(SCALAR, arrival_probability=lam))

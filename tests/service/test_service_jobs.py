@@ -19,7 +19,7 @@ from kfio.service.settings import Settings
 
 from support.live_server import slow_request
 
-SEED_2X2 = REQUEST_EXAMPLES["seed002-2x2"]["value"]  # seed 004's 2x2 system: stable, lambda_c = 9/25
+SEED_2X2 = REQUEST_EXAMPLES["seed002-2x2"]["value"]  # Sinopoli et al. (2004)'s 2x2 system: stable, lambda_c = 9/25
 PROBLEM = "application/problem+json"
 
 

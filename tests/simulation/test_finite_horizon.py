@@ -1,9 +1,9 @@
-"""Exact finite-horizon E[P_t] (seed 001, eq. (7)) against independent routes.
+"""Exact finite-horizon E[P_t] (Rohr, Marelli and Fu (2014), eq. (7)) against independent routes.
 
 Routes: hand-worked scalar values; a per-sequence brute force written from
 the textbook formula (explicit inverse, exact Fraction probabilities, no
 batching); the chunked vs. unchunked enumeration; the closed-form growth
-rates of seed 001 (Corollary 1, Example 3) and our own derivation for
+rates of Rohr, Marelli and Fu (2014) (Corollary 1, Example 3) and our own derivation for
 Example 1 under a Gilbert-Elliott channel.
 """
 
@@ -78,7 +78,7 @@ def _initial(ch: MarkovChannel, how: str) -> dict[int, float]:
 
 
 def brute_force(req: Request, steps: int, P0: np.ndarray, how: str = "stationary") -> np.ndarray:
-    """sum over S of P(Gamma_t = S) Psi(P0, S), each sequence separately (seed 001, eq. (7))."""
+    """sum over S of P(Gamma_t = S) Psi(P0, S), each sequence separately (Rohr, Marelli and Fu (2014), eq. (7))."""
     A, Q, C, R = (to_float(m) for m in (req.system.A, req.system.Q, req.system.C, req.system.R))
     if isinstance(req.channel, PerSensorChannel):
         chans = [req.channel.for_sensor(s.name) for s in req.system.sensors]
@@ -177,10 +177,10 @@ def test_limits_and_bad_input() -> None:
 
 # --- growth of the exact mean against closed-form rates ------------------------------------------------
 #
-# For an unstable system trace E[P_t] ~ c t^k rate^t with rate = max_k |alpha_k|^2 sigma_k (seed 001,
+# For an unstable system trace E[P_t] ~ c t^k rate^t with rate = max_k |alpha_k|^2 sigma_k (Rohr, Marelli and Fu (2014),
 # Theorem 1), so the log-slope over the last `window` steps of a 20-step horizon estimates log(rate)
 # with an error that decays like the ratio of the two largest growth terms (and k/t for Jordan
-# factors; none here).  On these cases that error is below 0.04 (largest: seed 004's system, whose
+# factors; none here).  On these cases that error is below 0.04 (largest: Sinopoli et al. (2004)'s system, whose
 # stable eigenvalue 0.9 couples into the unstable one); we allow 0.06, while the alternatives the
 # test must exclude (a stable verdict, log 1 = 0, or the seed's erroneous sigma below) are >= 0.2 away.
 GROWTH_TOL = 0.06
@@ -197,13 +197,13 @@ def growth(req: Request, horizon: int = HORIZON) -> float:
 @pytest.mark.parametrize(
     ("system", "channel", "rate"),
     [
-        # seed 001, Corollary 1 (non-degenerate): |a|^2 (1 - lambda) and |a|^2 (1 - q)
+        # Rohr, Marelli and Fu (2014), Corollary 1 (non-degenerate): |a|^2 (1 - lambda) and |a|^2 (1 - q)
         ({"A": [[1.5]], "C": [[1]], "Q": [[1]], "R": [[1]]}, bern(0.3), 2.25 * 0.7),
         ({"A": [[1.5]], "C": [[1]], "Q": [[1]], "R": [[1]]}, ge(0.2, 0.3), 2.25 * 0.7),
-        # seed 004's 3x3 system: one unstable eigenvalue 1.25
+        # Sinopoli et al. (2004)'s 3x3 system: one unstable eigenvalue 1.25
         (SEED004, bern(0.1), 1.5625 * 0.9),
         (SEED004, bern(0.2), 1.5625 * 0.8),
-        # seed 001, Example 3: A = 2 diag(1, -1), C = [1 1], degenerate, sigma = (1 - lambda)^(1/2)
+        # Rohr, Marelli and Fu (2014), Example 3: A = 2 diag(1, -1), C = [1 1], degenerate, sigma = (1 - lambda)^(1/2)
         ({"A": [[2, 0], [0, -2]], "C": [[1, 1]], "Q": [[1, 0], [0, 1]], "R": [[1]]}, bern(0.8), 4 * math.sqrt(0.2)),
     ],
 )
@@ -212,9 +212,9 @@ def test_unstable_growth_matches_closed_form(system: dict, channel: dict, rate: 
 
 
 def test_example1_gilbert_elliott_sigma_and_seed_erratum() -> None:
-    """Seed 001, Example 2 (A = alpha diag(1, -1), C = [1 1], Gilbert-Elliott).
+    """Rohr, Marelli and Fu (2014), Example 2 (A = alpha diag(1, -1), C = [1 1], Gilbert-Elliott).
 
-    Our derivation (MATH.md, M_F over (phase, last arrival)): both maximal blind sets {0} and {1}
+    Our derivation (docs/theory.md, M_F over (phase, last arrival)): both maximal blind sets {0} and {1}
     give a rank-one two-step matrix with eigenvalue (1 - q)^2 + p q, so
     sigma = ((1 - q)^2 + p q)^(1/2).  The seed prints D_3 = 1 - q (it uses P(loss | arrival) = 1 - q
     where it is p) and hence sigma = max(1 - q, (1 - q)^2 + p q)^(1/2).  With p = 0.05, q = 0.5,

@@ -1,15 +1,15 @@
-"""S_bar <= lim E[P_t] <= P_hat_N <= V_bar (seed 004, eq. (23); seed 002, eq. (18)), by simulation.
+"""S_bar <= lim E[P_t] <= P_hat_N <= V_bar (Sinopoli et al. (2004), eq. (23); Rohr, Marelli and Fu (2010), eq. (18)), by simulation.
 
-Bernoulli, one packet, above the threshold and above seed 002's variance condition
+Bernoulli, one packet, above the threshold and above Rohr, Marelli and Fu (2010)'s variance condition
 ``lambda > 1 - 1/rho(A)^4`` (so trace(P_t) has a finite variance and the Monte Carlo band is
 meaningful).  ``lim E[P_t]`` is checked two ways: the exact enumerated ``E[P_20]`` (levelled off:
-it changes by less than 0.1% per step at t = 20, the slowest case being seed 004's 3x3 system whose
+it changes by less than 0.1% per step at t = 20, the slowest case being Sinopoli et al. (2004)'s 3x3 system whose
 stable eigenvalue 0.9 relaxes like 0.81^t) and the Monte Carlo mean at t = 300 (within 4 standard
 errors of ``E[P_20]`` and inside the sandwich).
 
 The bounds come from two routes: ``kfio.mare._riccati`` (another engineer's module; skipped while it
 does not exist) and local reference computations written here from the seeds' definitions
-(S_bar: Lyapunov equation; V_bar: the MARE iterated from 0, seed 004 Theorem 4; P_hat_N: seed 002's
+(S_bar: Lyapunov equation; V_bar: the MARE iterated from 0, Sinopoli et al. (2004) Theorem 4; P_hat_N: Rohr, Marelli and Fu (2010)'s
 recursion (22), with g_N evaluated by our own enumeration).  When both exist they must agree.
 """
 
@@ -55,12 +55,12 @@ def make(system: dict, lam: float, simulate_opts: dict | None = None) -> Request
 
 
 def local_s_bar(A: np.ndarray, Q: np.ndarray, lam: float) -> np.ndarray:
-    """S = (1 - lambda) A S A' + Q (seed 004, Theorem 4 lower bound)."""
+    """S = (1 - lambda) A S A' + Q (Sinopoli et al. (2004), Theorem 4 lower bound)."""
     return solve_discrete_lyapunov(np.sqrt(1 - lam) * A, Q)
 
 
 def local_v_bar(A, C, Q, R, lam: float, iters: int = 100_000) -> np.ndarray:
-    """Fixed point of the MARE g_lambda, iterated from 0 (monotone, seed 004 Theorem 4)."""
+    """Fixed point of the MARE g_lambda, iterated from 0 (monotone, Sinopoli et al. (2004) Theorem 4)."""
     X = np.zeros_like(A)
     for _ in range(iters):
         Y = A @ X @ A.T + Q - lam * A @ X @ C.T @ np.linalg.solve(C @ X @ C.T + R, C @ X @ A.T)
@@ -71,7 +71,7 @@ def local_v_bar(A, C, Q, R, lam: float, iters: int = 100_000) -> np.ndarray:
 
 
 def local_p_hat(req: Request, N: int, iters: int = 2_000) -> np.ndarray:
-    """Seed 002, eq. (22): X <- g_N(X) from 0, with g_N(X) = E[P_N | P_0 = X] by enumeration."""
+    """Rohr, Marelli and Fu (2010), eq. (22): X <- g_N(X) from 0, with g_N(X) = E[P_N | P_0 = X] by enumeration."""
     sim = sim_system(req)
     X = np.zeros((sim.n, sim.n))
     for _ in range(iters):
@@ -117,7 +117,7 @@ def test_bounds_sandwich_the_limit(name: str, route: str) -> None:
     E = exact.mean_covariance[-1]
     assert exact.growth_per_step(4) == pytest.approx(1.0, abs=1e-3)  # levelled off
     scale = np.trace(v_bar)
-    # matrix order (seed 004, eq. (23); seed 002, eq. (18))
+    # matrix order (Sinopoli et al. (2004), eq. (23); Rohr, Marelli and Fu (2010), eq. (18))
     assert_psd(E - s_bar, scale)
     assert_psd(p_hat - E, scale)
     assert_psd(v_bar - p_hat, scale)

@@ -2,7 +2,7 @@
 
 Scalar plant a = 1.5, C = Q = R = 1.  Bernoulli lambda = 0.75 and Gilbert-Elliott with failure
 rate p = 0.1 and recovery rate q = 0.3 deliver the same long-run fraction of packets,
-q / (p + q) = 0.75.  Seed 001, Corollary 1: Bernoulli is stable iff a^2 (1 - lambda) < 1
+q / (p + q) = 0.75.  Rohr, Marelli and Fu (2014), Corollary 1: Bernoulli is stable iff a^2 (1 - lambda) < 1
 (here 0.5625), Gilbert-Elliott iff a^2 (1 - q) < 1 (here 1.575): the bursty channel is unstable.
 """
 

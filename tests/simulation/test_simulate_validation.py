@@ -1,8 +1,8 @@
 """Validation of the exact verdict by the exact finite-horizon mean (issue 5).
 
-When ``analyze`` says ``unstable``, ``trace E[P_t]`` (seed 001, eq. (7), computed by enumeration)
+When ``analyze`` says ``unstable``, ``trace E[P_t]`` (Rohr, Marelli and Fu (2014), eq. (7), computed by enumeration)
 must grow like ``rate^t`` with ``rate`` the largest block ``|alpha_k|^2 sigma_k``; when it says
-``stable``, it must level off.  Cases: the seed systems of MATH.md section 4 on both sides of their
+``stable``, it must level off.  Cases: the seed systems of docs/theory.md on both sides of their
 thresholds, and random small systems (fixed seed) chosen away from the boundary.
 
 Tolerance.  ``trace E[P_t] = c t^k rate^t (1 + O(r^t))`` where ``r < 1`` is the ratio of the next
@@ -72,16 +72,16 @@ EXAMPLE1_GE = {"A": [[SQRT3, 0], [0, "-" + SQRT3]], "C": [[1, 1]], "Q": [[1, 0],
 
 SEED_CASES = {
     # name: (system, channel, expected verdict, rate from the seeds' closed forms)
-    "scalar_lambda_0.2": (SCALAR, bern(0.2), "unstable", 1.5625 * 0.8),  # seed 004, Fig. 1
+    "scalar_lambda_0.2": (SCALAR, bern(0.2), "unstable", 1.5625 * 0.8),  # Sinopoli et al. (2004), Fig. 1
     "scalar_lambda_0.6": (SCALAR, bern(0.6), "stable", 1.5625 * 0.4),
-    "seed004_lambda_0.1": (SEED004, bern(0.1), "unstable", 1.5625 * 0.9),  # seed 004, Fig. 2
+    "seed004_lambda_0.1": (SEED004, bern(0.1), "unstable", 1.5625 * 0.9),  # Sinopoli et al. (2004), Fig. 2
     "seed004_lambda_0.6": (SEED004, bern(0.6), "stable", 1.5625 * 0.4),
-    "seed004_2x2_lambda_0.1": (SEED004_2X2, bern(0.1), "unstable", 1.5625 * 0.9),  # seed 004, Fig. 3
+    "seed004_2x2_lambda_0.1": (SEED004_2X2, bern(0.1), "unstable", 1.5625 * 0.9),  # Sinopoli et al. (2004), Fig. 3
     "seed004_2x2_lambda_0.7": (SEED004_2X2, bern(0.7), "stable", 1.5625 * 0.3),
-    # seed 001, Example 3: degenerate, sigma = (1 - lambda)^(1/2)
+    # Rohr, Marelli and Fu (2014), Example 3: degenerate, sigma = (1 - lambda)^(1/2)
     "example1_bernoulli_0.8": (EXAMPLE1, bern(0.8), "unstable", 4 * math.sqrt(0.2)),
     "example1_bernoulli_0.97": (EXAMPLE1, bern(0.97), "stable", 4 * math.sqrt(0.03)),
-    # seed 001, Example 2 as corrected in test_finite_horizon: sigma^2 = (1 - q)^2 + p q
+    # Rohr, Marelli and Fu (2014), Example 2 as corrected in test_finite_horizon: sigma^2 = (1 - q)^2 + p q
     "example1_ge_unstable": (EXAMPLE1_GE, ge(0.05, 0.5), "unstable", 3 * math.sqrt(0.25 + 0.025)),
     "example1_ge_stable": (EXAMPLE1_GE, ge(0.05, 0.9), "stable", 3 * math.sqrt(0.01 + 0.045)),
 }
@@ -98,7 +98,7 @@ def test_seed_systems_growth_matches_verdict(name: str) -> None:
 
 @pytest.mark.parametrize(("lam1", "expected"), [(0.9, "stable"), (0.8, "unstable")])
 def test_two_packets_growth_matches_verdict(lam1: float, expected: str) -> None:
-    """MATH.md section 4: A = diag(2.5, 1.5), one packet per state; exact region lambda_1 > 0.84, lambda_2 > 5/9."""
+    """docs/theory.md: A = diag(2.5, 1.5), one packet per state; exact region lambda_1 > 0.84, lambda_2 > 5/9."""
     system = {
         "A": [[2.5, 0], [0, 1.5]],
         "C": [[1, 0], [0, 1]],
@@ -125,7 +125,7 @@ def _random_channel(rng: np.random.Generator, kind: int) -> dict:
 
 
 def _loss_after_losses(ch: dict) -> float:
-    """P(g = 0 | nu zeros): sigma of a non-degenerate block (seed 001, Lemma 2)."""
+    """P(g = 0 | nu zeros): sigma of a non-degenerate block (Rohr, Marelli and Fu (2014), Lemma 2)."""
     if ch["model"] == "bernoulli":
         return 1 - float(Fraction(ch["arrival_probability"]))
     if ch["model"] == "gilbert_elliott":
@@ -137,7 +137,7 @@ def random_cases(count: int = 12, seed: int = 2024) -> list[tuple[dict, dict, fl
     """Small systems with real eigenvalues of distinct moduli, every mode observed.
 
     Then every FMO block is one eigenvalue and non-degenerate, so the closed form
-    ``rate = max |theta|^2 P(g = 0 | nu zeros)`` holds (seed 001, Theorem 1 with Lemma 2).
+    ``rate = max |theta|^2 P(g = 0 | nu zeros)`` holds (Rohr, Marelli and Fu (2014), Theorem 1 with Lemma 2).
     Alternate unstable (1.3 < rate < 3) and stable (rate < 0.7) cases, channels of order 0, 1, 2.
     """
     rng = np.random.default_rng(seed)

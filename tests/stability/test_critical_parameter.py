@@ -1,6 +1,6 @@
 """Exact critical value of one channel parameter named by a JSON pointer (Theorem 1 on a one-parameter family).
 
-Cross-checked against three independent routes: seed 001's closed form for
+Cross-checked against three independent routes: Rohr, Marelli and Fu (2014)'s closed form for
 Bernoulli (``critical_arrival_probability``), the Gilbert-Elliott line solver
 (renewal closed form, :mod:`kfio.stability._ge_region`), the per-sensor
 thresholds (:mod:`kfio.stability._regions`), and for order-2 Markov channels
@@ -50,7 +50,7 @@ def test_gilbert_elliott_matches_the_renewal_line(pointer, line):
 
 
 def test_per_sensor_matches_sensor_thresholds():
-    # MATH.md section 4: A = diag(2.5, 1.5), one sensor per state: lambda_2 > 5/9 exactly
+    # docs/theory.md: A = diag(2.5, 1.5), one sensor per state: lambda_2 > 5/9 exactly
     body = dict(
         sensors=[{"name": "s1", "rows": [0]}, {"name": "s2", "rows": [1]}],
     )

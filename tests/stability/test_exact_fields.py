@@ -123,7 +123,7 @@ def test_scalar_random_rationals(seed: int):
 @pytest.mark.parametrize("seed", range(4))
 def test_mirror_pair_sigma_is_a_square_root(seed: int):
     # A = a diag(1, -1), C = [1 1]: degenerate, period 2, largest blind set one phase, so
-    # sigma = (1 - lambda)^(1/2) and lambda_c = 1 - a^-4 (MATH.md section 4)
+    # sigma = (1 - lambda)^(1/2) and lambda_c = 1 - a^-4 (docs/theory.md)
     rng = random.Random(100 + seed)
     a, lam = _awkward_rational(rng), _probability(rng)
     if seed == 0:

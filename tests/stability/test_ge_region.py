@@ -1,6 +1,6 @@
 """Exact Gilbert-Elliott stability region (Theorem 1 of Rohr, Marelli and Fu 2014 on the (p, q) family).
 
-Checks: the closed forms of MATH.md section 6 (non-degenerate line
+Checks: the closed forms of docs/theory.md (non-degenerate line
 ``beta (1 - q) = 1``, You, Fu and Xie 2011; ``beta^2 ((1 - q)^2 + p q) = 1``
 for ``alpha diag(1, -1)``), the renewal product against the exact transfer
 matrices, exact labels against the independent brute-force DP of
@@ -31,7 +31,7 @@ from support.bruteforce import oracle_sigma
 
 GE = lambda p, q: {"model": "gilbert_elliott", "failure_rate": p, "recovery_rate": q}  # noqa: E731
 
-# (A, C): non-degenerate scalar, the degenerate pair of MATH.md, period 3, two blocks (envelope)
+# (A, C): non-degenerate scalar, the degenerate pair of docs/theory.md, period 3, two blocks (envelope)
 SYSTEMS = {
     "scalar": ([["3/2"]], [[1]]),
     "pair": ([["5/4", 0], [0, "-5/4"]], [[1, 1]]),
@@ -61,7 +61,7 @@ def test_non_degenerate_vertical_line():
 
 
 def test_degenerate_pair_closed_form():
-    # beta^2 ((1 - q)^2 + p q) = 1 with beta = 25/16 (MATH.md section 6)
+    # beta^2 ((1 - q)^2 + p q) = 1 with beta = 25/16 (docs/theory.md)
     r = analyze(request("pair", "1/4", "1/2"))
     g = r.gilbert_elliott
     expected = sympy.Rational(625, 256) * ((1 - sympy.Symbol("q")) ** 2 + sympy.Symbol("p") * sympy.Symbol("q")) - 1

@@ -1,13 +1,13 @@
-"""Exact partial-loss regions (issue 6): seed 000's cases, the one-sensor case, the bounds, the API.
+"""Exact partial-loss regions (issue 6): Liu and Goldsmith (2004)'s cases, the one-sensor case, the bounds, the API.
 
-The exact region is an *extension* of seed 001, Theorem 1 (MATH.md section 3,
+The exact region is an *extension* of Rohr, Marelli and Fu (2014), Theorem 1 (docs/theory.md,
 "Beyond the seeds"), so every closed form asserted here was first checked by
 an independent route: the brute-force blind probability of
 :mod:`bruteforce_sensors` (floating-point eigenvectors and a covered-set DP,
-nothing shared with the analyzer), by bisection to ``1e-7``; and seed 000's
+nothing shared with the analyzer), by bisection to ``1e-7``; and Liu and Goldsmith (2004)'s
 bounds (``kfio bounds``), between which the exact answer must lie.
 
-Seed 000's numbers, checked:
+Liu and Goldsmith (2004)'s numbers, checked:
 
 * Case 1 (Section VI.A): ``lambda_2c = max(0, 1 - 1/(1.25^2 (1 - lambda_1)))``
   is right (``alpha = 1.25``, both packets see every mode, so only the
@@ -59,11 +59,11 @@ def numeric(name: str):
     return np.array(A, dtype=float), C, groups
 
 
-# -- seed 000, Section VI.A: Cases 1 and 2 -------------------------------------
+# -- Liu and Goldsmith (2004), Section VI.A: Cases 1 and 2 -------------------------------------
 
 
 def case1_closed_form(lam1: F) -> sympy.Expr:
-    """Seed 000, Case 1: ``max(0, 1 - 1/(alpha^2 (1 - lambda_1)))`` with ``alpha = 5/4``."""
+    """Liu and Goldsmith (2004), Case 1: ``max(0, 1 - 1/(alpha^2 (1 - lambda_1)))`` with ``alpha = 5/4``."""
     v = 1 - 1 / (sympy.Rational(25, 16) * (1 - sympy.Rational(lam1.numerator, lam1.denominator)))
     return sympy.Max(0, v)
 
@@ -75,7 +75,7 @@ def test_case1_case2_closed_form(name: str, lam1: F) -> None:
     oracle = critical_probability(*numeric(name), [float(lam1), 0.5], sensor=1)
     assert oracle is not None and abs(oracle - float(case1_closed_form(lam1))) < ORACLE_TOL  # the seed is right
     if lam1 == 0:
-        return  # outside seed 001's Assumption 1: the request parser's job, not this one's
+        return  # outside Rohr, Marelli and Fu (2014)'s Assumption 1: the request parser's job, not this one's
     th = sensor_thresholds(sensor_request(A, Cs, [lam1, F(1, 2)]))
     t = th.thresholds[1]
     assert exact(t.critical_exact) == case1_closed_form(lam1)
@@ -97,7 +97,7 @@ def test_case1_case2_boundary_curve(name: str) -> None:
 
 
 def test_case2_bounds_meet_the_exact_curve() -> None:
-    """Seed 000, Case 2: the bounds coincide, and with the exact threshold."""
+    """Liu and Goldsmith (2004), Case 2: the bounds coincide, and with the exact threshold."""
     A, Cs = system("case2")
     req = sensor_request(A, Cs, ["1/5", "1/2"])
     crit = compute_bounds(req).critical[1]
@@ -107,7 +107,7 @@ def test_case2_bounds_meet_the_exact_curve() -> None:
     assert crit.upper.value is not None and 0.2 <= float(crit.upper.value) <= 0.2 + 1e-5
 
 
-# -- seed 000, Section VI.B ----------------------------------------------------
+# -- Liu and Goldsmith (2004), Section VI.B ----------------------------------------------------
 
 
 def test_diagonal_exact_region() -> None:
@@ -129,7 +129,7 @@ def test_diagonal_exact_region() -> None:
 
 
 def test_diagonal_lmi_is_tight_lower_bound_is_not() -> None:
-    """Seed 000: "the upper bound is tight while the lower bound is loose" (checked at (0.9, 0.6))."""
+    """Liu and Goldsmith (2004): "the upper bound is tight while the lower bound is loose" (checked at (0.9, 0.6))."""
     A, Cs = system("diagonal")
     rep = compute_bounds(sensor_request(A, Cs, ["9/10", "3/5"]))
     for crit, value in zip(rep.critical, (0.84, 5 / 9)):
@@ -137,7 +137,7 @@ def test_diagonal_lmi_is_tight_lower_bound_is_not() -> None:
         assert crit.lower < value - 0.2
 
 
-# -- seed 000, Section VI.C: the last example ----------------------------------
+# -- Liu and Goldsmith (2004), Section VI.C: the last example ----------------------------------
 
 
 def test_last_example_decided() -> None:
@@ -154,7 +154,7 @@ def test_last_example_decided() -> None:
 
 
 def test_last_example_budget_line() -> None:
-    """Seed 000, VI.C: on ``lambda_1 + lambda_2 = 1/2``, stable iff ``lambda_2 > 21/121``."""
+    """Liu and Goldsmith (2004), VI.C: on ``lambda_1 + lambda_2 = 1/2``, stable iff ``lambda_2 > 21/121``."""
     A, Cs = system("last")
     grid = [F(k, 100) for k in range(1, 50)]
     for lam2 in grid:
@@ -165,7 +165,7 @@ def test_last_example_budget_line() -> None:
     assert curve.h(0.25) == pytest.approx(21 / 121, abs=1e-15)
 
 
-# -- containment between seed 000's bounds --------------------------------------
+# -- containment between Liu and Goldsmith (2004)'s bounds --------------------------------------
 
 CONTAINMENT = {
     **{k: (A, Cs, False) for k, (A, Cs) in SEED000.items()},
@@ -178,7 +178,7 @@ def test_exact_grid_between_bounds(name: str) -> None:
     """A cell certified stable by the LMI is exactly stable; a cell unstable by the lower bound is not stable.
 
     A lower-bound cell may be exactly ``boundary`` only where the lower bound holds with equality
-    (``prod (1 - lambda_s) rho^2 = 1``): there the theorem is silent and seed 004 Theorem 3 says unbounded.
+    (``prod (1 - lambda_s) rho^2 = 1``): there the theorem is silent and Sinopoli et al. (2004) Theorem 3 says unbounded.
     """
     A, Cs, _ = CONTAINMENT[name]
     req = sensor_request(A, Cs, ["1/2", "1/2"], options={"bounds": {"grid": 7}})
@@ -278,7 +278,7 @@ def test_one_sensor_reproduces_analyze(name: str) -> None:
 
 
 def test_similarity_and_row_scaling_invariance() -> None:
-    """MATH.md section 2, "Checks": ``A -> T A T^-1``, ``C -> C T^-1`` and row scaling change nothing."""
+    """docs/theory.md, "Checks": ``A -> T A T^-1``, ``C -> C T^-1`` and row scaling change nothing."""
     A, Cs = system("last")
     T = sympy.Matrix([[1, 2], [0, 1]])
     At = (T * sympy.Matrix(A).applyfunc(sympy.nsimplify) * T.inv()).tolist()

@@ -1,10 +1,10 @@
 """Simulation spot checks of the exact region on both sides of its boundary (issue 6).
 
-Seed 000's last example (Section VI.B-C): ``A = [[1.25, 0], [1, 1.1]]``,
+Liu and Goldsmith (2004)'s last example (Section VI.B-C): ``A = [[1.25, 0], [1, 1.1]]``,
 ``C_1 = [1 0]``, ``C_2 = [1 1]``, ``Q = 20 I``, ``R = 2.5 I``.  The exact
 region is ``lambda_2 > 21/121`` (mode 1.1, seen by packet 2 only) and
 ``(1 - lambda_1)(1 - lambda_2) < 16/25`` (mode 1.25).  Three points that
-seed 000's bounds leave undecided:
+Liu and Goldsmith (2004)'s bounds leave undecided:
 
 =================  =========  ===========================  =========
 point              exact      largest block rate           bounds

@@ -1,4 +1,4 @@
-"""``sigma_k`` (seed 001, Lemmas 2-3, Corollary 2): worked examples, special cases, exact pieces.
+"""``sigma_k`` (Rohr, Marelli and Fu (2014), Lemmas 2-3, Corollary 2): worked examples, special cases, exact pieces.
 
 Reference values are derived in the comments and checked against the brute
 force of :mod:`bruteforce` wherever a seed's own arithmetic is involved.
@@ -31,7 +31,7 @@ def bernoulli(lam: F) -> MarkovChannel:
 
 
 def gilbert_elliott(p: F, q: F) -> MarkovChannel:
-    """``p`` failure rate, ``q`` recovery rate (seed 001, Remark 1): table ``(q, 1 - p)``."""
+    """``p`` failure rate, ``q`` recovery rate (Rohr, Marelli and Fu (2014), Remark 1): table ``(q, 1 - p)``."""
     return MarkovChannel("gilbert_elliott", 1, (q, 1 - p))
 
 
@@ -69,7 +69,7 @@ def block_of(c_int, exponents, N0, groups=None, exact=True) -> PhaseBlock:
     return PhaseBlock(N0, tuple(exponents), c / np.maximum(np.linalg.norm(c, axis=0), 1e-300), groups, oracle)
 
 
-#: Seed 001, Example 1: ``A = alpha diag(1, -1)``, ``C = [1 1]``: omega = (1, -1), N0 = 2.
+#: Rohr, Marelli and Fu (2014), Example 1: ``A = alpha diag(1, -1)``, ``C = [1 1]``: omega = (1, -1), N0 = 2.
 EXAMPLE1 = block_of([[1, 1]], (0, 1), 2)
 
 
@@ -79,7 +79,7 @@ def spectral_radius(P: list[list[F]]) -> float:
 
 @pytest.mark.parametrize("lam", [F(1, 10), F(1, 2), F(9, 10)])
 def test_example3_bernoulli(lam: F) -> None:
-    # Seed 001, Example 3, eq. (35): sigma = (1 - lambda)^(1/2); blind sets {0}, {1} (Corollary 2).
+    # Rohr, Marelli and Fu (2014), Example 3, eq. (35): sigma = (1 - lambda)^(1/2); blind sets {0}, {1} (Corollary 2).
     res = compute_sigma(EXAMPLE1, [bernoulli(lam)])
     assert res.period == 2 and res.degenerate and not res.fully_blind
     assert res.sigma == pytest.approx(float(1 - lam) ** 0.5, rel=1e-14)
@@ -92,7 +92,7 @@ def test_example3_bernoulli(lam: F) -> None:
 @pytest.mark.parametrize("p", [F(1, 10), F(1, 2), F(9, 10)])
 @pytest.mark.parametrize("q", [F(1, 10), F(1, 2), F(9, 10)])
 def test_example2_gilbert_elliott(p: F, q: F) -> None:
-    # Seed 001, Example 2 has an arithmetic slip: it writes D_3 = (1-q)^2 + q(1-q) = 1-q and
+    # Rohr, Marelli and Fu (2014), Example 2 has an arithmetic slip: it writes D_3 = (1-q)^2 + q(1-q) = 1-q and
     # concludes sigma^2 = max{1-q, (1-q)^2 + pq}.  After the arrival at the free phase the next
     # loss has probability p (the failure rate), not 1-q, so D_3 = (1-q)^2 + pq = D_2's Perron
     # root, as shift invariance of blind sets demands ({0} and {1} are shifts of each other).
@@ -111,7 +111,7 @@ def test_example2_gilbert_elliott(p: F, q: F) -> None:
     ids=["bernoulli", "gilbert_elliott", "order2"],
 )
 def test_non_degenerate_is_lemma2(channel: MarkovChannel) -> None:
-    # Seed 001, Lemma 2: only the empty set is blind, sigma = P(g = 0 | nu zeros) = 1 - table[0].
+    # Rohr, Marelli and Fu (2014), Lemma 2: only the empty set is blind, sigma = P(g = 0 | nu zeros) = 1 - table[0].
     block = block_of([[1, 0], [1, 1]], (0, 1), 2)
     res = compute_sigma(block, [channel])
     assert not res.degenerate and not res.fully_blind

@@ -3,7 +3,7 @@
 Random degenerate blocks (built directly as :class:`PhaseBlock`) under random
 Bernoulli, Gilbert-Elliott and order-2 Markov channels, one packet and two
 packets.  Tolerance: ``|sigma - oracle| <= 1e-6``; the oracle's ratio over
-``2^20`` periods converges far below that (MATH.md section 2, "Checks").
+``2^20`` periods converges far below that (docs/theory.md, "Checks").
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ TOL = 1e-6
 
 
 def random_channel(rng: np.random.Generator, order: int) -> MarkovChannel:
-    """Order 0, 1 or 2 with every probability in ``(0.05, 0.95)`` (seed 001, Assumption 1)."""
+    """Order 0, 1 or 2 with every probability in ``(0.05, 0.95)`` (Rohr, Marelli and Fu (2014), Assumption 1)."""
     table = tuple(Fraction(int(x), 100) for x in rng.integers(6, 95, size=1 << order))
     model = {0: "bernoulli", 1: "gilbert_elliott", 2: "markov"}[order]
     return MarkovChannel(model, order, table)
@@ -35,7 +35,7 @@ def structured_exponents(rng: np.random.Generator, N0: int, L: int) -> tuple[int
     """Exponents ``k N0 / m`` for random divisors ``m`` of ``N0``.
 
     Roots of unity of small order make chains share phase structure (large
-    blind sets, Example 1 of seed 001); repeats are chains of one eigenvalue.
+    blind sets, Example 1 of Rohr, Marelli and Fu (2014)); repeats are chains of one eigenvalue.
     """
     divisors = [m for m in range(1, N0 + 1) if N0 % m == 0]
     orders = rng.choice(divisors, size=L)

@@ -1,6 +1,6 @@
 """Tail exponent ``kappa = log(1/sigma) / (2 log|alpha|)`` (Mo and Sinopoli 2012; kfio's extension).
 
-Three kinds of check: worked values (MATH.md section 6), exact agreement with
+Three kinds of check: worked values (docs/theory.md), exact agreement with
 Theorem 1 (``kappa > 1`` iff stable) and with the i.i.d. variance threshold
 ``lambda > 1 - 1/|a|^4`` of Rohr, Marelli and Fu (2010), and the simulated
 stationary tail of an independent numpy Riccati sampler
@@ -28,7 +28,7 @@ def run(A, C, channel):
 
 
 def test_worked_scalar():
-    # MATH.md section 6: A = 2, Bernoulli 1/2: kappa = log 2 / log 4 = 1/2
+    # docs/theory.md: A = 2, Bernoulli 1/2: kappa = log 2 / log 4 = 1/2
     t = run([[2]], [[1]], BERN("1/2")).tail
     assert t.kappa_exact == "1/2" and t.kappa == pytest.approx(0.5, abs=1e-15)
     assert t.moments == {"mean": "infinite", "variance": "infinite"} and t.basis == "theorem"
@@ -43,7 +43,7 @@ def test_worked_degenerate():
 
 
 def test_degenerate_ge_closed_form():
-    # sigma^2 = (1 - q)^2 + p q (MATH.md section 6) = 3/8 at p = 1/4, q = 1/2
+    # sigma^2 = (1 - q)^2 + p q (docs/theory.md) = 3/8 at p = 1/4, q = 1/2
     b = run([[2, 0], [0, -2]], [[1, 1]], GE("1/4", "1/2")).tail.blocks[0]
     assert b.sigma_exact == "sqrt(6)/4"
     assert b.kappa == pytest.approx(0.5 * __import__("math").log(8 / 3) / __import__("math").log(4), rel=1e-14)

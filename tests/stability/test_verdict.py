@@ -1,4 +1,4 @@
-"""Seed 001, Theorem 1 end to end: reference cases, structures, invariances.
+"""Rohr, Marelli and Fu (2014), Theorem 1 end to end: reference cases, structures, invariances.
 
 Closed forms below were derived by hand for each structure and are checked
 independently: sigma against the brute-force oracle of ``tests/bruteforce.py``
@@ -30,11 +30,11 @@ def run(A, C, channel, **system):
     return analyze(load_request(json.dumps({"system": {"A": A, "C": C, **system}, "channel": channel})))
 
 
-# --- MATH.md section 4 and seed 001 -------------------------------------------------
+# --- docs/theory.md and Rohr, Marelli and Fu (2014) -------------------------------------------------
 
 
 def test_scalar_seed004():
-    # seed 004: A = -1.25, C = 1: lambda_c = 1 - 1/1.25^2 = 0.36
+    # Sinopoli et al. (2004): A = -1.25, C = 1: lambda_c = 1 - 1/1.25^2 = 0.36
     r = run([[-1.25]], [[1]], BERN(0.5), Q=[[1]], R=[[2.5]])
     assert r.critical_arrival_probability_exact == "9/25" and r.verdict == "stable"
     assert run([[-1.25]], [[1]], BERN("0.35")).verdict == "unstable"
@@ -50,7 +50,7 @@ def test_seed004_3x3_one_unstable_eigenvalue():
 
 
 def test_2x2_where_bounds_differ_theorem1_decides():
-    # seed 004's bounds give [0.36, ~0.48]; Theorem 1: two non-degenerate blocks, lambda_c = 9/25 exactly
+    # Sinopoli et al. (2004)'s bounds give [0.36, ~0.48]; Theorem 1: two non-degenerate blocks, lambda_c = 9/25 exactly
     r = run([[1.25, 0], [1, 1.1]], [[1, 1]], BERN("0.37"))
     assert r.critical_arrival_probability_exact == "9/25" and r.verdict == "stable"
     assert not any(b.degenerate for b in r.blocks)
@@ -69,7 +69,7 @@ def test_seed001_examples_1_and_3(alpha):
 
 
 def test_seed001_example2_gilbert_elliott_corrected():
-    # Seed 001, Example 2 claims sigma^2 = max{1 - q, (1 - q)^2 + pq}. Its D_3 is wrong: after an
+    # Rohr, Marelli and Fu (2014), Example 2 claims sigma^2 = max{1 - q, (1 - q)^2 + pq}. Its D_3 is wrong: after an
     # arrival at the free phase the next loss has probability p (failure rate), not 1 - q; by shift
     # invariance D_3 has the same spectral radius as D_2, so sigma^2 = (1 - q)^2 + pq for all p, q.
     for p, q in [("1/10", "3/10"), ("1/2", "9/10"), ("4/5", "1/5")]:
@@ -163,7 +163,7 @@ def test_zero_and_stable_eigenvalues():
 
 def test_equal_moduli_without_fmo_are_separate_blocks():
     # 5/4 and (3 +- 4i)/4 share |alpha| = 5/4 but no ratio is a root of unity: three non-degenerate
-    # FMO blocks (seed 001's definition), whereas grouping by modulus alone would call it degenerate.
+    # FMO blocks (Rohr, Marelli and Fu (2014)'s definition), whereas grouping by modulus alone would call it degenerate.
     A = [["5/4", 0, 0], [0, "3/4", -1], [0, 1, "3/4"]]
     r = run(A, [[1, 1, 0]], BERN("0.5"))
     assert len(r.blocks) == 3 and not any(b.degenerate for b in r.blocks)

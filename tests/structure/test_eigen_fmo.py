@@ -1,4 +1,4 @@
-"""Exact eigenstructure and FMO classes (seed 001, Definitions 3-5).
+"""Exact eigenstructure and FMO classes (Rohr, Marelli and Fu (2014), Definitions 3-5).
 
 Independent routes: SymPy's ``Matrix.jordan_form`` on small matrices (fine at
 this size), numpy eigenvalues, and hand-built block structures.

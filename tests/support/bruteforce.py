@@ -2,7 +2,7 @@
 
 Shares nothing with :mod:`kfio.stability._sigma` or :mod:`kfio.stability._blind`: it reads
 the raw fields of a :class:`~kfio.structure._phases.PhaseBlock` and the tables of
-the channels, and follows the definition of seed 001, eq. (14) and (33).
+the channels, and follows the definition of Rohr, Marelli and Fu (2014), eq. (14) and (33).
 The state after ``t`` steps is (set of covered slots as a bitmask, joint
 channel history); the phase ``t mod N0`` is implicit.  A covered set whose
 stacked rows reach full column rank is dropped (no longer blind).  Then

@@ -10,8 +10,8 @@ row group (per sensor).  Then per block
 
     rate_k = |alpha_k|^2 * (P(blind after (j+1) N0) / P(blind after j N0))^(1/N0),
 
-seed 001, eq. (33), with ``P(blind)`` over the joint per-sensor arrivals
-(MATH.md section 3, "Beyond the seeds").  The critical probability of one
+Rohr, Marelli and Fu (2014), eq. (33), with ``P(blind)`` over the joint per-sensor arrivals
+(docs/theory.md, "Beyond the seeds").  The critical probability of one
 sensor is found by bisection on this rate (it decreases in every
 ``lambda_s``).
 """
@@ -139,7 +139,7 @@ def critical_probability(
 
 # -- requests ------------------------------------------------------------------
 
-#: Seed 000's two-packet systems (MATH.md section 4), ``(A, [C_1, C_2])``; Q = 20 I and R = 2.5 I in the seed.
+#: Liu and Goldsmith (2004)'s two-packet systems (docs/theory.md), ``(A, [C_1, C_2])``; Q = 20 I and R = 2.5 I in the seed.
 SEED000 = {
     # Section VI.A, Case 1: C_1 and C_2 square and invertible.
     "case1": ([[1.25, 0], [1, 1.1]], [[[1, 0], [0, 1]], [[1, 0], [1, 1]]]),
@@ -153,7 +153,7 @@ SEED000 = {
 
 
 def sensor_request(A, Cs, lambdas, noise: bool = True, channels=None, options=None):
-    """A validated request: sensor ``s{i+1}`` carries the rows ``Cs[i]``; Q = 20 I, R = 2.5 I as in seed 000."""
+    """A validated request: sensor ``s{i+1}`` carries the rows ``Cs[i]``; Q = 20 I, R = 2.5 I as in Liu and Goldsmith (2004)."""
     import json
 
     from kfio import load_request
