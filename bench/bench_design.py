@@ -24,7 +24,10 @@ from kfio.structure._fmo import fmo_blocks
 GE = {"model": "gilbert_elliott", "failure_rate": "1/4", "recovery_rate": "1/2"}
 SYSTEMS = {
     "Rohr, Marelli and Fu (2014) Example (A = 1.25 diag(1, -1), C = [1 1])": ([["5/4", 0], [0, "-5/4"]], [[1, 1]]),
-    "Sinopoli et al. (2004) 3x3 (A = [[1.25,1,0],[0,0.9,7],[0,0,0.6]])": ([[1.25, 1, 0], [0, 0.9, 7], [0, 0, 0.6]], [[1, 0, 2]]),
+    "Sinopoli et al. (2004) 3x3 (A = [[1.25,1,0],[0,0.9,7],[0,0,0.6]])": (
+        [[1.25, 1, 0], [0, 0.9, 7], [0, 0, 0.6]],
+        [[1, 0, 2]],
+    ),
     "period 6, two rows (1.1 x cyclic shift)": (
         [[("11/10" if (i - j) % 6 == 1 else 0) for j in range(6)] for i in range(6)],
         [[1, 0, 0, 0, 0, 0], [0, 0, 1, 0, 0, 0]],

@@ -96,11 +96,7 @@ def _message_strings(path: Path) -> list[str]:
 
 
 def test_message_strings_in_the_code() -> None:
-    files = [
-        p
-        for folder in ("analyzer", "service")
-        for p in sorted((ROOT / folder).rglob("*.py"))
-    ]
+    files = [p for folder in ("analyzer", "service") for p in sorted((ROOT / folder).rglob("*.py"))]
     assert len(files) > 30
     bad = {str(p.relative_to(ROOT)): hits for p in files if (hits := _hits("\n".join(_message_strings(p))))}
     assert bad == {}

@@ -16,9 +16,24 @@ from kfio import Budget, BudgetExceeded, analyze, load_request
 from kfio.mare._compute import compute_bounds
 
 Q2, Q3 = [[20, 0], [0, 20]], [[20, 0, 0], [0, 20, 0], [0, 0, 20]]
-SCALAR = {"A": [[-1.25]], "C": [[1]], "Q": [[1]], "R": [[2.5]]}  # Sinopoli et al. (2004) Fig. 1, Rohr, Marelli and Fu (2010) eq. 35
-THREE = {"A": [[1.25, 1, 0], [0, 0.9, 7], [0, 0, 0.6]], "C": [[1, 0, 2]], "Q": Q3, "R": [[2.5]]}  # Sinopoli et al. (2004) Fig. 2
-TWO = {"A": [[1.25, 0], [1, 1.1]], "C": [[1, 1]], "Q": Q2, "R": [[2.5]]}  # Sinopoli et al. (2004) Fig. 3, Rohr, Marelli and Fu (2010) eq. 37
+SCALAR = {
+    "A": [[-1.25]],
+    "C": [[1]],
+    "Q": [[1]],
+    "R": [[2.5]],
+}  # Sinopoli et al. (2004) Fig. 1, Rohr, Marelli and Fu (2010) eq. 35
+THREE = {
+    "A": [[1.25, 1, 0], [0, 0.9, 7], [0, 0, 0.6]],
+    "C": [[1, 0, 2]],
+    "Q": Q3,
+    "R": [[2.5]],
+}  # Sinopoli et al. (2004) Fig. 2
+TWO = {
+    "A": [[1.25, 0], [1, 1.1]],
+    "C": [[1, 1]],
+    "Q": Q2,
+    "R": [[2.5]],
+}  # Sinopoli et al. (2004) Fig. 3, Rohr, Marelli and Fu (2010) eq. 37
 
 
 def bernoulli(lam) -> dict:
