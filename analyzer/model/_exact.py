@@ -10,7 +10,6 @@ built with :class:`fractions.Fraction` from integer parts.
 from __future__ import annotations
 
 import json
-import math
 import re
 from decimal import Decimal
 from fractions import Fraction
@@ -325,22 +324,3 @@ def _path_pointer(path: tuple[str, ...]) -> str:
 def fraction_text(x: Fraction) -> str:
     """Canonical text of a rational: ``"9/25"``, ``"-3"``."""
     return str(x.numerator) if x.denominator == 1 else f"{x.numerator}/{x.denominator}"
-
-
-def finite_or_none(x: float | None) -> float | None:
-    """``float(x)`` if it is finite, else ``None``: a report's float field next to an exact one.
-
-    Floats in reports are conveniences derived from exact values; when one is
-    outside float64's range (``|alpha| = 10^160`` has ``|alpha|^2 = 10^320``)
-    the JSON field is ``null`` and the exact field carries the value (JSON has
-    no infinities).
-
-    Examples
-    --------
-    >>> finite_or_none(1e300 * 1e300), finite_or_none(0.5)
-    (None, 0.5)
-    """
-    if x is None:
-        return None
-    x = float(x)
-    return x if math.isfinite(x) else None

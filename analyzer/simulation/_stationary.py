@@ -39,6 +39,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from .._json import json_float
 from ..errors import InvalidInput, LimitExceeded
 from ..model._exact import parse_number
 from ..model._types import Request
@@ -144,8 +145,7 @@ class StationaryReport:
         return self.kappa is not None and self.kappa <= 2
 
     def to_dict(self) -> dict[str, Any]:
-        def fin(x: float) -> float | None:
-            return x if math.isfinite(x) else None
+        fin = json_float  # JSON has no infinities: a value beyond float64 is null
 
         return {
             "step": self.step,
@@ -153,12 +153,12 @@ class StationaryReport:
             "method": "one sample of P_T per trajectory (Kar, Sinopoli and Moura 2012: P_t converges in distribution)",
             "quantiles": [{"q": q, "trace": fin(v), "ci95": [fin(lo), fin(hi)]} for q, v, lo, hi in self.quantiles],
             "outage": [{"threshold": m, "probability": p, "ci95": [lo, hi]} for m, p, lo, hi in self.outage],
-            "tail_exponent_hill": self.hill,
+            "tail_exponent_hill": fin(self.hill),
             "tail_exponent_hill_ci95": list(self.hill_interval) if self.hill_interval else None,
             "hill_k": self.hill_k,
-            "tail_exponent_exact": self.kappa,
+            "tail_exponent_exact": fin(self.kappa),
             "tail_exponent_exact_text": self.kappa_exact,
-            "exact_mean_growth_per_step": self.growth_rate,
+            "exact_mean_growth_per_step": fin(self.growth_rate),
             "verdict": self.verdict,
             "mean_unreliable": self.mean_unreliable,
             "warnings": list(self.warnings),

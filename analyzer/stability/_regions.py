@@ -45,8 +45,9 @@ import mpmath
 import sympy
 
 from .._budget import Budget
+from .._json import json_float
 from ..errors import InvalidInput
-from ..model._exact import finite_or_none, fraction_text, value_text
+from ..model._exact import fraction_text, value_text
 from ..model._request import require_assumption_1
 from ..model._types import PerSensorChannel, Request, packets_of
 from ..structure._fmo import FmoBlock
@@ -162,7 +163,7 @@ class SensorThresholds:
             "certified": self.certified,
             "consistent_with_analyze": self.consistent_with_analyze,
             "blocks": [
-                {**b.to_dict(self.sensors), "verdict": v, "rate": finite_or_none(r)}
+                {**b.to_dict(self.sensors), "verdict": v, "rate": json_float(r)}
                 for b, v, r in zip(self.blocks, self.block_verdicts, self.block_rates)
             ],
             "sensors": [t.to_dict(self.sensors) for t in self.thresholds],

@@ -45,8 +45,8 @@ import mpmath
 import sympy
 
 from .._budget import Budget
+from .._json import json_float
 from ..errors import InvalidInput, NumericalFailure
-from ..model._exact import finite_or_none
 from ..model._types import MarkovChannel, System
 from ..structure._algebraic import AlgebraicReal
 from ..structure._eigen import DIGITS  # working precision of the numerical side of exact comparisons
@@ -138,7 +138,7 @@ class BlockConstraints:
     def to_dict(self, names: Sequence[str]) -> dict[str, Any]:
         return {
             "eigenvalues": list(self.eigenvalues),
-            "modulus_squared": finite_or_none(self.beta_float),
+            "modulus_squared": json_float(self.beta_float),
             "modulus_squared_exact": self.beta_text if self.beta is not None else None,
             "period": self.period,
             "half_spaces": "sum_s misses_s * (-log(1 - lambda_s)) > period * log(modulus_squared), one per pattern",

@@ -18,6 +18,7 @@ import math
 from fractions import Fraction
 from typing import Any, Sequence
 
+from .._json import json_float
 from ._regions_constraints import BlockConstraints, block_rate
 
 
@@ -61,26 +62,28 @@ def sensor_gains(
         blk.patterns,
         key=lambda p: sum(z * math.log(max(1e-300, 1 - x)) for z, x in zip(p.misses, lam)),
     )
+    afters: list[float] = []  # may be inf beyond float64: compared here, null in the JSON
     for s, name in enumerate(names):
         improved = list(lam)
         improved[s] = 1 - (1 - lam[s]) / 2
         after, _ = _worst(blocks, improved)
+        afters.append(after)
         e = Fraction(binding.misses[s], blk.period)
         out.append(
             {
                 "sensor": name,
                 "elasticity_exact": str(e),
                 "elasticity": float(e),
-                "worst_rate_if_loss_halved": after,
+                "worst_rate_if_loss_halved": json_float(after),
             }
         )
-    best = min(out, key=lambda d: d["worst_rate_if_loss_halved"])
+    best = min(range(len(out)), key=lambda i: afters[i])
     return {
         "basis": "extension",
-        "worst_rate": rate,
+        "worst_rate": json_float(rate),
         "worst_block": list(blk.eigenvalues),
         "binding_pattern": binding.to_dict(names),
-        "best": best["sensor"] if best["worst_rate_if_loss_halved"] < rate else None,
+        "best": out[best]["sensor"] if afters[best] < rate else None,
         "sensors": out,
         "rule": "elasticity = d log(worst rate) / d log(1 - lambda_s) = z_s / N of the binding pattern",
     }

@@ -153,7 +153,10 @@ def _rational_ratio(num: Fraction, den: Fraction) -> Fraction | None:
     """``log(num) / log(den)`` if it is a rational with a small denominator, else ``None`` (exact test)."""
     if num <= 0 or den <= 0 or den == 1:
         return None
-    guess = Fraction(math.log(num) / math.log(den)).limit_denominator(64)
+    # logs of the integer parts: math.log takes any int, so no float overflow for huge rationals
+    log_num = math.log(num.numerator) - math.log(num.denominator)
+    log_den = math.log(den.numerator) - math.log(den.denominator)
+    guess = Fraction(log_num / log_den).limit_denominator(64)
     a, b = guess.numerator, guess.denominator
     if abs(a) > 256:
         return None

@@ -19,9 +19,9 @@ import mpmath
 import sympy
 
 from .._budget import Budget
+from .._json import json_float
 from .._reporting import Report, ShortRepr, stamp
 from ..errors import BudgetExceeded
-from ..model._exact import finite_or_none
 from ..model._request import require_assumption_1
 from ..model._types import MarkovChannel, PerSensorChannel, Request, System, packets_of, to_domain
 from ..structure._display import SHORT_TEXT_CHARS, algebraic_degree, short_text
@@ -66,15 +66,15 @@ class BlockReport(ShortRepr):
     def to_dict(self) -> dict[str, Any]:
         return {
             "eigenvalues": list(self.eigenvalues),
-            "eigenvalues_numeric": [[finite_or_none(z.real), finite_or_none(z.imag)] for z in self.eigenvalues_numeric],
-            "modulus": finite_or_none(self.modulus),
+            "eigenvalues_numeric": [[json_float(z.real), json_float(z.imag)] for z in self.eigenvalues_numeric],
+            "modulus": json_float(self.modulus),
             "modulus_exact": self.modulus_exact,
             "jordan_sizes": list(self.jordan_sizes),
             "period": self.period,
             "degenerate": self.degenerate,
-            "sigma": finite_or_none(self.sigma),
+            "sigma": json_float(self.sigma),
             "sigma_exact": self.sigma_exact,
-            "rate": finite_or_none(self.rate),
+            "rate": json_float(self.rate),
             "verdict": self.verdict,
             "certified": self.certified,
             "blind_set": self.blind_set,
@@ -117,7 +117,7 @@ class StabilityReport(Report):
             "verdict": self.verdict,
             "theorem": "Rohr, Marelli and Fu 2014, Theorem 1",
             "blocks": [b.to_dict() for b in self.blocks],
-            "critical_arrival_probability": finite_or_none(self.critical_arrival_probability),
+            "critical_arrival_probability": json_float(self.critical_arrival_probability),
             "critical_arrival_probability_exact": self.critical_arrival_probability_exact,
             "channel": self.channel,
             "system": self.system,
@@ -174,7 +174,7 @@ class StabilityReport(Report):
 
 def _shown(x: float | None, exact: str | None) -> str:
     """A float for the terminal, or its exact text when it is outside float64's range."""
-    if finite_or_none(x) is not None:
+    if json_float(x) is not None:
         return f"{x:.6g}"
     return exact if exact is not None else "beyond floating-point range"
 
