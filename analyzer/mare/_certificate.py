@@ -68,6 +68,9 @@ class StabilityCertificate:
         The solver's optimal ``t`` in ``Psi >= t I`` (its own claim).
     X, K:
         The certificate, in the user's coordinates.
+    route:
+        What produced the gains ``K``: ``"LMI"``, ``"annihilating gains"`` or
+        ``"MARE gains by policy iteration"`` (the check is the same for all).
     """
 
     lambdas: tuple[Fraction, ...]
@@ -76,6 +79,7 @@ class StabilityCertificate:
     solver_margin: float | None
     X: np.ndarray
     K: tuple[np.ndarray, ...]
+    route: str = "LMI"
 
     def describe(self) -> dict[str, Any]:
         checked = (
@@ -86,6 +90,7 @@ class StabilityCertificate:
         return {
             "method": self.method,
             "checked": checked + " (seed 004 Theorem 5(b); seed 000 Theorem 5(b) for several packets)",
+            "gains_from": self.route,
             "at": [str(x) for x in self.lambdas],
             "margin": _finite(self.margin),
             "closed_loop_spectral_radius_at_most": _finite(1.0 - self.margin),
@@ -174,23 +179,30 @@ def certify(
     K: Sequence[np.ndarray],
     solver_margin: float | None,
     exact: bool = True,
+    route: str = "LMI",
 ) -> StabilityCertificate | None:
     """Re-check gains ``K`` (user coordinates) at ``lambdas``; a certificate or ``None``.
 
-    ``model`` carries the same probabilities as floats.  The float check runs
-    first (cheap, and it rejects gains that do not stabilize); the exact one
-    then decides, unless ``exact`` is false.
+    ``model`` carries the same probabilities as floats.  A float test runs
+    first (cheap, and it rejects gains that do not stabilize): with ``exact``
+    the signs of the eigenvalues of ``X`` and ``X - L_K(X)``, then the exact
+    check decides; without, :func:`float_check` with its rounding allowance
+    is the verdict.
     """
     X = lyapunov_certificate(model, K)
     if X is None:
         return None
-    margin = float_check(model, K, X)
+    if exact:  # the float test only has to reject gains that do not stabilize: signs, no allowance
+        M, _ = _float_residual(model, K, X)
+        ex, em = np.linalg.eigvalsh(0.5 * (X + X.T)), np.linalg.eigvalsh(M)
+        margin = float(em[0] / ex[-1]) if ex[0] > 0 and em[0] > 0 else None
+    else:
+        margin = float_check(model, K, X)
     if margin is None:
         return None
     method = "eigenvalue_margin"
     if exact:
         if not exact_check(plant, weights, K, X):
             return None
-        M, _ = _float_residual(model, K, X)
         method = "exact_rational"
-    return StabilityCertificate(tuple(lambdas), method, margin, solver_margin, X, tuple(K))
+    return StabilityCertificate(tuple(lambdas), method, margin, solver_margin, X, tuple(K), route)
