@@ -33,6 +33,8 @@ from ._riccati import ArrivalModel, gains, policy_evaluation
 
 #: Policy-iteration steps allowed per call (Newton converges quadratically once close).
 POLICY_STEPS = 40
+#: Relative change of the gains at which policy iteration stops.
+GAIN_RTOL = 1e-10
 
 
 def unstable_subspace(A: np.ndarray) -> np.ndarray:
@@ -86,8 +88,11 @@ def policy_gains(
         X_next = policy_evaluation(model, K_next)
         if X_next is None:  # rounding at the edge of stability: keep the last stabilizing gains
             break
-        best = K_next
-        done = np.linalg.norm(X_next - X) <= 1e-13 * np.linalg.norm(X)
+        best_prev, best = best, K_next
+        # the gains, not X, are the product here: X blows up near the threshold while the gains settle
+        done = max(float(np.linalg.norm(a - b)) for a, b in zip(K_next, best_prev)) <= GAIN_RTOL * max(
+            1.0, max(float(np.linalg.norm(a)) for a in K_next)
+        )
         X = X_next
         if done:
             break

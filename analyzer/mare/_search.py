@@ -41,6 +41,9 @@ from ._vech import congruence_matrix, unvech, vech
 GRID = Fraction(1, 10**12)
 #: Steps of the MARE iteration from 0 before its gains are given up at a point (Newton takes over at 16, 32, ...).
 MARE_MAX_ITER = 4096
+#: Largest ``n`` at which the probe below the continuation's end also solves the LMI (about 0.1 s at n = 10;
+#: seconds from n = 20 on, where the continuation's stall is the evidence, see :meth:`CertifiedSearch.bisect`).
+LMI_PROBE_MAX_N = 12
 #: Slide / re-optimize rounds of the continuation in :meth:`CertifiedSearch.bisect`.
 MAX_ROUNDS = 64
 
@@ -184,20 +187,24 @@ class CertifiedSearch:
         model = self._working_model(lambdas)
         it = solve_v_bar(model, max_iter=MARE_MAX_ITER, budget=self.budget)
         if it.matrix is None:
-            return None, it.reason is not None and "diverge" in it.reason
+            return None, it.iterations < MARE_MAX_ITER  # stopped early: the trace exploded
         Ti = self._T0i
         return tuple(Ti @ k for k in gains(it.matrix, model)), False
 
     def certify(
-        self, lambdas: Sequence[Fraction], prior: Sequence[np.ndarray] | None = None
+        self,
+        lambdas: Sequence[Fraction],
+        prior: Sequence[np.ndarray] | None = None,
+        scratch: bool = True,
+        lmi: bool = True,
     ) -> StabilityCertificate | None:
         """A re-checked certificate at ``lambdas``, or ``None``.
 
         Tries, in order: the annihilating gains; the policy-iteration
-        refinement of ``prior`` (gains certified nearby); the MARE's gains
-        from scratch; the LMI (per :attr:`lmi_mode`: not where the MARE
-        iteration diverged, since by seed 004 Theorem 5 the LMI is then
-        infeasible too up to rounding).
+        refinement of ``prior`` (gains certified nearby); with ``scratch``,
+        the MARE's gains from 0; with ``lmi``, the LMI (per
+        :attr:`lmi_mode`; not where the MARE iteration diverged, since by
+        seed 004 Theorem 5 the LMI is then infeasible too, up to rounding).
         """
         if self.lmi_mode == "always":
             return self.certify_lmi(lambdas)
@@ -212,12 +219,14 @@ class CertifiedSearch:
                 cert = self.check_gains(lambdas, K1, route="MARE gains by policy iteration")
                 if cert is not None:
                     return cert
-        K2, diverged = self.mare_gains(lambdas)
-        if K2 is not None:
-            cert = self.check_gains(lambdas, K2, route="MARE gains by policy iteration")
-            if cert is not None:
-                return cert
-        if self.lmi_mode == "never" or diverged:
+        diverged = False
+        if scratch:
+            K2, diverged = self.mare_gains(lambdas)
+            if K2 is not None:
+                cert = self.check_gains(lambdas, K2, route="MARE gains by policy iteration")
+                if cert is not None:
+                    return cert
+        if not lmi or self.lmi_mode == "never" or diverged:
             return None
         return self.certify_lmi(lambdas)
 
@@ -320,11 +329,20 @@ class CertifiedSearch:
            stabilizing, re-optimize them there by policy iteration (the
            MARE's optimal gains at that point), slide again, until a round
            gains less than half the tolerance;
-        2. *probe*: one certification attempt one tolerance below (every
-           route, the LMI included unless :attr:`lmi_mode` is ``"never"``);
-           a success restarts step 1 from there, a failure ends the search
-           with the probe's point as ``lower_end``: "not certified" there,
-           never a proved infeasibility.
+        2. *probe*: one certification attempt one tolerance below (the
+           annihilating gains, the refined gains, and the LMI for
+           ``n <= LMI_PROBE_MAX_N``); a success restarts step 1 from there
+           (and a second stall there falls back to bisection), a failure
+           ends the search with the probe's point as ``lower_end``: "not
+           certified" there, never a proved infeasibility.
+
+        Why a stall means convergence: the MARE's optimal gains at ``lambda``
+        stabilize down to some ``T(lambda) < lambda``, and ``T(lambda) -
+        lambda_upper`` shrinks like the square of ``lambda - lambda_upper``
+        (the threshold is stationary in the gains at the optimum), so a round
+        that gains less than ``tol / 2`` ends within about ``tol`` of
+        ``lambda_upper``.  That is evidence, not proof, which is why only the
+        upper end is reported as certified.
 
         With ``lmi_mode == "always"`` this is the plain bisection over LMI
         solves (the reference route).
@@ -361,7 +379,7 @@ class CertifiedSearch:
             probe = Fraction(math.floor((hi - tol) / GRID)) * GRID
             if not lo < probe < hi:
                 break
-            c = self.certify(at(probe), prior=cert.K)
+            c = self.certify(at(probe), prior=cert.K, scratch=False, lmi=self.A.shape[0] <= LMI_PROBE_MAX_N)
             if c is None:
                 return UpperBound(hi, cert, probe, self.solves - steps0)
             hi, cert, probed = probe, c, True
