@@ -243,6 +243,20 @@ def _vech_index(n: int) -> np.ndarray:
     return idx
 
 
+def _congruence(A: np.ndarray) -> np.ndarray:
+    """``T`` with ``vech(A P A') = T vech(P)``: the formula of :func:`kfio.mare._vech.congruence_matrix`.
+
+    Repeated here so that the simulation does not import :mod:`kfio.mare` (CVXPY and all) at first use.
+    """
+    n = A.shape[0]
+    iu, ju = np.triu_indices(n)
+    W = (A[iu][:, :, None] * A[ju][:, None, :]).reshape(len(iu), n * n)
+    T = W[:, iu * n + ju]
+    T += W[:, ju * n + iu]
+    T[:, iu == ju] *= 0.5
+    return np.ascontiguousarray(T)
+
+
 @dataclass(frozen=True, eq=False)
 class PackedRiccatiStep:
     """:class:`RiccatiStep`'s map on a *structure of arrays*: the ``n(n+1)/2`` unique entries of each ``P``.
@@ -274,8 +288,6 @@ class PackedRiccatiStep:
 
     @classmethod
     def build(cls, A: np.ndarray, Q: np.ndarray, C: np.ndarray, R: np.ndarray) -> PackedRiccatiStep:
-        from ..mare._vech import congruence_matrix
-
         n, p = A.shape[0], C.shape[0]
         iu, ju = np.triu_indices(n)
         idx = _vech_index(n)
@@ -293,7 +305,7 @@ class PackedRiccatiStep:
             ju=ju,
             G=G,
             H=H,
-            T=np.ascontiguousarray(congruence_matrix(A)),
+            T=_congruence(np.asarray(A, float)),
             q=np.asarray(Q, float)[iu, ju][:, None],
             r=np.asarray(R, float)[ku, lu][:, None] if p else np.zeros((0, 1)),
         )

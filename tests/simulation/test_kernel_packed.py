@@ -104,3 +104,11 @@ def test_seeded_runs_agree_across_kernels(system, channel) -> None:
     assert np.array_equal(ok, np.isfinite(a.stats.mean))
     assert np.allclose(a.stats.mean[ok], b.stats.mean[ok], rtol=1e-12, atol=0)
     assert np.allclose(a.stats.percentiles, b.stats.percentiles, rtol=1e-12, atol=0, equal_nan=True)
+
+
+def test_the_kernel_s_congruence_matrix_is_the_bounds_one() -> None:
+    from kfio.mare._vech import congruence_matrix
+    from kfio.simulation._kernel import _congruence
+
+    A = np.random.default_rng(3).normal(size=(5, 5))
+    assert np.array_equal(_congruence(A), congruence_matrix(A))
