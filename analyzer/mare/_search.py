@@ -440,6 +440,16 @@ class CertifiedSearch:
         labels = [["unstable" if unstable[i, j] else "undecided" for j in range(K)] for i in range(K)]
         lowest_prev: int | None = None  # lowest stable index of the previous column
         certified = 0
+        last: list[StabilityCertificate] = []  # the latest certificate: its gains seed the next cell
+
+        def cell(lambdas: list[Fraction]) -> StabilityCertificate | None:
+            # the MARE from 0 is slow exactly where it fails (below the threshold): refine nearby gains instead
+            prior = last[-1].K if last else None
+            c = self.certify(lambdas, prior=prior, scratch=prior is None)
+            if c is not None:
+                last.append(c)
+            return c
+
         for i in range(K):
             free = [j for j in range(K) if not unstable[i, j]]
             if not free:
@@ -448,13 +458,13 @@ class CertifiedSearch:
             if lowest_prev is not None:
                 hi_idx = lowest_prev  # stable by monotonicity in lambda_1
             else:
-                if self.certify([values[i], values[K - 1]]) is None:
+                if cell([values[i], values[K - 1]]) is None:
                     continue
                 certified += 1
                 hi_idx = K - 1
             while hi_idx - lo_idx > 1:
                 mid = (lo_idx + hi_idx) // 2
-                if self.certify([values[i], values[mid]]) is not None:
+                if cell([values[i], values[mid]]) is not None:
                     hi_idx = mid
                     certified += 1
                 else:
