@@ -10,6 +10,8 @@ import json
 import subprocess
 import sys
 
+import pytest
+
 from kfio.service.jobs import PRELOAD
 
 CHILD = r"""
@@ -31,6 +33,7 @@ def test_warmup_is_preloaded_last() -> None:
     assert PRELOAD[-1] == "kfio.service.warmup"
 
 
+@pytest.mark.slow  # a fresh interpreter imports all of kfio and runs the warm-up (about 10 s of CPU)
 def test_after_the_warmup_a_seed_analysis_imports_no_module() -> None:
     out = subprocess.run([sys.executable, "-c", CHILD], check=True, capture_output=True, text=True, timeout=300)
     res = json.loads(out.stdout.strip().splitlines()[-1])
