@@ -1,62 +1,119 @@
-"""kfio's math library: stability of Kalman filters with lossy measurement channels.
+"""kfio: stability of Kalman filters whose measurements travel over lossy networks.
 
 Knows nothing of HTTP or the command line (see :mod:`kfio.service`).  Exact in,
 exact through, converted at the edge.
+
+The Python API (see ``docs/python_api.md``)::
+
+    import kfio
+    sys = kfio.System(A=[[1.25, 0], [1, 1.1]], C=[[1, 1]], Q=[[20, 0], [0, 20]], R=[[2.5]])
+    report = kfio.analyze(sys, kfio.bernoulli(0.5))      # the exact verdict
+    kfio.bounds(sys, kfio.bernoulli(0.6))                 # Riccati and LMI bounds
+    kfio.simulate(sys, kfio.bernoulli(0.6), steps=50)     # Monte Carlo
+    kfio.expected_covariance(sys, kfio.bernoulli(0.6), 6) # exact E[P_t]
+
+Every name is imported when first used, so ``import kfio`` (and the ``kfio``
+command) start at once: SymPy, CVXPY and Matplotlib load only with the
+function that needs them.
 """
 
-from ._budget import Budget
-from .errors import (
-    AnalyzerError,
-    AssumptionViolation,
-    BudgetExceeded,
-    InvalidInput,
-    LimitExceeded,
-    NumericalFailure,
-)
-from .model._exact import load_json, parse_number
-from .model._limits import DEFAULT_LIMITS, Limits
-from .model._request import load_request, parse_request
-from .model._types import MarkovChannel, PerSensorChannel, Request, Sensor, System
-from .stability._verdict import StabilityReport, analyze
+from __future__ import annotations
 
-# Bounds pull in CVXPY (seconds to import) and simulation is large: both are
-# exported lazily so that ``kfio analyze`` starts fast.
+import importlib
+from typing import TYPE_CHECKING, Any
+
+from ._version import __version__
+
+#: Public name -> the module (relative to kfio) that defines it.
 _LAZY = {
+    # the Python API
+    "System": "._system",
+    "analyze": "._api",
+    "bounds": "._api",
+    "simulate": "._api",
+    "expected_covariance": "._api",
+    "build_request": "._api",
+    "request_dict": "._api",
+    "bernoulli": ".model._channels",
+    "gilbert_elliott": ".model._channels",
+    "markov": ".model._channels",
+    "per_sensor": ".model._channels",
+    # errors and budgets
+    "AnalyzerError": ".errors",
+    "AssumptionViolation": ".errors",
+    "BudgetExceeded": ".errors",
+    "InvalidInput": ".errors",
+    "LimitExceeded": ".errors",
+    "NumericalFailure": ".errors",
+    "Budget": "._budget",
+    # the JSON route and the model
+    "load_json": ".model._exact",
+    "parse_number": ".model._exact",
+    "DEFAULT_LIMITS": ".model._limits",
+    "Limits": ".model._limits",
+    "load_request": ".model._request",
+    "parse_request": ".model._request",
+    "MarkovChannel": ".model._types",
+    "PerSensorChannel": ".model._types",
+    "Request": ".model._types",
+    "Sensor": ".model._types",
+    # reports and the request-level entry points
+    "StabilityReport": ".stability._verdict",
+    "BlockReport": ".stability._verdict",
     "compute_bounds": ".mare",
     "BoundsReport": ".mare",
-    "simulate": ".simulation",
     "SimulationReport": ".simulation",
-    "expected_covariance": ".simulation",
     "FiniteHorizonReport": ".simulation",
     "SimulationLimits": ".simulation",
     "DEFAULT_SIMULATION_LIMITS": ".simulation",
 }
 
+if TYPE_CHECKING:  # what the lazy names are, for type checkers and editors
+    from ._api import analyze, bounds, build_request, expected_covariance, request_dict, simulate
+    from ._budget import Budget
+    from ._system import System
+    from .errors import (
+        AnalyzerError,
+        AssumptionViolation,
+        BudgetExceeded,
+        InvalidInput,
+        LimitExceeded,
+        NumericalFailure,
+    )
+    from .mare import BoundsReport, compute_bounds
+    from .model._channels import bernoulli, gilbert_elliott, markov, per_sensor
+    from .model._exact import load_json, parse_number
+    from .model._limits import DEFAULT_LIMITS, Limits
+    from .model._request import load_request, parse_request
+    from .model._types import MarkovChannel, PerSensorChannel, Request, Sensor
+    from .simulation import DEFAULT_SIMULATION_LIMITS, FiniteHorizonReport, SimulationLimits, SimulationReport
+    from .stability._verdict import BlockReport, StabilityReport
 
-def __getattr__(name: str):
-    if name in _LAZY:
-        import importlib
 
-        value = getattr(importlib.import_module(_LAZY[name], __name__), name)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module 'kfio' has no attribute {name!r}")
+def __getattr__(name: str) -> Any:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'kfio' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module, __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))
 
 
 __all__ = [
-    "BoundsReport",
-    "DEFAULT_SIMULATION_LIMITS",
-    "FiniteHorizonReport",
-    "SimulationLimits",
-    "SimulationReport",
-    "compute_bounds",
-    "expected_covariance",
-    "simulate",
+    "__version__",
     "AnalyzerError",
     "AssumptionViolation",
+    "BlockReport",
+    "BoundsReport",
     "Budget",
     "BudgetExceeded",
     "DEFAULT_LIMITS",
+    "DEFAULT_SIMULATION_LIMITS",
+    "FiniteHorizonReport",
     "InvalidInput",
     "LimitExceeded",
     "Limits",
@@ -65,11 +122,23 @@ __all__ = [
     "PerSensorChannel",
     "Request",
     "Sensor",
+    "SimulationLimits",
+    "SimulationReport",
     "StabilityReport",
     "System",
     "analyze",
+    "bernoulli",
+    "bounds",
+    "build_request",
+    "compute_bounds",
+    "expected_covariance",
+    "gilbert_elliott",
     "load_json",
     "load_request",
+    "markov",
     "parse_number",
     "parse_request",
+    "per_sensor",
+    "request_dict",
+    "simulate",
 ]

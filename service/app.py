@@ -16,15 +16,18 @@ from fastapi.exceptions import RequestValidationError
 from fastapi.openapi.utils import get_openapi
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
+from kfio._version import __version__
 from kfio.errors import AnalyzerError
 
-from .api import api_router
+from .api import api_router, web
 from .api.schemas import COMPONENTS
 from .dispatch import Dispatcher
+from .jobstore import JobStore
 from .problems import ProblemError, problem_handler
 from .settings import Settings, get_settings
 
-API_VERSION = "1.0.0"
+#: OpenAPI ``info.version``: the package's version (the HTTP contract ships with the package).
+API_VERSION = __version__
 
 DESCRIPTION = """\
 Stability analysis of Kalman filters whose measurements travel over lossy packet channels.
@@ -51,18 +54,23 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
         dispatcher = Dispatcher(settings)
-        app.state.dispatcher = dispatcher
-        starting = asyncio.create_task(dispatcher.pool.start())
+        jobs = JobStore(settings)
+        app.state.dispatcher, app.state.jobs = dispatcher, jobs
+        starting = [asyncio.create_task(dispatcher.pool.start()), asyncio.create_task(jobs.start())]
         try:
             yield
         finally:
             await dispatcher.pool.close()
-            # it sees the pool closed and stops its last worker; a start error was logged
-            await asyncio.gather(starting, return_exceptions=True)
-            app.state.dispatcher = None
+            await jobs.close()
+            # they see the pools closed and stop their last workers; a start error was logged
+            await asyncio.gather(*starting, return_exceptions=True)
+            app.state.dispatcher = app.state.jobs = None
 
-    app = FastAPI(title="kfio", version=API_VERSION, description=DESCRIPTION, lifespan=lifespan)
+    app = FastAPI(
+        title="kfio", version=API_VERSION, description=DESCRIPTION, lifespan=lifespan, docs_url=None, redoc_url=None
+    )
     app.include_router(api_router)
+    web.install(app)  # /, /docs, /redoc: every asset from the package, none from another host
     for exc in (ProblemError, AnalyzerError, RequestValidationError, StarletteHTTPException, Exception):
         app.add_exception_handler(exc, problem_handler)
 

@@ -6,6 +6,8 @@ INVALID_INPUT = 2  #: the request broke a rule; one message on stderr names the 
 BOUNDARY = 3  #: verdict on the boundary |alpha|^2 sigma = 1 (Theorem 1's gap)
 BUDGET = 4  #: the work did not finish within its budget
 NUMERICAL = 5  #: a numerical step could not be completed or certified (kfio refuses rather than guess)
+SWEEP_ERRORS = 8  #: kfio sweep finished, and some points have an error row (the table says which)
 INTERNAL = 70  #: anything else: a bug (EX_SOFTWARE)
+BROKEN_PIPE = 141  #: standard output was closed by its reader (128 + SIGPIPE, as a shell reports it)
 
 BY_VERDICT = {"stable": STABLE, "unstable": UNSTABLE, "boundary": BOUNDARY}

@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import argparse
-import json
 import sys
-from typing import Any, Callable
+from typing import Any, Callable, TextIO
 
+from kfio._reporting import json_text
 from kfio.errors import BudgetExceeded, InvalidInput, NumericalFailure
+from kfio.model._exact import escaped
 
 from . import exitcodes
 
@@ -36,8 +37,20 @@ def add_request_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def dump_json(report: dict[str, Any]) -> str:
-    """Stable JSON text: fixed key order as built, two-space indent."""
-    return json.dumps(report, indent=2, allow_nan=False)
+    """Stable JSON text: fixed key order as built, two-space indent (the text of ``report.to_json()``)."""
+    return json_text(report)
+
+
+def emit(text: str, stream: TextIO | None = None) -> None:
+    """Print ``text`` so that no user string can make printing fail.
+
+    Sensor names and keys are user text; whatever the terminal's encoding,
+    a character it cannot show is written as a backslash escape instead of
+    raising ``UnicodeEncodeError``.
+    """
+    stream = stream if stream is not None else sys.stdout
+    encoding = getattr(stream, "encoding", None) or "utf-8"
+    print(escaped(text).encode(encoding, "backslashreplace").decode(encoding), file=stream)
 
 
 def run_guarded(body: Callable[[], int]) -> int:
@@ -45,14 +58,14 @@ def run_guarded(body: Callable[[], int]) -> int:
     try:
         return body()
     except InvalidInput as exc:
-        print(f"kfio: invalid input at {exc.field}: {exc.rule}", file=sys.stderr)
+        emit(f"kfio: invalid input at {exc.field}: {exc.rule}", sys.stderr)
         return exitcodes.INVALID_INPUT
     except BudgetExceeded as exc:
-        print(f"kfio: budget exceeded: {exc}", file=sys.stderr)
+        emit(f"kfio: budget exceeded: {exc}", sys.stderr)
         return exitcodes.BUDGET
     except NumericalFailure as exc:
-        print(f"kfio: numerical failure: {exc}", file=sys.stderr)
+        emit(f"kfio: numerical failure: {exc}", sys.stderr)
         return exitcodes.NUMERICAL
     except KeyboardInterrupt:
-        print("kfio: interrupted", file=sys.stderr)
+        emit("kfio: interrupted", sys.stderr)
         return 130

@@ -20,14 +20,15 @@ Examples
 
 from __future__ import annotations
 
-import importlib
 import json
 import logging
 from typing import Any, Callable, Mapping
 
 from kfio import Budget, Request, load_request
 
+from .loader import resolve
 from .problems import Unavailable, problem_from_exception
+from .progress import budget_for
 from .settings import Settings
 
 log = logging.getLogger("kfio.service")
@@ -49,20 +50,6 @@ PNG = "image/png"
 #: ``(content, media_type)``: what a job hands back to the shell.
 JobOutput = tuple[bytes, str]
 JobFn = Callable[[bytes, Settings, Budget, Mapping[str, Any]], JobOutput]
-
-
-def resolve(module: str, name: str) -> Callable[..., Any]:
-    """``module.name``, or :class:`Unavailable` if this build does not have it."""
-    try:
-        mod = importlib.import_module(module)
-    except ModuleNotFoundError as exc:
-        if exc.name is not None and module.startswith(exc.name):
-            raise Unavailable(f"{module} is not part of this build of kfio") from None
-        raise
-    fn = getattr(mod, name, None)
-    if fn is None:
-        raise Unavailable(f"{module}.{name} is not part of this build of kfio")
-    return fn
 
 
 def report_json(report: Any) -> JobOutput:
@@ -106,6 +93,13 @@ def _plot_job(name: str) -> JobFn:
     return job
 
 
+def _sweep_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[str, Any]) -> JobOutput:
+    """``POST /v1/sweeps``: :func:`kfio.service.sweep_jobs.sweep_job` (imported when a sweep runs)."""
+    from .sweep_jobs import sweep_job
+
+    return sweep_job(body, settings, budget, params)
+
+
 JOBS: dict[str, JobFn] = {
     "analyze": analyze_job,
     "bounds": bounds_job,
@@ -113,6 +107,7 @@ JOBS: dict[str, JobFn] = {
     "plot-phase-transition": _plot_job("phase_transition"),
     "plot-region": _plot_job("region"),
     "plot-simulation": _plot_job("simulation"),
+    "sweep": _sweep_job,
 }
 
 
@@ -129,7 +124,8 @@ def run_job(name: str, body: bytes, settings: Settings, params: Mapping[str, Any
         fn = JOBS.get(name)
         if fn is None:
             raise Unavailable(f"unknown job {name!r}")
-        content, media_type = fn(body, settings, Budget(seconds=budget_s), params)
+        budget, params = budget_for(budget_s, params)  # a job's progress file, if it has one
+        content, media_type = fn(body, settings, budget, params)
         return ("ok", content, media_type)
     except Exception as exc:  # noqa: BLE001 - every failure becomes a problem document
         problem = problem_from_exception(exc)

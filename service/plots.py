@@ -2,7 +2,7 @@
 
 Figures are built with the object API (:class:`matplotlib.figure.Figure`),
 never ``pyplot``: no global state, no GUI backend.  Each function takes a
-validated request, a :class:`analyzer.Budget` and the plot's query
+validated request, a :class:`kfio.Budget` and the plot's query
 parameters, and returns PNG bytes.  They compute nothing of their own:
 every value drawn comes from :mod:`kfio` (the same calls as the CLI).
 """
@@ -18,7 +18,7 @@ import numpy as np
 from kfio import Budget, InvalidInput, Request
 from kfio.model._types import MarkovChannel, PerSensorChannel, to_float
 
-from .jobs import resolve
+from .loader import resolve
 
 _SIZE = (7.0, 4.5)
 _DPI = 100
@@ -89,7 +89,7 @@ def simulation(request: Request, budget: Budget, params: Mapping[str, Any]) -> b
     return _png(fig)
 
 
-# -- phase transition (seed 004, Figs. 1-3) -----------------------------------
+# -- phase transition (Sinopoli et al. 2004, Figs. 1-3) ------------------------
 
 
 def _value(node: Any) -> float | None:
@@ -112,21 +112,21 @@ def _critical_values(request: Request, budget: Budget) -> dict[str, float | None
 def phase_transition(request: Request, budget: Budget, params: Mapping[str, Any]) -> bytes:
     """``trace(S_bar)`` and ``trace(V_bar)`` against lambda, critical values marked.
 
-    ``S_bar`` (:func:`kfio.mare._riccati.s_bar`, exists for lambda above the
-    lower bound) bounds the limit of ``E[P_t]`` from below and ``V_bar``
-    (:func:`kfio.mare._riccati.v_bar`, exists above the LMI bound) from above
-    (seed 004, Theorems 3-6).  Marked: the lower bound ``1 - 1/rho(A)^2``,
-    the LMI upper bound and kfio's exact ``lambda_c`` (seed 001).
+    The traces come from :func:`kfio.mare._sweep.bound_traces`: ``S_bar``
+    (exists for lambda above the lower bound) bounds the limit of ``E[P_t]``
+    from below and ``V_bar`` (exists above the LMI bound) from above
+    (Sinopoli et al. 2004, Theorems 3-6).  Marked: the lower bound
+    ``1 - 1/rho(A)^2``, the LMI upper bound and kfio's exact ``lambda_c``
+    (Rohr, Marelli and Fu 2014).
 
     ``V_bar`` is evaluated only above the LMI bound: the MARE iteration
-    converges exactly where the LMI is feasible (seed 004, Theorem 5), and
-    just below that point its divergence is slow to detect (seconds per
-    point).
+    converges exactly where the LMI is feasible (Sinopoli et al. 2004,
+    Theorem 5), and just below that point its divergence is slow to detect
+    (seconds per point).
     """
     lam0 = _bernoulli_lambda(request, "phase transition")
     _require_noise(request, "phase transition")
-    s_bar = resolve("kfio.mare._riccati", "s_bar")
-    v_bar = resolve("kfio.mare._riccati", "v_bar")
+    bound_traces = resolve("kfio.mare._sweep", "bound_traces")
     crit = _critical_values(request, budget)
     A, C, Q, R = (to_float(getattr(request.system, k)) for k in ("A", "C", "Q", "R"))
     lower = crit["lower"] or 0.0
@@ -134,14 +134,10 @@ def phase_transition(request: Request, budget: Budget, params: Mapping[str, Any]
     hi = params.get("lambda_max")
     lo = float(lo) if lo is not None else max(0.0, lower - 0.05)
     hi = float(hi) if hi is not None else 1.0
-    lams = np.linspace(lo, hi, int(params.get("points", 100)))
-    s_tr = np.full(lams.shape, math.nan)
-    v_tr = np.full(lams.shape, math.nan)
-    for i, lam in enumerate(lams):
-        budget.tick("phase transition plot", 2)
-        s_tr[i] = _trace_or_nan(s_bar, A, Q, 1.0 - lam)
-        if crit["upper"] is None or lam >= crit["upper"]:
-            v_tr[i] = _trace_or_nan(v_bar, A, C, Q, R, lam)
+    traces = bound_traces(
+        A, C, Q, R, np.linspace(lo, hi, int(params.get("points", 100))), v_bar_from=crit["upper"], budget=budget
+    )
+    lams, s_tr, v_tr = traces.lambdas, traces.s_bar, traces.v_bar
     fig = _figure()
     ax = fig.subplots()
     ax.plot(lams, s_tr, label="trace(S_bar): lower bound on lim E[P_t]")
@@ -166,21 +162,7 @@ def phase_transition(request: Request, budget: Budget, params: Mapping[str, Any]
     return _png(fig)
 
 
-def _trace_or_nan(fn: Any, *args: Any) -> float:
-    """``trace(fn(*args))``; NaN where the bound does not exist (``None``, non-finite, or refused)."""
-    from kfio import AnalyzerError
-
-    try:
-        value = fn(*args)
-    except (AnalyzerError, ArithmeticError, np.linalg.LinAlgError):
-        return math.nan
-    if value is None:
-        return math.nan
-    tr = float(np.trace(np.asarray(value, dtype=float)))
-    return tr if math.isfinite(tr) and tr >= 0 else math.nan
-
-
-# -- region map for two sensors (seed 000, Figs. 4-5) -------------------------
+# -- region map for two sensors (Liu and Goldsmith 2004, Figs. 4-5) ------------
 
 _LABEL_CODE = {"unstable": -1.0, "undecided": 0.0, "stable": 1.0}
 
@@ -188,12 +170,12 @@ _LABEL_CODE = {"unstable": -1.0, "undecided": 0.0, "stable": 1.0}
 def region(request: Request, budget: Budget, params: Mapping[str, Any]) -> bytes:
     """The ``(lambda_1, lambda_2)`` square for two sensors: stable, unstable, undecided.
 
-    The coloured map is the bounds report's (``options.bounds.grid`` set to
-    the ``points`` parameter): unstable by the lower bound, stable by the LMI
-    of seed 000.  Over it, kfio's exact labels for every cell and the exact
-    boundary curve ``lambda_2 = h(lambda_1)``
-    (:func:`kfio.stability._regions.exact_region_grid`; MATH.md, "exact
-    partial-loss regions", an extension of seed 001).
+    Everything drawn is the bounds report's (``options.bounds.grid`` set to
+    the ``points`` parameter): the coloured map, unstable by the lower bound
+    and stable by the LMI of Liu and Goldsmith (2004), and over it the exact
+    labels of every cell and the exact boundary curve ``lambda_2 = h(lambda_1)``
+    that the report carries (:func:`kfio.stability._regions.exact_region_grid`,
+    a kfio extension of Rohr, Marelli and Fu 2014).
     """
     import dataclasses
 
@@ -202,10 +184,13 @@ def region(request: Request, budget: Budget, params: Mapping[str, Any]) -> bytes
     points = int(params.get("points", 21))
     grid_options = {**request.options.get("bounds", {}), "grid": points}
     gridded = dataclasses.replace(request, options={**request.options, "bounds": grid_options})
-    report = resolve("kfio.mare._compute", "compute_bounds")(gridded, budget=budget).to_dict()["region"]
+    bounds = resolve("kfio.mare._compute", "compute_bounds")(gridded, budget=budget)
+    report = bounds.region.to_dict()
     values = np.array(report["values"], dtype=float)
     labels = np.array([[_LABEL_CODE.get(x, 0.0) for x in row] for row in report["labels"]])
-    grid = resolve("kfio.stability._regions", "exact_region_grid")(request, points, budget=budget)
+    grid = bounds.region.exact
+    if grid is None:  # outside Assumption 1: let the exact route say why
+        grid = resolve("kfio.stability._regions", "exact_region_grid")(request, points, budget=budget)
     exact = np.array([[_EXACT_CODE[x] for x in row] for row in grid.labels])
     return _draw_region(values, labels, exact, grid.curve, tuple(report["axes"]), request)
 
@@ -255,11 +240,12 @@ def _draw_region(
     handles.append(ax.scatter([point[0]], [point[1]], marker="*", s=140, c="blue", label="request"))
     ax.set_xlim(extent[0], extent[1])
     ax.set_ylim(extent[2], extent[3])
-    ax.set_xlabel(f"lambda_1 ({axes[0]})")
-    ax.set_ylabel(f"lambda_2 ({axes[1]})")
+    # sensor names are user text: drawn as plain text, never through mathtext or TeX
+    ax.set_xlabel(f"lambda_1 ({axes[0]})", parse_math=False, usetex=False)
+    ax.set_ylabel(f"lambda_2 ({axes[1]})", parse_math=False, usetex=False)
     ax.set_title(
-        "Stability region for two sensors: bounds (colours, seed 000)\n"
-        "and exact verdict (markers, line: kfio extension of seed 001)",
+        "Stability region for two sensors: bounds (colours, Liu and Goldsmith 2004)\n"
+        "and exact verdict (markers, line: kfio extension of Rohr, Marelli and Fu 2014)",
         fontsize="medium",
     )
     ax.legend(handles=handles, fontsize="x-small", loc="upper left", bbox_to_anchor=(1.01, 1.0))

@@ -41,6 +41,7 @@ from kfio.errors import (
     LimitExceeded,
     NumericalFailure,
 )
+from kfio.model._exact import escaped
 
 from .pool import PoolBusy, PoolTimeout, WorkerCrashed
 
@@ -85,15 +86,16 @@ class Problem:
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON document (members that are ``None`` are left out)."""
+        # escaped: a field pointer or rule may quote user text, which must not break the encoder
         doc: dict[str, Any] = {
             "type": _PREFIX + self.kind,
             "title": self.title,
             "status": self.status,
-            "detail": self.detail,
+            "detail": escaped(self.detail),
         }
         for key in ("field", "rule"):
             if getattr(self, key) is not None:
-                doc[key] = getattr(self, key)
+                doc[key] = escaped(getattr(self, key))
         if self.location is not None:
             doc["in"] = self.location
         return doc

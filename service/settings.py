@@ -47,6 +47,22 @@ class Settings(BaseSettings):
         Bounds of the in-memory LRU cache of answers.
     max_states, max_markov_order, max_digits, max_outputs, max_sensors:
         Request size limits (:class:`kfio.model._limits.Limits`).
+    job_workers:
+        Worker processes of the job lane (``/v1/jobs/...``), separate from
+        ``workers`` so that long jobs never starve synchronous requests.
+    job_time_budget_s:
+        Default and maximum budget of one job (an hour by default); a job
+        may ask for less with ``options.time_budget_s``.
+    max_jobs:
+        Jobs allowed to wait for a job worker; beyond it ``POST /v1/jobs/...``
+        answers 429.
+    job_retention:
+        Finished jobs kept for polling (the oldest are forgotten first).
+    dask_scheduler:
+        Address of a Dask scheduler (``tcp://HOST:PORT``) that ``POST /v1/sweeps``
+        runs its sweeps on; without it a sweep runs in its job-lane worker.
+    max_sweep_points:
+        Points one ``POST /v1/sweeps`` may have.
     """
 
     model_config = SettingsConfigDict(env_prefix="KFIO_", frozen=True, extra="ignore")
@@ -65,6 +81,12 @@ class Settings(BaseSettings):
     max_digits: int = Field(Limits.max_digits, ge=1)
     max_outputs: int = Field(Limits.max_outputs, ge=1)
     max_sensors: int = Field(Limits.max_sensors, ge=1)
+    job_workers: int = Field(1, ge=1, le=64)
+    job_time_budget_s: float = Field(3600.0, gt=0, le=86400)
+    max_jobs: int = Field(16, ge=0)
+    job_retention: int = Field(64, ge=1)
+    dask_scheduler: str | None = Field(None, pattern=r"^(tcp|tls|inproc)://[^\s]+$")
+    max_sweep_points: int = Field(100_000, ge=1, le=1_000_000)
 
     def limits(self) -> Limits:
         """The request size limits of this deployment."""

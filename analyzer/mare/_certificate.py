@@ -33,6 +33,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from .._json import json_float
 from ..model._types import Matrix
 from ._riccati import ArrivalModel, closed_loop_operator
 from ._vech import unvech, vech
@@ -88,17 +89,14 @@ class StabilityCertificate:
         )
         return {
             "method": self.method,
-            "checked": checked + " (seed 004 Theorem 5(b); seed 000 Theorem 5(b) for several packets)",
+            "checked": checked
+            + " (Sinopoli et al. 2004, Theorem 5(b); Liu and Goldsmith 2004, Theorem 5(b) for several packets)",
             "gains_from": self.route,
             "at": [str(x) for x in self.lambdas],
-            "margin": _finite(self.margin),
-            "closed_loop_spectral_radius_at_most": _finite(1.0 - self.margin),
-            "solver_margin": _finite(self.solver_margin),
+            "margin": json_float(self.margin),
+            "closed_loop_spectral_radius_at_most": json_float(1.0 - self.margin),
+            "solver_margin": json_float(self.solver_margin),
         }
-
-
-def _finite(x: float | None) -> float | None:
-    return float(x) if x is not None and np.isfinite(x) else None
 
 
 def lyapunov_certificate(model: ArrivalModel, K: Sequence[np.ndarray]) -> np.ndarray | None:

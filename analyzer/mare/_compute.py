@@ -90,10 +90,18 @@ def _interval(search: CertifiedSearch, s: int, opts: BoundsOptions, rho: float) 
 
 def _verdict(search: CertifiedSearch, model: ArrivalModel, rho: float, lams: tuple[Fraction, ...]):
     if model.loss_probability * rho * rho >= 1.0:
-        return "unstable", "prod (1 - lambda) rho(A)^2 >= 1: the lower bound S_bar diverges (seed 004 Theorem 3)", None
+        return (
+            "unstable",
+            "prod (1 - lambda) rho(A)^2 >= 1: the lower bound S_bar diverges (Sinopoli et al. 2004, Theorem 3)",
+            None,
+        )
     cert = search.certify(lams)
     if cert is not None:
-        return "stable", "the stability LMI is feasible here, certificate re-checked (seed 004 Theorems 3 and 5)", cert
+        return (
+            "stable",
+            "the stability LMI is feasible here, certificate re-checked (Sinopoli et al. 2004, Theorems 3 and 5)",
+            cert,
+        )
     return "undecided", "between the bounds: the lower bound does not diverge and no LMI certificate was found", None
 
 
@@ -135,7 +143,7 @@ def _region(search: CertifiedSearch, opts: BoundsOptions, rho: float, request: R
     labels, certified = search.region(values, unstable)
     names = tuple(p.name or f"sensor {i}" for i, p in enumerate(opts.packets))
     try:
-        exact = exact_region_grid(request, K, budget=budget).to_dict()
+        exact = exact_region_grid(request, K, budget=budget)
     except AssumptionViolation:
         exact = None
     return RegionMap(

@@ -11,14 +11,13 @@ Every error names its field as a JSON pointer.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from decimal import Decimal
 from fractions import Fraction
 from typing import Any, Mapping
 
 from ..errors import InvalidInput, LimitExceeded
-from ..model._exact import parse_number
+from ..model._exact import parse_integer, parse_number
 from ..model._request import option_group
-from ..model._types import MarkovChannel, PerSensorChannel, Request
+from ..model._types import MarkovChannel, Packet, Request, packets_of
 from ._phat import max_horizon
 
 DEFAULT_TOLERANCE = 1e-6
@@ -28,16 +27,12 @@ MIN_GRID, MAX_GRID = 2, 41
 #: The stability LMI has ``n (2^m + 1)`` rows for ``n`` states and ``m`` packets.
 MAX_LMI_ROWS = 200
 
+#: Largest entry magnitude (``10^MAX_FLOAT_EXPONENT``) of A, C, Q, R for the floating-point bounds.
+MAX_FLOAT_EXPONENT = 30
+MAX_FLOAT_ENTRY = Fraction(10) ** MAX_FLOAT_EXPONENT
+
 _KEYS = ("tolerance", "horizon", "grid", "arrival_probability")
 _WHERE = "/options/bounds"
-
-
-@dataclass(frozen=True)
-class Packet:
-    """One measurement packet: its name (``None`` for a request without sensors) and rows of ``C``."""
-
-    name: str | None
-    rows: tuple[int, ...]
 
 
 @dataclass(frozen=True)
@@ -69,10 +64,35 @@ def _source(key: str, flags: Mapping[str, Any]) -> str:
     return f" (given as --{key})" if key in flags else ""
 
 
+#: Integer options are range-checked against this before conversion (the precise
+#: limits follow); an exponent bomb such as ``1e999999999`` never becomes an ``int``.
+_COARSE_INTEGER_LIMIT = 10**6
+
+
 def _integer(value: Any, key: str, flags: Mapping[str, Any]) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, Decimal)) or int(value) != value:
-        raise InvalidInput(f"{_WHERE}/{key}", f"{key} must be an integer{_source(key, flags)}")
-    return int(value)
+    at = f"{_WHERE}/{key}"
+    try:
+        return parse_integer(value, at, -_COARSE_INTEGER_LIMIT, _COARSE_INTEGER_LIMIT, key)
+    except InvalidInput as exc:
+        raise type(exc)(at, exc.rule + _source(key, flags)) from None
+
+
+def _check_float_range(request: Request) -> None:
+    """The bounds are floating-point computations: entries beyond :data:`MAX_FLOAT_ENTRY` are refused.
+
+    ``rho(A)^2``, ``A P A'`` and the LMI blocks square the entries; at
+    ``|a| = 10^160`` (a valid exact input) they overflow float64.  The exact
+    verdict (``kfio analyze``) has no such limit.
+    """
+    for name, M in (("A", request.system.A), ("C", request.system.C), ("Q", request.system.Q), ("R", request.system.R)):
+        for i, row in enumerate(M or ()):
+            for j, x in enumerate(row):
+                if abs(x) > MAX_FLOAT_ENTRY:
+                    raise LimitExceeded(
+                        f"/system/{name}/{i}/{j}",
+                        f"the bounds are computed in floating point; entries of {name} must have magnitude at most "
+                        f"1e{MAX_FLOAT_EXPONENT} (kfio analyze decides the exact verdict without this limit)",
+                    )
 
 
 def _iid(channel: MarkovChannel, where: str) -> Fraction:
@@ -80,23 +100,15 @@ def _iid(channel: MarkovChannel, where: str) -> Fraction:
     if lam is None:
         raise InvalidInput(
             f"{where}/model",
-            f"the bounds of seeds 004 and 000 assume i.i.d. (Bernoulli) packet losses; this {channel.model} "
+            f"the bounds of Sinopoli et al. 2004 and Liu and Goldsmith 2004 assume i.i.d. (Bernoulli) packet losses; this {channel.model} "
             "channel has memory (use 'kfio analyze' for its exact verdict)",
         )
     return lam
 
 
 def _packets(request: Request) -> tuple[tuple[Packet, ...], tuple[Fraction, ...]]:
-    system, channel = request.system, request.channel
-    if isinstance(channel, PerSensorChannel):
-        assert system.sensors is not None  # guaranteed by parse_channel
-        lams = tuple(_iid(channel.for_sensor(s.name), f"/channel/channels/{s.name}") for s in system.sensors)
-        return tuple(Packet(s.name, s.rows) for s in system.sensors), lams
-    lam = _iid(channel, "/channel")
-    if system.sensors is not None:  # a single sensor carrying every row
-        s = system.sensors[0]
-        return (Packet(s.name, s.rows),), (lam,)
-    return (Packet(None, tuple(range(system.p))),), (lam,)
+    packets = packets_of(request)
+    return packets, tuple(_iid(p.channel, p.where) for p in packets)
 
 
 def _arrival_overrides(raw: Any, packets: tuple[Packet, ...], lams: tuple[Fraction, ...]) -> tuple[Fraction, ...]:
@@ -143,6 +155,7 @@ def parse_bounds_options(request: Request, flags: Mapping[str, Any] | None = Non
         raise InvalidInput("/system/Q", "the bounds need the process noise covariance Q")
     if system.R is None:
         raise InvalidInput("/system/R", "the bounds need the measurement noise covariance R")
+    _check_float_range(request)
     packets, lams = _packets(request)
     n, m = system.n, len(packets)
     if n * ((1 << m) + 1) > MAX_LMI_ROWS:
@@ -173,7 +186,9 @@ def parse_bounds_options(request: Request, flags: Mapping[str, Any] | None = Non
         at = f"{_WHERE}/horizon"
         h = _integer(merged["horizon"], "horizon", flags)
         if m != 1:
-            raise InvalidInput(at, f"P_hat_N (seed 002) is defined for one packet; this request has {m} sensors")
+            raise InvalidInput(
+                at, f"P_hat_N (Rohr, Marelli and Fu 2010) is defined for one packet; this request has {m} sensors"
+            )
         if h < 1:
             raise InvalidInput(at, f"horizon must be at least 1{_source('horizon', flags)}")
         if h > limit:

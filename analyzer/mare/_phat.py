@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._budget import Budget
+from ..errors import InvalidInput, NumericalFailure
 from ._riccati import DIVERGENCE_RATIO, v_bar
 from ._vech import congruence_matrix, unvech, vech, vech_layout
 
@@ -96,7 +97,7 @@ class BatchedMare:
     def g_n(self, h: np.ndarray, N: int) -> np.ndarray:
         """``vech(g_N(X))`` for one ``h = vech(X)`` (seed 002, eq. 11)."""
         if N < 1:
-            raise ValueError("N must be at least 1")
+            raise InvalidInput("/options/bounds/horizon", "N must be at least 1")
         return self._descend(h[None, :], np.ones(1), N)
 
     def _descend(self, level: np.ndarray, w: np.ndarray, depth: int) -> np.ndarray:
@@ -222,3 +223,31 @@ def p_hat_sequence(
     for N in sorted(set(horizons)):
         get(N)
     return out
+
+
+def p_hat(A: np.ndarray, C: np.ndarray, Q: np.ndarray, R: np.ndarray, lam: float, N: int) -> np.ndarray:
+    """The ``P_hat_N`` of Rohr, Marelli and Fu (2010): the fixed point of ``g_N`` (eq. 15); ``p_hat(..., 1)`` is ``V_bar``.
+
+    ``V_bar = P_hat_1 >= P_hat_N >= lim E[P_t]`` (their Theorem 1).  The
+    algorithm (``g_N`` level by level on batches, warm starts along divisors)
+    is :func:`p_hat_sequence`.
+
+    Raises
+    ------
+    NumericalFailure
+        If ``P_hat_N`` does not exist at this ``lam`` (the iteration diverges)
+        or the iteration stalls.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> A, C, Q, R = np.array([[-1.25]]), np.array([[1.0]]), np.array([[1.0]]), np.array([[2.5]])
+    >>> bool(p_hat(A, C, Q, R, 0.4, 8)[0, 0] < p_hat(A, C, Q, R, 0.4, 1)[0, 0])
+    True
+    """
+    if N < 1:
+        raise InvalidInput("/options/bounds/horizon", "N must be at least 1")
+    res = p_hat_sequence(A, C, Q, R, lam, [N])[N]
+    if res.matrix is None:
+        raise NumericalFailure(f"P_hat_{N}: {res.reason}")
+    return res.matrix

@@ -9,25 +9,25 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .._json import json_float as num  # the one JSON-safe float of kfio
+from .._reporting import Report, stamp
 from ..model._exact import fraction_text
+from ..model._types import Packet
 from ._certificate import StabilityCertificate
 from ._lmi import SDPSolution
-from ._options import Packet
 from ._phat import PHat
 from ._riccati import VBarIteration
 from ._search import UpperBound
 
+if TYPE_CHECKING:  # the exact grid is computed by kfio.stability, which imports no bounds
+    from ..stability._regions import RegionGrid
+
 #: Relative agreement required between the V_bar iteration and the SDP.
 SDP_AGREEMENT = 1e-6
-
-
-def num(x: float | None) -> float | None:
-    """A JSON-safe float: ``None`` for missing, NaN or infinite values."""
-    return float(x) if x is not None and np.isfinite(x) else None
 
 
 def mat(M: np.ndarray | None) -> list[list[float | None]] | None:
@@ -63,7 +63,7 @@ class CriticalInterval:
                 "certificate": {
                     "method": "closed_form",
                     "checked": "rho(A) from numpy.linalg.eigvals; below this value the Lyapunov lower bound "
-                    "S_bar diverges (seed 004 Theorem 3, seed 000 Theorem 3)",
+                    "S_bar diverges (Sinopoli et al. 2004, Theorem 3; Liu and Goldsmith 2004, Theorem 3)",
                 },
             },
             "upper": {
@@ -125,7 +125,7 @@ class CovarianceBounds:
                 "trace": _trace(it.matrix),
                 "reason": it.reason,
                 "iteration": {
-                    "method": "monotone iteration from 0 (seed 004 Theorem 6(a)), finished by monotone policy "
+                    "method": "monotone iteration from 0 (Sinopoli et al. 2004, Theorem 6(a)), finished by monotone policy "
                     "iteration from above; the two bracket V_bar",
                     "iterations": it.iterations,
                     "policy_iteration_steps": it.newton_steps,
@@ -186,7 +186,7 @@ class PHatBounds:
             )
         return {
             "horizon": self.horizon,
-            "method": "fixed point of g_N (seed 002 eqs. 11, 15, 22), g_N evaluated level by level on batches",
+            "method": "fixed point of g_N (Rohr, Marelli and Fu 2010, eqs. 11, 15, 22), g_N evaluated level by level on batches",
             "entries": out,
             "monotone_subsequences_hold": self.subsequences_monotone(),
         }
@@ -201,7 +201,7 @@ class RegionMap:
     labels: tuple[tuple[str, ...], ...]
     certified_cells: int
     lmi_solves: int
-    exact: dict[str, Any] | None = None  # kfio.stability._regions.exact_region_grid(...).to_dict()
+    exact: RegionGrid | None = None  # kfio.stability._regions.exact_region_grid(...), an extension
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -210,19 +210,19 @@ class RegionMap:
             "labels": [list(row) for row in self.labels],
             "indexing": "labels[i][j] is the cell lambda_1 = values[i], lambda_2 = values[j]",
             "legend": {
-                "stable": "the LMI (seed 000 eq. 20) is feasible, by a re-checked certificate at this cell or at a "
-                "cell below it in both coordinates (feasibility is monotone, seed 000 Lemma 3)",
+                "stable": "the LMI (Liu and Goldsmith 2004, eq. 20) is feasible, by a re-checked certificate at this cell or at a "
+                "cell below it in both coordinates (feasibility is monotone, Liu and Goldsmith 2004, Lemma 3)",
                 "unstable": "prod_s (1 - lambda_s) rho(A)^2 >= 1: the lower bound diverges",
                 "undecided": "neither bound decides",
             },
             "certified_cells": self.certified_cells,
             "lmi_solves": self.lmi_solves,
-            "exact": self.exact,
+            "exact": None if self.exact is None else self.exact.to_dict(),
         }
 
 
-@dataclass(frozen=True)
-class BoundsReport:
+@dataclass(frozen=True, repr=False)
+class BoundsReport(Report):
     """Everything ``kfio bounds`` reports; :meth:`to_dict` is the JSON, :meth:`summary` the text."""
 
     packets: tuple[Packet, ...]
@@ -242,6 +242,15 @@ class BoundsReport:
     def one_packet(self) -> bool:
         return len(self.packets) == 1
 
+    def _repr_items(self) -> list[tuple[str, Any]]:
+        intervals = tuple((c.lower, None if c.upper.value is None else float(c.upper.value)) for c in self.critical)
+        return [
+            ("verdict", self.verdict),
+            ("critical_intervals", intervals),
+            ("trace_S_bar", _trace(self.covariance.s_bar)),
+            ("trace_V_bar", _trace(self.covariance.v_bar.matrix)),
+        ]
+
     def to_dict(self) -> dict[str, Any]:
         one = self.one_packet
         packets = [
@@ -257,6 +266,7 @@ class BoundsReport:
         if not one:
             sensors = [{"name": p.name, "critical_interval": c.to_dict()} for p, c in zip(self.packets, self.critical)]
         return {
+            **stamp(),
             "command": "bounds",
             "packets": packets,
             "spectral_radius_A": num(self.rho),
@@ -271,7 +281,7 @@ class BoundsReport:
             "variance_threshold": {
                 "value": num(self.variance_threshold),
                 "formula": "max(0, 1 - 1/rho(A)^4)",
-                "meaning": "finite asymptotic variance of P_t needs lambda above this (seed 002 Theorem 4)",
+                "meaning": "finite asymptotic variance of P_t needs lambda above this (Rohr, Marelli and Fu 2010, Theorem 4)",
             }
             if one
             else None,
@@ -286,12 +296,12 @@ class BoundsReport:
         if not self.one_packet:
             notes.append(
                 "several sensors: critical_probability is per sensor, see sensors[*].critical_interval; "
-                "P_hat_N and the variance threshold are one-packet results (seed 002)"
+                "P_hat_N and the variance threshold are one-packet results (Rohr, Marelli and Fu 2010)"
             )
         bad = [k for k in ("A_Q_controllable", "A_C_detectable") if self.hypotheses.get(k) is False]
         if bad:
             notes.append(
-                f"hypotheses of seed 004 Theorems 2-5 fail ({', '.join(bad)}): the bounds are computed "
+                f"hypotheses of Sinopoli et al. 2004, Theorems 2-5 fail ({', '.join(bad)}): the bounds are computed "
                 "but those theorems do not cover them"
             )
         return notes
@@ -314,7 +324,7 @@ class BoundsReport:
             lines.append(f"  {c.lower:.9g} (closed form) <= {who} <= {upper}")
         lines.append(f"  at the operating point: {self.verdict} ({self.verdict_reason})")
         if self.variance_threshold is not None:
-            lines.append(f"  finite variance needs lambda > {self.variance_threshold:.6g} (seed 002)")
+            lines.append(f"  finite variance needs lambda > {self.variance_threshold:.6g} (Rohr, Marelli and Fu 2010)")
         cov = self.covariance
         s = cov.s_bar
         s_text = f"trace {np.trace(s):.6g}" if s is not None else "none"
@@ -336,7 +346,7 @@ class BoundsReport:
                 t = float(np.trace(e.matrix))
                 t1 = t if e.N == 1 else t1
                 parts.append(f"N={e.N}: {t:.6g}" + (f" ({100 * (1 - t / t1):+.1f}%)" if t1 and e.N > 1 else ""))
-            lines.append("  P_hat_N traces (seed 002): " + ", ".join(parts))
+            lines.append("  P_hat_N traces (Rohr, Marelli and Fu 2010): " + ", ".join(parts))
         if self.region is not None:
             r = self.region
             lines.append(

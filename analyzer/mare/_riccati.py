@@ -1,11 +1,11 @@
-"""Riccati and Lyapunov maps behind the bounds of MATH.md section 3.
+"""Riccati and Lyapunov maps behind the classical bounds (docs/theory.md).
 
 The modified algebraic Riccati equation (MARE) of seed 004 (eq. 17) and its
 partial-loss generalization of seed 000 (eq. 12, for any number ``m`` of
 independent Bernoulli packets), the Lyapunov lower bound ``S_bar`` and the
 MARE fixed point ``V_bar`` (seed 004, Theorems 3, 4 and 6(a); seed 000,
-Theorem 4).  Seed 002's tighter bounds ``P_hat_N``: :func:`p_hat`, computed by
-:mod:`kfio.mare._phat`.
+Theorem 4).  The tighter bounds ``P_hat_N`` of Rohr, Marelli and Fu (2010)
+build on this module and live in :mod:`kfio.mare._phat`.
 
 Everything here is float NumPy.  Certificates that are checked exactly live
 in :mod:`kfio.mare._certificate`.
@@ -372,34 +372,3 @@ def v_bar(A: np.ndarray, C: np.ndarray, Q: np.ndarray, R: np.ndarray, lam: float
     39.512342
     """
     return solve_v_bar(one_packet_model(A, C, Q, R, lam)).matrix
-
-
-def p_hat(A: np.ndarray, C: np.ndarray, Q: np.ndarray, R: np.ndarray, lam: float, N: int) -> np.ndarray:
-    """Seed 002's ``P_hat_N``, the fixed point of ``g_N`` (eq. 15); ``p_hat(..., 1)`` is ``V_bar``.
-
-    ``V_bar = P_hat_1 >= P_hat_N >= lim E[P_t]`` (seed 002, Theorem 1).  The
-    algorithm (``g_N`` level by level on batches, warm starts along divisors)
-    lives in :func:`kfio.mare._phat.p_hat_sequence`.
-
-    Raises
-    ------
-    NumericalFailure
-        If ``P_hat_N`` does not exist at this ``lam`` (the iteration diverges)
-        or the iteration stalls.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> A, C, Q, R = np.array([[-1.25]]), np.array([[1.0]]), np.array([[1.0]]), np.array([[2.5]])
-    >>> bool(p_hat(A, C, Q, R, 0.4, 8)[0, 0] < p_hat(A, C, Q, R, 0.4, 1)[0, 0])
-    True
-    """
-    from ..errors import NumericalFailure
-    from ._phat import p_hat_sequence  # here, not at the top: bounds_phat builds on this module
-
-    if N < 1:
-        raise ValueError("N must be at least 1")
-    res = p_hat_sequence(A, C, Q, R, lam, [N])[N]
-    if res.matrix is None:
-        raise NumericalFailure(f"P_hat_{N}: {res.reason}")
-    return res.matrix

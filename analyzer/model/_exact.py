@@ -10,6 +10,7 @@ built with :class:`fractions.Fraction` from integer parts.
 from __future__ import annotations
 
 import json
+import math
 import re
 from decimal import Decimal
 from fractions import Fraction
@@ -17,23 +18,32 @@ from typing import Any
 
 from ..errors import InvalidInput, LimitExceeded
 
-_DECIMAL = r"[+-]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][+-]?\d+)?"
-_NUMBER_RE = re.compile(rf"^\s*({_DECIMAL})\s*(?:/\s*({_DECIMAL})\s*)?$")
-_PARTS_RE = re.compile(r"^([+-]?)(\d*)(?:\.(\d*))?(?:[eE]([+-]?\d+))?$")
+# The grammar is ASCII: ``\d`` and ``str.isdigit`` would accept other scripts' digits
+# ("\u0661.\u0662\u0665" is 1.25 in Arabic-Indic digits) and ``\s`` would accept vertical tab and
+# form feed; only JSON's own whitespace (space, tab, LF, CR) may surround a number in a string.
+_DIGITS = "[0-9]"
+_WS = r"[ \t\n\r]*"
+_DECIMAL = rf"[+-]?(?:{_DIGITS}+(?:\.{_DIGITS}*)?|\.{_DIGITS}+)(?:[eE][+-]?{_DIGITS}+)?"
+_NUMBER_RE = re.compile(rf"{_WS}({_DECIMAL}){_WS}(?:/{_WS}({_DECIMAL}){_WS})?", re.ASCII)
+_PARTS_RE = re.compile(rf"([+-]?)({_DIGITS}*)(?:\.({_DIGITS}*))?(?:[eE]([+-]?{_DIGITS}+))?", re.ASCII)
+#: Exponent digits kept by :func:`load_json`; a longer exponent is clamped (the value is far
+#: beyond every limit either way, and :mod:`decimal` refuses exponents above 10^18).
+_MAX_EXPONENT_DIGITS = 15
 
 
 def _decimal_text_to_fraction(text: str, field: str, max_digits: int) -> Fraction:
-    m = _PARTS_RE.match(text)
+    m = _PARTS_RE.fullmatch(text)
     if m is None:  # pragma: no cover - guarded by _NUMBER_RE
-        raise InvalidInput(field, f"{text!r} is not a number")
+        raise InvalidInput(field, f"{value_text(text)} is not a number")
     sign, whole, frac, exp = m.groups()
     frac = frac or ""
     digits = (whole + frac).lstrip("0")
     if len(digits) > max_digits:
         raise LimitExceeded(field, f"numbers may have at most {max_digits} digits")
-    e = int(exp) if exp else 0
-    if abs(e) > 4 * max_digits:
-        raise LimitExceeded(field, f"exponent {e} is beyond the limit of {4 * max_digits}")
+    exp = (exp or "0").lstrip("+")
+    if len(exp.lstrip("-").lstrip("0")) > len(str(4 * max_digits)) or abs(int(exp)) > 4 * max_digits:
+        raise LimitExceeded(field, f"the exponent of a number must lie in [-{4 * max_digits}, {4 * max_digits}]")
+    e = int(exp)
     mantissa = int(whole + frac) if (whole + frac) else 0
     e -= len(frac)
     value = Fraction(mantissa * 10**e) if e >= 0 else Fraction(mantissa, 10 ** (-e))
@@ -78,7 +88,7 @@ def parse_number(value: Any, field: str, max_digits: int = 200) -> Fraction:
             raise LimitExceeded(field, f"numbers may have at most {max_digits} digits")
         return Fraction(value)
     if isinstance(value, float):
-        value = repr(value)
+        value = repr(float(value))  # numpy.float64 is a float whose repr is "np.float64(0.5)"
     if isinstance(value, Decimal):
         if not value.is_finite():
             raise InvalidInput(field, "NaN and infinities are not numbers")
@@ -87,11 +97,11 @@ def parse_number(value: Any, field: str, max_digits: int = 200) -> Fraction:
         raise InvalidInput(field, f"expected a number, got a {_json_type(value)}")
     if len(value) > 4 * max_digits + 16:
         raise LimitExceeded(field, f"numbers may have at most {max_digits} digits")
-    m = _NUMBER_RE.match(value)
+    m = _NUMBER_RE.fullmatch(value)
     if m is None:
         raise InvalidInput(
             field,
-            f"{value[:40]!r} is not a number (use an integer, a decimal such as "
+            f"{value_text(value)} is not a number (use an integer, a decimal such as "
             "'1.1e-3', or a fraction such as '11/10')",
         )
     num = _decimal_text_to_fraction(m.group(1), field, max_digits)
@@ -101,6 +111,75 @@ def parse_number(value: Any, field: str, max_digits: int = 200) -> Fraction:
     if den == 0:
         raise InvalidInput(field, "division by zero")
     return num / den
+
+
+def parse_integer(value: Any, field: str, lo: int, hi: int | None = None, name: str = "the value") -> int:
+    """An integer option, range-checked from its decimal text before any conversion.
+
+    A JSON number such as ``1e999999999`` is kept by :func:`load_json` as a
+    :class:`decimal.Decimal`; converting it to ``int`` would build a
+    billion-digit integer.  Comparisons of a ``Decimal`` with the bounds look
+    at its exponent first, so the range is checked at no cost, and only a
+    value inside ``[lo, hi]`` is converted.  Integral decimals (``1e3``,
+    ``200.0``) are integers.
+
+    Raises
+    ------
+    InvalidInput
+        Not a number, not integral, or below ``lo``.
+    LimitExceeded
+        Above ``hi``.
+
+    Examples
+    --------
+    >>> parse_integer(Decimal("1e3"), "/x", 1, 10**6)
+    1000
+    >>> parse_integer(Decimal("1e999999999"), "/x", 1, 41, "grid")
+    Traceback (most recent call last):
+    ...
+    kfio.errors.LimitExceeded: /x: grid must be at most 41; got 1e999999999
+    """
+    if isinstance(value, bool) or not isinstance(value, (int, Decimal)):
+        raise InvalidInput(field, f"{name} must be an integer; got {value_text(value)}")
+    if isinstance(value, Decimal) and not value.is_finite():
+        raise InvalidInput(field, f"{name} must be an integer; got {value_text(value)}")
+    if value < lo:
+        raise InvalidInput(field, f"{name} must be at least {lo}; got {value_text(value)}")
+    if hi is not None and value > hi:
+        raise LimitExceeded(field, f"{name} must be at most {hi}; got {value_text(value)}")
+    if isinstance(value, Decimal):
+        if hi is None and value.adjusted() >= _MAX_UNBOUNDED_DIGITS:
+            raise LimitExceeded(field, f"{name} must have at most {_MAX_UNBOUNDED_DIGITS} digits")
+        if value != value.to_integral_value():
+            raise InvalidInput(field, f"{name} must be an integer; got {value_text(value)}")
+        return int(value)
+    return value
+
+
+#: Digits allowed in an integer option without an upper bound of its own.
+_MAX_UNBOUNDED_DIGITS = 30
+
+
+def value_text(value: Any, limit: int = 40) -> str:
+    """A user value as it would appear in JSON, for messages: never a Python repr, never huge.
+
+    Strings are JSON-quoted with non-ASCII escaped (so a lone surrogate prints
+    as ``\\ud800``), numbers are their decimal text, containers are named.
+
+    Examples
+    --------
+    >>> value_text(Decimal("1E+999999")), value_text("x"), value_text(True), value_text([1])
+    ('1e999999', '"x"', 'true', 'a JSON array')
+    """
+    if isinstance(value, Decimal):
+        text = str(value).lower().replace("e+", "e")
+    elif isinstance(value, int) and not isinstance(value, bool):
+        text = str(value) if abs(value) < 10**limit else f"an integer of more than {limit} digits"
+    elif isinstance(value, (str, bool, float)) or value is None:
+        text = json.dumps(value, ensure_ascii=True)
+    else:
+        return f"a JSON {_json_type(value)}"
+    return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
 def _json_type(value: Any) -> str:
@@ -113,6 +192,15 @@ def _json_type(value: Any) -> str:
     return type(value).__name__
 
 
+def _json_decimal(text: str) -> Decimal:
+    """A JSON number with a fraction or exponent, exactly (its exponent clamped, see ``_MAX_EXPONENT_DIGITS``)."""
+    mantissa, sep, exp = text.replace("E", "e").partition("e")
+    if sep and len(exp.lstrip("+-")) > _MAX_EXPONENT_DIGITS:
+        sign = "-" if exp.startswith("-") else ""
+        text = f"{mantissa}e{sign}1{'0' * _MAX_EXPONENT_DIGITS}"
+    return Decimal(text)
+
+
 def _reject_constant(name: str) -> Any:
     raise InvalidInput("/", f"{name} is not a number (NaN and infinities are rejected)")
 
@@ -121,7 +209,7 @@ def _no_duplicates(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
     out: dict[str, Any] = {}
     for key, val in pairs:
         if key in out:
-            raise InvalidInput("/", f"duplicate key {key!r} in a JSON object")
+            raise InvalidInput("/", f"duplicate key {value_text(key)} in a JSON object")
         out[key] = val
     return out
 
@@ -143,9 +231,9 @@ def load_json(text: str | bytes) -> Any:
         except UnicodeDecodeError as exc:
             raise InvalidInput("/", f"request is not UTF-8 text ({exc.reason})") from None
     try:
-        return json.loads(
+        tree = json.loads(
             text,
-            parse_float=Decimal,
+            parse_float=_json_decimal,
             parse_constant=_reject_constant,
             object_pairs_hook=_no_duplicates,
         )
@@ -157,8 +245,102 @@ def load_json(text: str | bytes) -> Any:
         if isinstance(exc, InvalidInput):
             raise
         raise InvalidInput("/", f"not valid JSON: {exc}") from None
+    if _may_hold_surrogates(text):
+        _reject_lone_surrogates(tree)
+    return tree
+
+
+def escaped(text: str) -> str:
+    """``text`` with lone surrogates written as backslash escapes (safe to encode, print and send).
+
+    Examples
+    --------
+    >>> print(escaped("s" + chr(0xD800)))
+    s\\ud800
+    """
+    if text.isascii():
+        return text
+    return text.encode("utf-8", "backslashreplace").decode("utf-8")
+
+
+#: A JSON escape of a surrogate code point (U+D800 to U+DFFF), in either case.
+_SURROGATE_ESCAPE = re.compile(r"\\u[dD][89abcdefABCDEF]")
+
+
+def _may_hold_surrogates(text: str) -> bool:
+    """Whether the parsed tree can hold a surrogate: the text has one, raw or as an escape.
+
+    A scan of the text at C speed; the tree walk runs only when this is true
+    (a 1 MiB request of plain numbers costs no walk).
+    """
+    return _has_lone_surrogate(text) or _SURROGATE_ESCAPE.search(text) is not None
+
+
+def _has_lone_surrogate(text: str) -> bool:
+    if text.isascii():
+        return False
+    try:
+        text.encode("utf-8")
+    except UnicodeEncodeError:
+        return True
+    return False
+
+
+def _reject_lone_surrogates(tree: Any) -> None:
+    """Refuse strings (keys or values) that are not Unicode text.
+
+    JSON's ``\\ud800`` escape can denote a lone surrogate, which is no
+    character at all (RFC 8259, section 8.2); I-JSON (RFC 7493, section 2.1)
+    forbids it.  Such a string cannot be encoded as UTF-8, so it could not be
+    echoed in a report or an error message; it is refused here, once, for
+    every field name, sensor name, channel key, history key and option key.
+    """
+    stack: list[tuple[Any, tuple[str, ...]]] = [(tree, ())]  # depth first, in document order
+    while stack:
+        node, path = stack.pop()
+        if isinstance(node, str):
+            if _has_lone_surrogate(node):
+                raise InvalidInput(_path_pointer(path), _SURROGATE_RULE)
+        elif isinstance(node, dict):
+            children = []
+            for key, val in node.items():
+                if _has_lone_surrogate(key):
+                    raise InvalidInput(_path_pointer((*path, key)), _SURROGATE_RULE)
+                children.append((val, (*path, key)))
+            stack.extend(reversed(children))
+        elif isinstance(node, list):
+            stack.extend((node[i], (*path, str(i))) for i in reversed(range(len(node))))
+
+
+_SURROGATE_RULE = (
+    "strings must be Unicode text: a lone surrogate escape such as \\ud800 is not a character "
+    "(RFC 8259 section 8.2, RFC 7493 section 2.1)"
+)
+
+
+def _path_pointer(path: tuple[str, ...]) -> str:
+    return "".join("/" + escaped(p).replace("~", "~0").replace("/", "~1") for p in path) or "/"
 
 
 def fraction_text(x: Fraction) -> str:
     """Canonical text of a rational: ``"9/25"``, ``"-3"``."""
     return str(x.numerator) if x.denominator == 1 else f"{x.numerator}/{x.denominator}"
+
+
+def finite_or_none(x: float | None) -> float | None:
+    """``float(x)`` if it is finite, else ``None``: a report's float field next to an exact one.
+
+    Floats in reports are conveniences derived from exact values; when one is
+    outside float64's range (``|alpha| = 10^160`` has ``|alpha|^2 = 10^320``)
+    the JSON field is ``null`` and the exact field carries the value (JSON has
+    no infinities).
+
+    Examples
+    --------
+    >>> finite_or_none(1e300 * 1e300), finite_or_none(0.5)
+    (None, 0.5)
+    """
+    if x is None:
+        return None
+    x = float(x)
+    return x if math.isfinite(x) else None

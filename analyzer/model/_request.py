@@ -13,7 +13,7 @@ from fractions import Fraction
 from typing import Any, Iterable, Mapping, Optional
 
 from ..errors import InvalidInput, LimitExceeded
-from ._exact import load_json, parse_number
+from ._exact import load_json, parse_number, value_text
 from ._limits import DEFAULT_LIMITS, Limits
 from ._types import Channel, MarkovChannel, Matrix, PerSensorChannel, Request, Sensor, System
 
@@ -64,8 +64,11 @@ def parse_matrix(obj: Any, where: str, name: str, limits: Limits, max_rows: int,
     return tuple(rows)
 
 
-#: Wall-clock allowance (s) for the exact fallback of :func:`is_psd`.
-EXACT_PSD_SECONDS = 10.0
+#: Largest Hadamard bound (bits) of the integer congruence ``D m D`` for which :func:`is_psd` runs
+#: its exact route.  Every intermediate of the elimination is a ratio of minors of that matrix, so
+#: this bounds the work by size, not by time: at the limit a near-singular 40 x 40 matrix takes
+#: about 2 s of CPU on a loaded 2-core machine (bench/bench_validation.py, docs/hardening.md).
+MAX_EXACT_PSD_BITS = 1 << 14
 
 
 def _float_filter(m: Matrix) -> Optional[int]:
@@ -90,36 +93,68 @@ def _float_filter(m: Matrix) -> Optional[int]:
     return None
 
 
+def hadamard_bits(m: Matrix) -> int:
+    """Bits of Hadamard's bound ``prod_i ||row_i||`` of the integer congruence ``D m D``.
+
+    ``d_i`` is the lcm of the denominators in row ``i`` of ``m``; ``D m D``
+    has the same inertia as ``m`` (``D`` is positive diagonal) and integer
+    entries ``m_ij d_i d_j``.
+
+    Computed from bit lengths only (no big products): every minor of the
+    scaled matrix, hence every intermediate of :func:`is_psd`'s exact route,
+    has at most this many bits.  Rows of ``m`` with large coprime
+    denominators make it grow fastest (the lcm multiplies them).
+    """
+    import math
+
+    total = 0
+    for row in m:
+        d = math.lcm(*(x.denominator for x in row))
+        # entry i, j of D m D is x d_i d_j with d_j <= lcm of all denominators: bound by bit lengths
+        biggest = max((abs(x.numerator) * (d // x.denominator)).bit_length() for x in row)
+        total += biggest + (len(row).bit_length() + 1) // 2
+    dmax = max(math.lcm(*(x.denominator for x in row)).bit_length() for row in m)
+    return total + len(m) * dmax
+
+
 def is_psd(m: Matrix, strict: bool, where: str = "/", exact: bool = False) -> bool:
-    """Exact (semi)definiteness of a symmetric rational matrix.
+    """Exact (semi)definiteness of a symmetric rational matrix, decided deterministically.
 
     A floating-point filter (:func:`_float_filter`) decides clear cases.
-    Near-singular matrices go to a symmetric-pivoted ``L D L^T`` in exact
-    rationals (python-flint ``fmpq``): pivot on the largest remaining diagonal
-    entry; a negative one means indefinite; when every remaining diagonal
-    entry is zero, the matrix is semidefinite iff the remaining block is zero
-    (``m_ij^2 <= m_ii m_jj``).  The exact route has :data:`EXACT_PSD_SECONDS`;
-    past it, :class:`LimitExceeded` names ``where`` instead of hanging.
-    ``exact=True`` (certificates) skips the filter and the time allowance.
-    """
-    import time
+    Near-singular matrices take the exact route: a symmetric-pivoted
+    ``L D L^T`` in exact rationals (python-flint ``fmpq``), pivoting on the
+    largest remaining diagonal entry; a negative one means indefinite; when
+    every remaining diagonal entry is zero the matrix is semidefinite iff the
+    remaining block is zero (``m_ij^2 <= m_ii m_jj``).  Every intermediate
+    is a ratio of two minors of ``m``, i.e. of minors of the integer
+    congruence ``D m D`` (see :func:`hadamard_bits`),
+    so the work is bounded by the matrix's size: when Hadamard's bound of
+    ``D m D`` exceeds :data:`MAX_EXACT_PSD_BITS` the request is refused
+    (:class:`LimitExceeded` naming ``where``), whatever the machine's load.
+    ``exact=True`` (certificates the analyzer built itself) skips the filter
+    and the size limit.
 
+    Examples
+    --------
+    >>> from fractions import Fraction as F
+    >>> is_psd(((F(1), F(1)), (F(1), F(1))), strict=False), is_psd(((F(1), F(1)), (F(1), F(1))), strict=True)
+    (True, False)
+    """
     import flint
 
     sign = None if exact else _float_filter(m)
     if sign is not None:
         return sign > 0 or (sign == 0 and not strict)
-    start = time.monotonic()
-    n = len(m)
+    if not exact and hadamard_bits(m) > MAX_EXACT_PSD_BITS:
+        raise LimitExceeded(
+            where,
+            "the matrix is too close to singular for floating point to decide its definiteness, and deciding "
+            f"it exactly would need numbers of more than {MAX_EXACT_PSD_BITS} bits (Hadamard's bound); "
+            "use entries with fewer digits or smaller denominators",
+        )
     M = [[flint.fmpq(x.numerator, x.denominator) for x in row] for row in m]
-    rest = list(range(n))
+    rest = list(range(len(M)))
     while rest:
-        if not exact and time.monotonic() - start > EXACT_PSD_SECONDS:
-            raise LimitExceeded(
-                where,
-                f"the matrix is too close to singular to decide its definiteness exactly within "
-                f"{EXACT_PSD_SECONDS:g} s; use entries with fewer digits",
-            )
         k = max(rest, key=lambda i: M[i][i])
         d = M[k][k]
         if d < 0:
@@ -265,7 +300,7 @@ def parse_markov_channel(obj: Any, limits: Limits = DEFAULT_LIMITS, where: str =
         raise InvalidInput(
             f"{where}/model", "'per_sensor' is only allowed at the top level of channel, with system.sensors"
         )
-    raise InvalidInput(f"{where}/model", f"unknown channel model {model!r}; expected one of {allowed}")
+    raise InvalidInput(f"{where}/model", f"unknown channel model {value_text(model)}; expected one of {allowed}")
 
 
 def parse_channel(obj: Any, system: System, limits: Limits = DEFAULT_LIMITS, where: str = "/channel") -> Channel:
@@ -361,6 +396,6 @@ def require_assumption_1(channel: Channel) -> None:
                     fld = f"{base}/arrival_probability/{format(h, f'0{ch.order}b') if ch.order else ''}"
                 raise AssumptionViolation(
                     fld,
-                    "Assumption 1 of seed 001 requires every conditional arrival probability to lie strictly "
+                    "Assumption 1 of Rohr, Marelli and Fu 2014 requires every conditional arrival probability to lie strictly "
                     f"between 0 and 1 (got {int(x)}); Theorem 1 gives no verdict for this channel",
                 )

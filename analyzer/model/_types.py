@@ -144,6 +144,34 @@ Channel = Union[MarkovChannel, PerSensorChannel]
 
 
 @dataclass(frozen=True)
+class Packet:
+    """One measurement packet: the rows of ``C`` it carries and the channel it travels over.
+
+    Attributes
+    ----------
+    name:
+        The sensor's name; ``None`` for a request without ``system.sensors``.
+    rows:
+        The rows of ``C`` (and of ``R``) in the packet.
+    channel:
+        Its Markov channel.
+    where:
+        JSON pointer of that channel in the request: ``/channel``, or
+        ``/channel/channels/<name>`` for a per-sensor channel.
+    """
+
+    name: str | None
+    rows: tuple[int, ...]
+    channel: MarkovChannel
+    where: str
+
+    @property
+    def per_sensor(self) -> bool:
+        """Whether the request gives this packet a channel of its own."""
+        return self.where != "/channel"
+
+
+@dataclass(frozen=True)
 class Request:
     """A validated request: system, channel and raw per-command options.
 
@@ -156,3 +184,21 @@ class Request:
     channel: Channel
     options: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
     time_budget_s: float | None = None
+
+
+def packets_of(request: Request) -> tuple[Packet, ...]:
+    """The packets of a validated request, in ``system.sensors`` order.
+
+    A per-sensor channel gives one packet per sensor; any other channel one
+    packet with every row of ``C`` (the request's single sensor, if it names
+    one).
+    """
+    system, ch = request.system, request.channel
+    if isinstance(ch, PerSensorChannel):
+        assert system.sensors is not None  # guaranteed by the validator
+        return tuple(
+            Packet(s.name, s.rows, ch.for_sensor(s.name), f"/channel/channels/{s.name}") for s in system.sensors
+        )
+    if system.sensors:  # then a single sensor, carrying every row
+        return (Packet(system.sensors[0].name, system.sensors[0].rows, ch, "/channel"),)
+    return (Packet(None, tuple(range(system.p)), ch, "/channel"),)

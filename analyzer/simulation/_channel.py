@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._setup import Packet
+from ..model._types import Packet
 
 
 @dataclass(frozen=True, eq=False)

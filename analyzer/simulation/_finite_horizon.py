@@ -41,7 +41,10 @@ from typing import Any
 import numpy as np
 
 from .._budget import Budget
+from .._json import json_float
+from .._reporting import Report, stamp
 from ..errors import InvalidInput, LimitExceeded
+from ..model._exact import value_text
 from ..model._types import Request
 from ._channel import JointChannel
 from ._kernel import PRECISION_RATIO, RiccatiStep
@@ -51,7 +54,6 @@ from ._setup import (
     SimSystem,
     SimulationLimits,
     check_exact_steps,
-    finite_or_none,
     matrix_or_none,
     parse_options,
     sim_system,
@@ -61,8 +63,8 @@ from ._setup import (
 _CHUNK_FLOATS = 1 << 22
 
 
-@dataclass(frozen=True, eq=False)
-class FiniteHorizonReport:
+@dataclass(frozen=True, eq=False, repr=False)
+class FiniteHorizonReport(Report):
     """``E[P_t]`` for ``t = 0..steps``, exactly up to float rounding.
 
     Attributes
@@ -112,19 +114,28 @@ class FiniteHorizonReport:
         """
         return log_slope_growth(self.mean_trace, window)
 
+    def _repr_items(self) -> list[tuple[str, Any]]:
+        return [
+            ("steps", self.steps),
+            ("sequences", self.sequences),
+            ("final_mean_trace", float(self.mean_trace[-1])),
+            ("diverged_at", self.diverged_at),
+        ]
+
     def to_dict(self) -> dict[str, Any]:
         growth = self.growth_per_step()
         last_ok = self.mean_covariance[-1]
         return {
+            **stamp(),
             "steps": self.steps,
             "sequences": self.sequences,
             "initial_channel": self.initial_channel,
-            "mean_trace": [finite_or_none(x) for x in self.mean_trace],
+            "mean_trace": [json_float(x) for x in self.mean_trace],
             "final_mean_covariance": matrix_or_none(last_ok),
             "diverged": self.diverged_at is not None,
             "diverged_at": self.diverged_at,
-            "imprecise_probability": finite_or_none(self.imprecise_probability[-1]),
-            "growth_per_step": None if growth is None else finite_or_none(growth),
+            "imprecise_probability": json_float(self.imprecise_probability[-1]),
+            "growth_per_step": None if growth is None else json_float(growth),
         }
 
     def summary(self) -> str:
@@ -329,7 +340,9 @@ def expected_covariance(
     4.0
     """
     if isinstance(steps, bool) or not isinstance(steps, int) or steps < 0:
-        raise InvalidInput(f"{OPTIONS_FIELD}/exact_steps", f"the horizon must be a non-negative integer; got {steps!r}")
+        raise InvalidInput(
+            f"{OPTIONS_FIELD}/exact_steps", f"the horizon must be a non-negative integer; got {value_text(steps)}"
+        )
     sim = sim_system(request)
     opts = parse_options(request, limits)
     _check_enumeration_size(sim, steps, opts.initial_channel, limits)

@@ -47,9 +47,10 @@ from typing import Any, Mapping
 import numpy as np
 
 from ..errors import InvalidInput, LimitExceeded
+from ..model._exact import parse_integer
 from ..model._limits import DEFAULT_LIMITS
 from ..model._request import check_symmetric, is_psd, option_group, parse_matrix
-from ..model._types import MarkovChannel, Matrix, PerSensorChannel, Request, to_float
+from ..model._types import Matrix, Packet, Request, packets_of, to_float
 
 OPTIONS_FIELD = "/options/simulate"
 PERCENTILES = (50, 90, 99)
@@ -84,15 +85,6 @@ class SimulationLimits:
 
 
 DEFAULT_SIMULATION_LIMITS = SimulationLimits()
-
-
-@dataclass(frozen=True)
-class Packet:
-    """One packet: the rows of ``C`` it carries and its Markov channel."""
-
-    name: str
-    rows: tuple[int, ...]
-    channel: MarkovChannel
 
 
 @dataclass(frozen=True, eq=False)
@@ -164,26 +156,10 @@ def sim_system(request: Request) -> SimSystem:
     )
 
 
-def packets_of(request: Request) -> tuple[Packet, ...]:
-    """The packets of a request, in ``system.sensors`` order."""
-    ch = request.channel
-    if isinstance(ch, PerSensorChannel):
-        sensors = request.system.sensors or ()
-        return tuple(Packet(s.name, s.rows, ch.for_sensor(s.name)) for s in sensors)
-    return (Packet("", tuple(range(request.system.p)), ch),)
-
-
 def _int_option(raw: Mapping[str, Any], key: str, default: int | None, lo: int, hi: int | None) -> int | None:
     if key not in raw:
         return default
-    val = raw[key]
-    if isinstance(val, bool) or not isinstance(val, int):
-        raise InvalidInput(f"{OPTIONS_FIELD}/{key}", f"{key} must be an integer; got {val!r}")
-    if val < lo:
-        raise InvalidInput(f"{OPTIONS_FIELD}/{key}", f"{key} must be at least {lo}; got {val}")
-    if hi is not None and val > hi:
-        raise LimitExceeded(f"{OPTIONS_FIELD}/{key}", f"{key} must be at most {hi}; got {val}")
-    return val
+    return parse_integer(raw[key], f"{OPTIONS_FIELD}/{key}", lo, hi, key)
 
 
 def _parse_p0(raw: Any, n: int) -> Matrix:
@@ -263,12 +239,6 @@ def parse_options(request: Request, limits: SimulationLimits = DEFAULT_SIMULATIO
             )
         P0, default = to_float(request.system.Q), True
     return SimulateOptions(steps, trajectories, seed, _readonly(P0), default, exact_steps, initial)
-
-
-def finite_or_none(x: float) -> float | None:
-    """``float(x)`` if finite, else ``None`` (JSON has no NaN or infinity)."""
-    x = float(x)
-    return x if math.isfinite(x) else None
 
 
 def matrix_or_none(m: np.ndarray | None) -> list[list[float]] | None:

@@ -42,6 +42,8 @@ from typing import Any
 import numpy as np
 
 from .._budget import Budget
+from .._json import json_float
+from .._reporting import Report, stamp
 from ..model._types import Request
 from ._channel import JointChannel
 from ._finite_horizon import FiniteHorizonReport, expected_covariance
@@ -60,7 +62,6 @@ from ._setup import (
     SimSystem,
     SimulateOptions,
     SimulationLimits,
-    finite_or_none,
     matrix_or_none,
     parse_options,
     sim_system,
@@ -95,8 +96,8 @@ class MonteCarloRun:
     arrival_rate: np.ndarray  # empirical, per packet
 
 
-@dataclass(frozen=True, eq=False)
-class SimulationReport:
+@dataclass(frozen=True, eq=False, repr=False)
+class SimulationReport(Report):
     """What ``kfio simulate`` reports.
 
     Attributes
@@ -165,13 +166,24 @@ class SimulationReport:
         return {
             "steps_compared": int(ok.sum()),
             "within_ci95": int((z <= Z95).sum()),
-            "max_abs_z": finite_or_none(z.max()) if z.size else None,
+            "max_abs_z": json_float(z.max()) if z.size else None,
         }
+
+    def _repr_items(self) -> list[tuple[str, Any]]:
+        o = self.options
+        return [
+            ("steps", o.steps),
+            ("trajectories", o.trajectories),
+            ("seed", o.seed),
+            ("final_mean_trace", float(self.stats.mean[-1])),
+            ("mean_diverged_at", self.mean_diverged_at),
+        ]
 
     def to_dict(self) -> dict[str, Any]:
         low, high = self.ci95
         o = self.options
         return {
+            **stamp(),
             "steps": o.steps,
             "trajectories": o.trajectories,
             "seed": o.seed,
@@ -232,7 +244,7 @@ def _first(flags: np.ndarray) -> int | None:
 
 
 def _series(x: np.ndarray) -> list[float | None]:
-    return [finite_or_none(v) for v in x]
+    return [json_float(v) for v in x]
 
 
 def _fmt(x: float) -> str:
@@ -375,6 +387,6 @@ def simulate(
         final_mean_covariance=run.final_mean_covariance,
         arrival_rate=run.arrival_rate,
         stationary_arrival_rate=JointChannel.from_packets(sim.packets).stationary_arrival_rates(),
-        packet_names=tuple(pk.name for pk in sim.packets),
+        packet_names=tuple(pk.name if pk.per_sensor and pk.name is not None else "" for pk in sim.packets),
         exact=exact,
     )

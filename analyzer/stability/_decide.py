@@ -17,14 +17,19 @@ Three situations, all decided in exact arithmetic where the inputs allow:
 from __future__ import annotations
 
 from fractions import Fraction
-from typing import Sequence
+from typing import Any, Callable, Sequence
 
 import mpmath
 from sympy import QQ, CRootOf, Poly, oo
 from sympy.polys.matrices import DomainMatrix
 
+from ..errors import NumericalFailure
 from ..structure._algebraic import AlgebraicReal
+from ..structure._balls import MAX_PREC, START_PREC, integer_coeffs, precision, root_balls, sign
 from ..structure._eigen import X
+
+#: Verdict names by the sign of ``rate - 1``: ``VERDICTS[sign + 1]``.
+VERDICTS = ("stable", "boundary", "unstable")
 
 
 def bernoulli_factor(exponents: Sequence[Fraction], lambdas: Sequence[Fraction], N: int) -> Fraction:
@@ -33,16 +38,29 @@ def bernoulli_factor(exponents: Sequence[Fraction], lambdas: Sequence[Fraction],
     for e, lam in zip(exponents, lambdas):
         z = e * N
         if z.denominator != 1:  # pragma: no cover - z_g counts phases
-            raise ArithmeticError("non-integer blind count")
+            raise NumericalFailure("non-integer blind count")
         c *= (1 - lam) ** int(z)
     return c
 
 
-def compare_rate_bernoulli(beta: AlgebraicReal | None, beta_float: float, N: int, c: Fraction) -> tuple[int, bool]:
-    """Sign of ``beta^N c - 1`` and whether it was decided exactly."""
+def compare_rate_bernoulli(
+    beta: AlgebraicReal | None,
+    beta_float: float,
+    N: int,
+    c: Fraction,
+    enclosed: Callable[[int, Fraction], tuple[int, bool]] | None = None,
+) -> tuple[int, bool]:
+    """Sign of ``beta^N c - 1`` and whether it was decided exactly.
+
+    ``enclosed(N, q)``, when given, is the sign of ``beta^N - q`` from a
+    certified enclosure of ``beta`` (:meth:`kfio.structure.FmoBlock.compare_power`):
+    it proves every strict inequality when ``beta`` has no exact form.
+    """
     if c == 0:
         return -1, True
     if beta is None:
+        if enclosed is not None:
+            return enclosed(N, 1 / c)
         return _numeric_sign(mpmath.mpf(beta_float) ** N * (mpmath.mpf(c.numerator) / c.denominator) - 1), False
     return beta.compare_power(N, 1 / c), True
 
@@ -69,9 +87,18 @@ def spectral_radius(P: Sequence[Sequence[Fraction]], digits: int = 30) -> mpmath
 
 
 def compare_rate_markov(
-    beta: AlgebraicReal | None, beta_float: float, N: int, P: Sequence[Sequence[Fraction]]
+    beta: AlgebraicReal | None,
+    beta_float: float,
+    N: int,
+    P: Sequence[Sequence[Fraction]],
+    beta_ball: Callable[[int], Any] | None = None,
 ) -> tuple[int, bool]:
-    """Sign of ``beta^N rho(P) - 1`` and whether it was decided exactly."""
+    """Sign of ``beta^N rho(P) - 1`` and whether it was decided exactly.
+
+    Rational ``beta``: exact (Sturm counts).  Otherwise certified enclosures
+    of ``beta`` (exact minimal polynomial, or ``beta_ball(prec)``) and of
+    the Perron root prove every strict inequality.
+    """
     if beta is not None and beta.is_rational:
         assert beta.rational is not None
         if beta.rational == 0:
@@ -84,9 +111,34 @@ def compare_rate_markov(
         if above - (1 if at else 0) > 0:
             return 1, True
         return (0 if at else -1), True
+    ball = beta.ball if beta is not None else beta_ball
+    if ball is not None:
+        s = _enclosed_sign(ball, N, _rho_poly(P))
+        if s is not None:
+            return s, True
     with mpmath.workdps(60):
         b = beta.approx(50) if beta is not None else mpmath.mpf(beta_float)
         return _numeric_sign(b**N * spectral_radius(P, 50) - 1), False
+
+
+def _enclosed_sign(ball: Callable[[int], Any], N: int, chi: Poly) -> int | None:
+    """Sign of ``beta^N rho - 1`` from enclosures (``rho`` the largest real root of ``chi``), if they prove it.
+
+    Never proves an equality: ``None`` when the enclosures still contain 0
+    at :data:`~kfio.structure._balls.MAX_PREC` bits.
+    """
+    coeffs = integer_coeffs(chi.all_coeffs())
+    prec = START_PREC
+    while prec <= MAX_PREC:
+        roots, n_real = root_balls(coeffs, prec)
+        if n_real == 0:  # pragma: no cover - a non-negative matrix has a real Perron root
+            return None
+        with precision(prec):
+            s = sign(ball(prec) ** N * roots[n_real - 1].real - 1)
+        if s:
+            return s
+        prec *= 4
+    return None
 
 
 def _numeric_sign(v: mpmath.mpf, margin: float = 1e-30) -> int:

@@ -46,10 +46,11 @@ import sympy
 
 from .._budget import Budget
 from ..errors import InvalidInput
-from ..model._exact import fraction_text
+from ..model._exact import finite_or_none, fraction_text, value_text
 from ..model._request import require_assumption_1
-from ..model._types import MarkovChannel, PerSensorChannel, Request
+from ..model._types import PerSensorChannel, Request, packets_of
 from ..structure._fmo import FmoBlock
+from ._decide import VERDICTS
 from ._regions_constraints import (
     DIGITS,
     SEPARATION,
@@ -66,11 +67,10 @@ from ._regions_constraints import (
 from ._regions_curve import DEFAULT_SAMPLES, BoundaryCurve, boundary_curve
 from ._sigma import SigmaResult
 
-VERDICTS = ("stable", "boundary", "unstable")
 BASIS = "extension"
 STATEMENT = (
-    "seed 001's FMO construction applied to separately lost Bernoulli packets (MATH.md section 3, "
-    "'Beyond the seeds: exact partial-loss regions'); not a theorem of the seeds"
+    "the FMO construction of Rohr, Marelli and Fu 2014 applied to separately lost Bernoulli packets "
+    "(docs/theory.md, 'Per-sensor exact regions'); a kfio extension, not a theorem of the papers"
 )
 
 
@@ -82,15 +82,7 @@ def bernoulli_packets(request: Request) -> tuple[tuple[str, ...], tuple[Fraction
     InvalidInput
         A channel with memory (field ``/channel/...``).
     """
-    ch = request.channel
-    sensors = request.system.sensors
-    if isinstance(ch, PerSensorChannel):
-        pairs: list[tuple[str, MarkovChannel, str]] = [
-            (name, c, f"/channel/channels/{name}") for name, c in ch.channels
-        ]
-    else:
-        name = sensors[0].name if sensors else "packet"
-        pairs = [(name, ch, "/channel")]
+    pairs = [(p.name if p.name is not None else "packet", p.channel, p.where) for p in packets_of(request)]
     for name, c, where in pairs:
         if c.order != 0:
             raise InvalidInput(
@@ -169,7 +161,7 @@ class SensorThresholds:
             "certified": self.certified,
             "consistent_with_analyze": self.consistent_with_analyze,
             "blocks": [
-                {**b.to_dict(self.sensors), "verdict": v, "rate": r}
+                {**b.to_dict(self.sensors), "verdict": v, "rate": finite_or_none(r)}
                 for b, v, r in zip(self.blocks, self.block_verdicts, self.block_rates)
             ],
             "sensors": [t.to_dict(self.sensors) for t in self.thresholds],
@@ -378,7 +370,7 @@ class RegionGrid:
                 "boundary": "the largest block rate is exactly 1: the theorem's gap",
             },
             "edge_cells": (
-                "cells with lambda = 0 or 1 lie outside seed 001's Assumption 1; they are labelled by the same "
+                "cells with lambda = 0 or 1 lie outside Assumption 1 of Rohr, Marelli and Fu 2014; they are labelled by the same "
                 "formula (0^0 = 1: a sensor that always arrives removes every pattern that misses it)"
             ),
             "certified": self.certified,
@@ -449,7 +441,7 @@ def exact_region_grid(
     """
     names = _two_sensors(request)
     if isinstance(K, bool) or not isinstance(K, int) or K < 2:
-        raise InvalidInput("/options/regions/grid", f"the grid side must be an integer >= 2; got {K!r}")
+        raise InvalidInput("/options/regions/grid", f"the grid side must be an integer >= 2; got {value_text(K)}")
     grid = tuple(Fraction(i, K - 1) for i in range(K)) if values is None else tuple(Fraction(v) for v in values)
     if len(grid) != K:
         raise InvalidInput("/options/regions/grid", f"{len(grid)} values given for a grid of side {K}")

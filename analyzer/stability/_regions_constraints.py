@@ -45,15 +45,15 @@ import mpmath
 import sympy
 
 from .._budget import Budget
-from ..errors import NumericalFailure
+from ..errors import InvalidInput, NumericalFailure
+from ..model._exact import finite_or_none
 from ..model._types import MarkovChannel, System
 from ..structure._algebraic import AlgebraicReal
+from ..structure._eigen import DIGITS  # working precision of the numerical side of exact comparisons
 from ..structure._fmo import FmoBlock, fmo_blocks
 from ._decide import compare_rate_bernoulli
 from ._sigma import SigmaResult, compute_sigma
 
-#: Working precision (decimal digits) of the numerical side of exact comparisons.
-DIGITS = 60
 #: Two values whose logs differ by more than this are ordered numerically
 #: (the error at :data:`DIGITS` digits is below ``1e-55``); closer values are
 #: compared in exact arithmetic.
@@ -138,7 +138,7 @@ class BlockConstraints:
     def to_dict(self, names: Sequence[str]) -> dict[str, Any]:
         return {
             "eigenvalues": list(self.eigenvalues),
-            "modulus_squared": self.beta_float,
+            "modulus_squared": finite_or_none(self.beta_float),
             "modulus_squared_exact": self.beta_text if self.beta is not None else None,
             "period": self.period,
             "half_spaces": "sum_s misses_s * (-log(1 - lambda_s)) > period * log(modulus_squared), one per pattern",
@@ -253,7 +253,7 @@ def block_constraints(
     """
     blocks = fmo if fmo is not None else fmo_blocks(system, budget)
     if sigma is not None and len(sigma) != len(blocks):
-        raise ValueError("sigma results must be aligned with the FMO blocks")
+        raise InvalidInput("/", "sigma results must be aligned with the FMO blocks (one per block, in order)")
     sensors = len(system.sensors) if system.sensors is not None else 1
     out = []
     for i, block in enumerate(blocks):

@@ -123,7 +123,8 @@ def _check_inputs(block: PhaseBlock, channels: Sequence[MarkovChannel]) -> None:
     for ch in channels:
         if any(not 0 < p < 1 for p in ch.table):
             raise AssumptionViolation(
-                "/channel", "every arrival probability must lie strictly between 0 and 1 (seed 001, Assumption 1)"
+                "/channel",
+                "every arrival probability must lie strictly between 0 and 1 (Rohr, Marelli and Fu 2014, Assumption 1)",
             )
 
 
@@ -521,7 +522,12 @@ def _find_worst(
         return _Found(everything, (everything,), True, "every slot together is rank-deficient: sigma = 1")
     if space.n_groups == 1 and not degenerate:
         empty = np.zeros(space.size, dtype=bool)
-        return _Found(empty, (empty,), True, "non-degenerate block: only the empty set is blind (seed 001, Lemma 2)")
+        return _Found(
+            empty,
+            (empty,),
+            True,
+            "non-degenerate block: only the empty set is blind (Rohr, Marelli and Fu 2014, Lemma 2)",
+        )
     objective = _objective(channels, space.n_phases, period)
     if space.n_groups == 1:
         res = search(space, budget, margins, objective)

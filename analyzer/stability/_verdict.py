@@ -13,28 +13,33 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Any, Optional, Sequence
+from typing import Any, Mapping, Optional, Sequence
 
 import mpmath
 import sympy
 
 from .._budget import Budget
+from .._reporting import Report, ShortRepr, stamp
 from ..errors import InvalidInput
+from ..model._exact import finite_or_none
 from ..model._request import require_assumption_1
-from ..model._types import MarkovChannel, PerSensorChannel, Request, System, to_domain
+from ..model._types import MarkovChannel, PerSensorChannel, Request, System, packets_of, to_domain
+from ..structure._display import SHORT_TEXT_CHARS, algebraic_degree, short_text
 from ..structure._fmo import FmoBlock, fmo_blocks
-from ._decide import bernoulli_factor, compare_rate_bernoulli, compare_rate_markov
+from ._decide import VERDICTS, bernoulli_factor, compare_rate_bernoulli, compare_rate_markov
+from ._radicals import RealRadical
 from ._regions import region_report
 from ._sigma import SigmaResult, compute_sigma, period_transfer_matrix
 
-VERDICTS = ("stable", "boundary", "unstable")
 #: Default wall-clock budget (s) of one analysis when the request sets none.
 DEFAULT_BUDGET_S = 120.0
 
 
-@dataclass(frozen=True)
-class BlockReport:
+@dataclass(frozen=True, repr=False)
+class BlockReport(ShortRepr):
     """Theorem 1 applied to one FMO block."""
+
+    _repr_fields = ("eigenvalues", "modulus", "period", "sigma", "rate", "verdict")
 
     eigenvalues: tuple[str, ...]
     eigenvalues_numeric: tuple[complex, ...]
@@ -57,15 +62,15 @@ class BlockReport:
     def to_dict(self) -> dict[str, Any]:
         return {
             "eigenvalues": list(self.eigenvalues),
-            "eigenvalues_numeric": [[z.real, z.imag] for z in self.eigenvalues_numeric],
-            "modulus": self.modulus,
+            "eigenvalues_numeric": [[finite_or_none(z.real), finite_or_none(z.imag)] for z in self.eigenvalues_numeric],
+            "modulus": finite_or_none(self.modulus),
             "modulus_exact": self.modulus_exact,
             "jordan_sizes": list(self.jordan_sizes),
             "period": self.period,
             "degenerate": self.degenerate,
-            "sigma": self.sigma,
+            "sigma": finite_or_none(self.sigma),
             "sigma_exact": self.sigma_exact,
-            "rate": self.rate,
+            "rate": finite_or_none(self.rate),
             "verdict": self.verdict,
             "certified": self.certified,
             "blind_set": self.blind_set,
@@ -74,9 +79,11 @@ class BlockReport:
         }
 
 
-@dataclass(frozen=True)
-class StabilityReport:
+@dataclass(frozen=True, repr=False)
+class StabilityReport(Report):
     """The verdict of Theorem 1 for a whole request, with its evidence."""
+
+    _repr_fields = ("verdict", "critical_arrival_probability", "critical_arrival_probability_exact", "blocks")
 
     verdict: str
     blocks: tuple[BlockReport, ...]
@@ -87,14 +94,22 @@ class StabilityReport:
     assumptions: tuple[str, ...] = ()
     warnings: tuple[str, ...] = ()
     regions: Optional[dict[str, Any]] = None
+    #: Short forms of long exact texts for :meth:`summary` (never in the JSON).
+    display: Mapping[str, str] = field(default_factory=dict, repr=False, compare=False)
+
+    def _short(self, text: str, value: complex | float | None) -> str:
+        if value is None:
+            return text
+        return self.display.get(text) or short_text(text, value)
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON report (stable field names; see README)."""
         return {
+            **stamp(),
             "verdict": self.verdict,
-            "theorem": "seed 001 (Rohr, Marelli, Fu), Theorem 1",
+            "theorem": "Rohr, Marelli and Fu 2014, Theorem 1",
             "blocks": [b.to_dict() for b in self.blocks],
-            "critical_arrival_probability": self.critical_arrival_probability,
+            "critical_arrival_probability": finite_or_none(self.critical_arrival_probability),
             "critical_arrival_probability_exact": self.critical_arrival_probability_exact,
             "channel": self.channel,
             "system": self.system,
@@ -105,29 +120,29 @@ class StabilityReport:
 
     def summary(self) -> str:
         """Readable multi-line summary for the terminal."""
-        lines = [f"verdict: {self.verdict.upper()}  (seed 001, Theorem 1)"]
+        lines = [f"verdict: {self.verdict.upper()}  (Rohr, Marelli and Fu 2014, Theorem 1)"]
         if self.critical_arrival_probability_exact is not None:
             lines.append(
                 f"critical arrival probability: {self.critical_arrival_probability:.6g}"
-                f"  (exact: {self.critical_arrival_probability_exact})"
+                f"  (exact: {self._short(self.critical_arrival_probability_exact, self.critical_arrival_probability)})"
             )
-        lines.append("FMO blocks (largest modulus first):")
+        lines.append("finite multiplicative order (FMO) blocks, largest modulus first:")
         for b in self.blocks:
-            eig = ", ".join(b.eigenvalues)
+            eig = ", ".join(self._short(t, z) for t, z in zip(b.eigenvalues, b.eigenvalues_numeric))
+            modulus = _shown(b.modulus, b.modulus_exact)
             if b.rate is None:
-                lines.append(
-                    f"  [{b.verdict}] eigenvalues {eig}: |alpha| = {b.modulus:.6g} < 1, stable for any channel"
-                )
+                lines.append(f"  [{b.verdict}] eigenvalues {eig}: |alpha| = {modulus} < 1, stable for any channel")
                 continue
             deg = "degenerate" if b.degenerate else "non-degenerate"
             lines.append(
-                f"  [{b.verdict}] eigenvalues {eig}: |alpha| = {b.modulus:.6g}, {deg}, period {b.period}, "
-                f"sigma = {b.sigma:.6g}, rate |alpha|^2 sigma = {b.rate:.6g}"
+                f"  [{b.verdict}] eigenvalues {eig}: |alpha| = {modulus}, {deg}, period {b.period}, "
+                f"sigma = {_shown(b.sigma, b.sigma_exact)}, rate |alpha|^2 sigma = {_shown(b.rate, None)}"
                 + ("" if b.certified else "  (not certified)")
             )
         for s in (self.regions or {}).get("sensors", []):
             if s.get("status") == "threshold":
-                crit = f"{s['critical_arrival_probability']:.6g} (exact: {s['critical_arrival_probability_exact']})"
+                exact = self._short(s["critical_arrival_probability_exact"], s["critical_arrival_probability"])
+                crit = f"{s['critical_arrival_probability']:.6g} (exact: {exact})"
             else:
                 crit = {"zero": "0 (any arrival probability)", "none": "none: no arrival probability suffices"}.get(
                     s.get("status"), str(s.get("status"))
@@ -140,11 +155,15 @@ class StabilityReport:
         return "\n".join(lines)
 
 
+def _shown(x: float | None, exact: str | None) -> str:
+    """A float for the terminal, or its exact text when it is outside float64's range."""
+    if finite_or_none(x) is not None:
+        return f"{x:.6g}"
+    return exact if exact is not None else "beyond floating-point range"
+
+
 def _channels_of(request: Request) -> list[MarkovChannel]:
-    ch = request.channel
-    if isinstance(ch, PerSensorChannel):
-        return [ch.for_sensor(s.name) for s in (request.system.sensors or ())]
-    return [ch]
+    return [p.channel for p in packets_of(request)]
 
 
 def _controllable(system: System) -> bool | None:
@@ -161,19 +180,26 @@ def _controllable(system: System) -> bool | None:
 
 
 def _modulus_text(block: FmoBlock) -> str | None:
-    if block.modulus_sq is None:
+    if block.modulus_sq is None or not block.modulus_sq.writable():
         return None
     return str(sympy.sqrt(block.modulus_sq.expr()))
 
 
-def _sigma_exact_text(res: SigmaResult, lambdas: Sequence[Fraction]) -> str | None:
-    if res.bernoulli_exponents is None:
+def _modulus_float(block: FmoBlock) -> float:
+    """``|alpha|`` from the exact ``|alpha|^2`` when there is one (``10^160`` is a float, its square is not)."""
+    if block.modulus_sq is None:
+        return block.modulus
+    with mpmath.workdps(30):
+        return float(mpmath.sqrt(block.modulus_sq.approx(20)))
+
+
+def _sigma_exact(res: SigmaResult, c: Fraction | None) -> RealRadical | None:
+    """``sigma = c^(1/N)`` with ``c = sigma^N`` the exact rational of Corollary 2 (Bernoulli channels)."""
+    if res.fully_blind:
+        return RealRadical.of(Fraction(1), 1)
+    if c is None or c == 0:
         return None
-    expr = sympy.Integer(1)
-    for e, lam in zip(res.bernoulli_exponents, lambdas):
-        base = 1 - sympy.Rational(lam.numerator, lam.denominator)
-        expr *= base ** sympy.Rational(e.numerator, e.denominator)
-    return str(sympy.nsimplify(expr))
+    return RealRadical.of(c, res.period)
 
 
 def _analyze_block(
@@ -182,22 +208,20 @@ def _analyze_block(
     base: dict[str, Any] = dict(
         eigenvalues=block.eigenvalue_texts,
         eigenvalues_numeric=block.eigenvalue_values,
-        modulus=block.modulus,
+        modulus=_modulus_float(block),
         modulus_exact=_modulus_text(block),
         jordan_sizes=block.jordan_sizes,
         basis=basis,
         modulus_sq_expr=block.modulus_sq.expr() if block.modulus_sq else None,
     )
-    if (
-        block.phase is None
-        or block.modulus_sq_float < 1
-        and (block.modulus_sq is None or block.modulus_sq.compare_power(1, Fraction(1)) < 0)
-    ):
+    below_one, below_certified = (-1, True) if block.phase is None else block.compare_power(1, Fraction(1))
+    if below_one < 0:
         degenerate = None
         if block.phase is not None:
             degenerate = (
                 block.phase.numeric_rank([(0, g) for g in range(len(block.phase.row_groups))]) < block.phase.n_columns
             )
+        # certified iff |alpha| < 1 was proved (exactly or from a certified enclosure)
         return BlockReport(
             period=None,
             degenerate=degenerate,
@@ -205,23 +229,25 @@ def _analyze_block(
             sigma_exact=None,
             rate=None,
             verdict="stable",
-            certified=True,
-            notes=block.notes,
+            certified=below_certified,
+            notes=block.notes + (() if below_certified else ("|alpha| < 1 was decided numerically, not proved",)),
             **base,
         ), None
+    assert block.phase is not None  # the zero class has |alpha| = 0 < 1
     res = compute_sigma(block.phase, channels, budget)
     N = res.period
     lambdas = [ch.bernoulli_lambda for ch in channels]
     all_bernoulli = all(lam is not None and ch.model == "bernoulli" for lam, ch in zip(lambdas, channels))
     notes = list(block.notes) + list(res.notes)
+    c: Fraction | None = None
     if res.fully_blind:
-        s, exact = compare_rate_bernoulli(block.modulus_sq, block.modulus_sq_float, 1, Fraction(1))
+        s, exact = block.compare_power(1, Fraction(1))
         notes.append("no arrival pattern observes this block (sigma = 1): an unobservable mode")
     elif all_bernoulli and res.bernoulli_exponents is not None:
         lam_f = [lam for lam in lambdas if lam is not None]
         sets = res.maximal_blind_sets or (res.worst_blind_set,)
         c = max(bernoulli_factor(_bernoulli_exponents(F, N, len(channels)), lam_f, N) for F in sets)
-        s, exact = compare_rate_bernoulli(block.modulus_sq, block.modulus_sq_float, N, c)
+        s, exact = compare_rate_bernoulli(block.modulus_sq, block.modulus_sq_float, N, c, block.compare_power)
     else:
         sets = res.maximal_blind_sets or (res.worst_blind_set,)
         signs = []
@@ -229,21 +255,27 @@ def _analyze_block(
         for F in sets:
             budget.tick("exact transfer matrices")
             si, ex = compare_rate_markov(
-                block.modulus_sq, block.modulus_sq_float, N, period_transfer_matrix(N, F, channels)
+                block.modulus_sq,
+                block.modulus_sq_float,
+                N,
+                period_transfer_matrix(N, F, channels),
+                block.modulus_sq_ball,
             )
             signs.append(si)
             exact = exact and ex
         s = max(signs)
     certified = exact and res.certified and block.certified
+    sigma_exact = _sigma_exact(res, c) if all_bernoulli else None
+    sigma = float(sigma_exact.approx(20)) if sigma_exact is not None else res.sigma
     verdict = {1: "unstable", 0: "boundary", -1: "stable"}[s]
     if not exact:
         notes.append("rate compared with 1 numerically (50 digits), not exactly")
     report = BlockReport(
         period=N,
         degenerate=res.degenerate,
-        sigma=res.sigma,
-        sigma_exact=_sigma_exact_text(res, [lam for lam in lambdas if lam is not None]) if all_bernoulli else None,
-        rate=block.modulus_sq_float * res.sigma,
+        sigma=sigma,
+        sigma_exact=sigma_exact.text() if sigma_exact is not None else None,
+        rate=block.modulus_sq_float * sigma,
         verdict=verdict,
         certified=certified,
         blind_set=sorted([list(s) for s in res.worst_blind_set]),
@@ -259,10 +291,20 @@ def _bernoulli_exponents(F: frozenset, N: int, groups: int) -> tuple[Fraction, .
     return tuple(Fraction(N - sum(1 for n, g in F if g == grp), N) for grp in range(groups))
 
 
-def _critical_probability(blocks: Sequence[BlockReport]) -> tuple[float | None, str | None, list[str]]:
-    """Seed 001, Corollary 2 + Theorem 1: ``lambda_c = max_k 1 - beta_k^(-N_k / z_k)``."""
+def _critical_probability(
+    blocks: Sequence[BlockReport], display: dict[str, str]
+) -> tuple[float | None, str | None, list[str]]:
+    """Seed 001, Corollary 2 + Theorem 1: ``lambda_c = max_k 1 - beta_k^(-N_k / z_k)``.
+
+    Exact arithmetic only: for a rational ``beta_k`` the term is ``1 - r`` with
+    ``r = beta_k^(-N_k/z_k)`` a :class:`RealRadical` (a rational when it is one,
+    e.g. ``1 - 1/alpha^2`` for a rational real ``alpha``), compared exactly
+    between blocks; for an algebraic ``beta_k`` it is the SymPy expression
+    ``1 - CRootOf(h, i)**(-N/z)``, compared at 40 digits.  Long exact texts get
+    a short form for the terminal in ``display`` (the JSON keeps the text).
+    """
     warnings: list[str] = []
-    best: tuple[mpmath.mpf, Any] | None = None
+    candidates: list[tuple[mpmath.mpf, RealRadical | None, Any]] = []
     for b in blocks:
         if b.rate is None:
             continue
@@ -274,17 +316,36 @@ def _critical_probability(blocks: Sequence[BlockReport]) -> tuple[float | None, 
                 "no arrival probability makes the filter stable"
             )
             return None, None, warnings
-        beta = b.modulus_sq_expr if b.modulus_sq_expr is not None else sympy.Float(b.modulus**2, 30)
+        beta = b.modulus_sq_expr
+        if isinstance(beta, sympy.Rational):
+            r = RealRadical.power(1 / Fraction(int(beta.p), int(beta.q)), 1 / share)
+            with mpmath.workdps(50):
+                candidates.append((1 - r.approx(40), r, None))
+            continue
+        if beta is None:
+            beta = sympy.Float(b.modulus**2, 30)
         expr = 1 - beta ** (-1 / sympy.Rational(share.numerator, share.denominator))
-        expr = sympy.nsimplify(expr) if beta.is_Rational else expr
-        val = mpmath.mpf(str(sympy.N(expr, 40)))
-        if best is None or val > best[0]:
-            best = (val, expr)
-    if best is None:
+        candidates.append((mpmath.mpf(str(sympy.N(expr, 40))), None, expr))
+    if not candidates:
         return 0.0, "0", warnings
-    if best[0] < 0:
+    radicals = [r for _, r, _ in candidates if r is not None]
+    if len(radicals) == len(candidates):  # all exact: the largest 1 - r has the smallest r
+        smallest = radicals[0]
+        for r in radicals[1:]:
+            if r.compare(smallest) < 0:
+                smallest = r
+        if smallest.compare(RealRadical.of(Fraction(1), 1)) >= 0:
+            return 0.0, "0", warnings
+        with mpmath.workdps(50):
+            value = 1 - smallest.approx(40)
+        return float(value), smallest.one_minus_text(), warnings
+    val, rad, expr = max(candidates, key=lambda t: t[0])
+    if val <= 0:
         return 0.0, "0", warnings
-    return float(best[0]), str(best[1]), warnings
+    text = rad.one_minus_text() if rad is not None else str(expr)
+    if len(text) > SHORT_TEXT_CHARS:
+        display[text] = short_text(text, float(val), algebraic_degree(expr) if expr is not None else None)
+    return float(val), text, warnings
 
 
 def _parse_options(request: Request) -> None:
@@ -293,7 +354,7 @@ def _parse_options(request: Request) -> None:
         raise InvalidInput(f"/options/analyze/{key}", "analyze takes no options")
 
 
-def analyze(request: Request, budget: Budget | None = None) -> StabilityReport:
+def analyze(request: Request, budget: Budget | None = None, *, fmo: Sequence[FmoBlock] | None = None) -> StabilityReport:
     """Decide stability of the expected error covariance (seed 001, Theorem 1).
 
     Parameters
@@ -303,6 +364,10 @@ def analyze(request: Request, budget: Budget | None = None) -> StabilityReport:
         are not needed: the verdict does not depend on them.
     budget:
         Work budget; defaults to ``request.time_budget_s`` or 120 s.
+    fmo:
+        The FMO blocks of ``request.system`` (:func:`kfio.structure.fmo_blocks`),
+        when the caller already has them (a sweep that varies only the
+        channel); they depend on ``A`` and ``C`` alone.  Computed when omitted.
 
     Returns
     -------
@@ -332,7 +397,8 @@ def analyze(request: Request, budget: Budget | None = None) -> StabilityReport:
     system = request.system
     channels = _channels_of(request)
     basis = "extension" if len(channels) > 1 else "theorem"
-    fmo = fmo_blocks(system, budget)
+    if fmo is None:
+        fmo = fmo_blocks(system, budget)
     analyzed = [_analyze_block(b, channels, basis, budget) for b in fmo]
     blocks = [rep for rep, _ in analyzed]
     verdict = max((b.verdict for b in blocks), key=VERDICTS.index, default="stable")
@@ -340,12 +406,13 @@ def analyze(request: Request, budget: Budget | None = None) -> StabilityReport:
     assumptions: list[str] = []
     if basis == "extension":
         assumptions.append(
-            "per-sensor channels: seed 001's construction applied to separately lost packets "
-            "(MATH.md section 3, 'Beyond the seeds'); not a theorem of the seeds"
+            "per-sensor channels: the construction of Rohr, Marelli and Fu 2014 applied to separately lost packets "
+            "(docs/theory.md, 'Per-sensor exact regions'); a kfio extension, not a theorem of the papers"
         )
     crit = crit_exact = None
+    display: dict[str, str] = {}
     if len(channels) == 1 and channels[0].model == "bernoulli":
-        crit, crit_exact, w = _critical_probability(blocks)
+        crit, crit_exact, w = _critical_probability(blocks, display)
         warnings.extend(w)
     controllable = _controllable(system)
     if controllable is False:
@@ -365,6 +432,7 @@ def analyze(request: Request, budget: Budget | None = None) -> StabilityReport:
         system={"n": system.n, "p": system.p, "controllable_A_Q": controllable},
         assumptions=tuple(assumptions),
         warnings=tuple(warnings),
+        display=display,
     )
     if basis != "extension":
         return report

@@ -4,8 +4,8 @@ Only what Theorem 1 needs: ``beta = |alpha|^2`` of an FMO block as the root of
 an irreducible polynomial over ``Q``, and the sign of ``beta^N - c`` for a
 rational ``c``.  Equality is decided exactly (``h`` irreducible, so
 ``beta^N = c`` iff ``h`` divides ``x^N - c``); a strict inequality is decided
-by certified root refinement, which terminates because the difference is a
-non-zero algebraic number.
+by certified root enclosures (flint, Arb balls), refined until the sign of
+the non-zero difference is proved.
 """
 
 from __future__ import annotations
@@ -15,9 +15,28 @@ from fractions import Fraction
 from typing import Any
 
 import mpmath
+from flint import arb
 from sympy import QQ, CRootOf, Poly, Rational
 
+from ..errors import NumericalFailure
+from ._balls import MAX_PREC, START_PREC, integer_coeffs, precision, rational_ball, root_balls, sign
 from ._eigen import DIGITS, X
+
+
+def power_minus(N: int, c: Any) -> Poly:
+    """``x**N - c`` over ``QQ``, built from its coefficients.
+
+    Building it as the expression ``X**N - c`` costs the first call about
+    0.1 s of SymPy sub-imports (combinatorics, tensor); the coefficient list
+    does not.
+
+    Examples
+    --------
+    >>> power_minus(3, QQ(1, 2)).all_coeffs()
+    [1, 0, 0, -1/2]
+    """
+    coeffs = [QQ(1)] + [QQ(0)] * (N - 1) + [-QQ(c)] if N > 0 else [QQ(1) - QQ(c)]
+    return Poly.from_list(coeffs, X, domain=QQ)
 
 
 @dataclass(frozen=True)
@@ -42,6 +61,16 @@ class AlgebraicReal:
             return Rational(self.rational.numerator, self.rational.denominator)
         return CRootOf(self.minpoly, self.index)
 
+    def writable(self) -> bool:
+        """Whether :meth:`text` fits Python's int-to-text limit (4300 digits per integer)."""
+        if self.rational is not None:
+            return max(self.rational.numerator.bit_length(), self.rational.denominator.bit_length()) < 12000
+        assert self.minpoly is not None
+        return all(
+            max(int(c.numerator).bit_length(), int(c.denominator).bit_length()) < 12000
+            for c in self.minpoly.all_coeffs()
+        )
+
     def text(self) -> str:
         """Exact text: ``"25/16"`` or ``"CRootOf(x**2 - 3*x + 1, 1)"``."""
         if self.rational is not None:
@@ -49,45 +78,48 @@ class AlgebraicReal:
             return str(r.numerator) if r.denominator == 1 else f"{r.numerator}/{r.denominator}"
         return str(self.expr())
 
-    def approx(self, digits: int = DIGITS) -> mpmath.mpf:
+    def ball(self, prec: int = START_PREC) -> arb:
+        """Certified enclosure at ``prec`` bits (flint root isolation of :attr:`minpoly`)."""
         if self.rational is not None:
-            with mpmath.workdps(digits + 10):
-                return mpmath.mpf(self.rational.numerator) / self.rational.denominator
+            with precision(prec):
+                return rational_ball(self.rational)
+        assert self.minpoly is not None
+        coeffs = integer_coeffs(self.minpoly.all_coeffs())
+        balls, n_real = root_balls(coeffs, prec)
+        if self.index >= n_real:  # pragma: no cover - constructed from a real root
+            raise NumericalFailure("an algebraic real refers to a non-real root")
+        return balls[self.index].real
+
+    def approx(self, digits: int = DIGITS) -> mpmath.mpf:
+        """Midpoint of :meth:`ball` at ``digits`` decimal digits, as an mpmath number."""
+        bits = max(START_PREC, int(digits * 3.33) + 16)
+        mid = self.ball(bits).mid()
+        man, exp = mid.man_exp()
         with mpmath.workdps(digits + 10):
-            return mpmath.mpf(str(CRootOf(self.minpoly, self.index).evalf(digits)))
+            return mpmath.mpf((int(man), int(exp)))
 
     def __float__(self) -> float:
         return float(self.approx(20))
 
     def compare_power(self, N: int, c: Fraction) -> int:
-        """Sign of ``self**N - c`` (exact)."""
+        """Sign of ``self**N - c`` (exact).
+
+        Equality is exact (the minimal polynomial divides ``x^N - c``);
+        otherwise the difference is a non-zero algebraic number and the
+        enclosure is refined until its sign is proved.
+        """
         if self.rational is not None:
             v = self.rational**N - c
             return (v > 0) - (v < 0)
         assert self.minpoly is not None
-        target = Poly(X**N - QQ(c.numerator, c.denominator), X, domain=QQ)
+        target = power_minus(N, QQ(c.numerator, c.denominator))
         if target.rem(self.minpoly).is_zero:
             return 0
-        digits = 30
-        while True:
-            with mpmath.workdps(digits + 10):
-                v = self.approx(digits) ** N - mpmath.mpf(c.numerator) / c.denominator
-                scale = max(mpmath.mpf(1), abs(mpmath.mpf(c.numerator) / c.denominator))
-                if abs(v) > scale * mpmath.mpf(10) ** (-(digits - 5)) * N:
-                    return 1 if v > 0 else -1
-            digits *= 2
-            if digits > 4000:  # pragma: no cover - would need a pathological input
-                raise ArithmeticError("could not separate an algebraic number from a rational")
-
-
-def real_root_matching(h: Poly, value: mpmath.mpf) -> int | None:
-    """Index of the real root of ``h`` equal to ``value`` (numerically), if any."""
-    best = None
-    with mpmath.workdps(DIGITS + 10):
-        for i in range(h.count_roots()):
-            r = mpmath.mpf(str(CRootOf(h, i).evalf(DIGITS)))
-            if abs(r - value) <= mpmath.mpf(10) ** (-(DIGITS // 2)) * max(1, abs(value)):
-                if best is not None:  # pragma: no cover - roots are separated far beyond this
-                    raise ArithmeticError("two real roots agree to 30 digits")
-                best = i
-    return best
+        prec = START_PREC
+        while prec <= MAX_PREC:
+            with precision(prec):
+                s = sign(self.ball(prec) ** N - rational_ball(c))
+            if s is not None and s != 0:
+                return s
+            prec *= 2
+        raise NumericalFailure("could not separate an algebraic number from a rational")  # pragma: no cover

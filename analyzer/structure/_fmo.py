@@ -4,11 +4,13 @@ Eigenvalues ``theta_i ~ theta_j`` when ``theta_i / theta_j`` is a root of
 unity (they have a *finite multiplicative order* up to a constant).  A class
 has one modulus ``|alpha_k|``; zero eigenvalues form their own class.
 
-Root-of-unity tests are exact where the degrees allow it: the ratios
-``theta'/theta`` of roots of ``f`` and ``g`` are the roots of
-``Res_y(f(y), g(x y))``, and its cyclotomic factors ``Phi_m`` are exactly the
-orders that occur (MATH.md section 2).  Which pairs carry which order is read
-from 60-digit certified roots, and must agree with the resultant.
+Root-of-unity relations and non-relations are proved at every size from
+certified root enclosures (:mod:`kfio.structure._unity`): provably different
+moduli settle a pair at once, the argument of a ratio leaves at most one
+candidate order, and that candidate is confirmed or refuted exactly.  The
+previous route (60-digit roots checked against the cyclotomic factors of
+``Res_y(f(y), g(x y))`` when ``deg f * deg g <= 144``) is kept as
+:func:`fmo_classes_resultant`, a test oracle.
 
 The reduced block (Definition 4) uses only eigenvectors: the heads of all
 Jordan chains of ``theta`` span ``ker(A - theta I)``, so
@@ -21,28 +23,36 @@ import math
 from dataclasses import dataclass, field
 from fractions import Fraction
 from functools import reduce
-from typing import Any, Iterable, Optional, Sequence
+from typing import Any, Callable, Iterable, Optional, Sequence
 
 import mpmath
 import numpy as np
+from flint import arb, fmpq, fmpq_mat
 from sympy import QQ, Poly, resultant, symbols
 from sympy.polys.matrices import DomainMatrix
+from sympy.polys.polyerrors import BasePolynomialError
 
 from .._budget import Budget
 from ..errors import NumericalFailure
 from ..model._exact import fraction_text
-from ..model._types import Matrix, System, to_domain
-from ._algebraic import AlgebraicReal, real_root_matching
+from ..model._types import Matrix, System
+from ._adjugate import to_fmpq_mat
+from ._algebraic import AlgebraicReal, power_minus
+from ._balls import MAX_PREC, START_PREC, horner, precision, sign, to_float
 from ._eigen import DIGITS, EigenFactor, X, eigen_factors
-from ._phases import PhaseBlock, Slot
+from ._modulus import modulus_squared
+from ._phases import PhaseBlock, RankOracle, Slot
+from ._unity import Root as UnityRoot
+from ._unity import ratio_relation
 
 _Y = symbols("y")
 #: Largest ``deg f * deg g`` for which the resultant test is run exactly.
 MAX_RESULTANT_DEGREE = 144
 #: Largest degree of a compositum field used for exact ranks.
 MAX_EXACT_FIELD_DEGREE = 48
-#: Largest ``deg f`` for which ``|theta|^2`` of a non-real root is made exact.
-MAX_MODULUS_DEGREE = 10
+
+#: Coefficients longer than this (bits) are not written out: Python refuses int-to-text past 4300 digits.
+_TEXT_BITS = 12000
 
 Root = tuple[int, int]  # (factor index, index into EigenFactor.roots)
 
@@ -69,6 +79,9 @@ class FmoBlock:
     certified:
         Whether the class structure (root-of-unity relations) was decided
         exactly.
+    modulus_sq_ball:
+        ``prec -> `` certified enclosure (flint ``arb``) of ``beta`` at
+        ``prec`` bits, or ``None`` for the zero class.
     """
 
     members: tuple[Root, ...]
@@ -80,10 +93,32 @@ class FmoBlock:
     phase: PhaseBlock | None
     certified: bool
     notes: tuple[str, ...] = field(default=())
+    modulus_sq_ball: Callable[[int], Any] | None = field(default=None, compare=False, repr=False)
 
     @property
     def modulus(self) -> float:
         return math.sqrt(self.modulus_sq_float)
+
+    def compare_power(self, N: int, c: Fraction) -> tuple[int, bool]:
+        """Sign of ``beta^N - c`` and whether it is proved.
+
+        Exact through :attr:`modulus_sq` when known; otherwise from the
+        enclosure :attr:`modulus_sq_ball`, refined up to :data:`MAX_PREC`
+        bits, which proves every strict inequality but never an equality.
+        """
+        if self.modulus_sq is not None:
+            return self.modulus_sq.compare_power(N, c), True
+        if self.modulus_sq_ball is not None:
+            prec = START_PREC
+            while prec <= MAX_PREC:
+                with precision(prec):
+                    s = sign(self.modulus_sq_ball(prec) ** N - arb(fmpq(c.numerator, c.denominator)))
+                if s:
+                    return s, True
+                prec *= 4
+        with mpmath.workdps(DIGITS):
+            v = mpmath.mpf(self.modulus_sq_float) ** N - mpmath.mpf(c.numerator) / c.denominator
+        return (0 if abs(v) <= 1e-30 else (1 if v > 0 else -1)), False
 
     @property
     def is_zero(self) -> bool:
@@ -164,14 +199,15 @@ class _UnionFind:
             self.parent[max(ra, rb)] = min(ra, rb)
 
 
-def fmo_classes(
+def fmo_classes_resultant(
     factors: Sequence[EigenFactor], budget: Budget | None = None
 ) -> tuple[list[list[Root]], dict[tuple[Root, Root], tuple[int, int]], bool, list[str]]:
-    """Partition the non-zero eigenvalues into FMO classes.
+    """The previous route, kept as a test oracle: 60-digit ratios checked by the resultant test.
 
     Returns the classes, the relation ``(u, v) -> (m, k)`` meaning
     ``v / u = exp(2 pi i k / m)``, whether every relation (and non-relation)
-    was certified by the resultant test, and notes.
+    was certified by the resultant test (only when ``deg f * deg g <=``
+    :data:`MAX_RESULTANT_DEGREE`), and notes.
     """
     roots: list[tuple[Root, mpmath.mpc]] = []
     for fi, f in enumerate(factors):
@@ -234,67 +270,92 @@ def fmo_classes(
     return classes, relation, certified, notes
 
 
-# ---------------------------------------------------------------------------
-# |alpha|^2 exactly
+def _root_handle(f: EigenFactor, ri: int) -> UnityRoot:
+    return UnityRoot(f.int_coeffs, lambda prec: f.root_ball(ri, prec))
 
 
-def _companion(f: Poly) -> DomainMatrix:
-    c = [QQ.convert(x) for x in f.monic().all_coeffs()]
-    d = len(c) - 1
-    rows = [[QQ(0)] * d for _ in range(d)]
-    for i in range(1, d):
-        rows[i][i - 1] = QQ(1)
-    for i in range(d):
-        rows[i][d - 1] = -c[d - i]
-    return DomainMatrix(rows, (d, d), QQ)
+def fmo_classes(
+    factors: Sequence[EigenFactor], budget: Budget | None = None
+) -> tuple[list[list[Root]], dict[tuple[Root, Root], tuple[int, int]], bool, list[str]]:
+    """Partition the non-zero eigenvalues into FMO classes, every relation and non-relation proved.
 
+    Rohr, Marelli and Fu (2014), Definition 3.  Pairs whose moduli are
+    provably different (disjoint enclosures of ``|theta|^2``) are settled
+    at once; the others by :func:`kfio.structure._unity.ratio_relation`
+    (one candidate order from the enclosure of the ratio's argument, then an
+    exact test).
 
-def _kron(a: DomainMatrix, b: DomainMatrix) -> DomainMatrix:
-    la, lb = a.to_list(), b.to_list()
-    n, m = len(la), len(lb)
-    rows = [[la[i // m][j // m] * lb[i % m][j % m] for j in range(n * m)] for i in range(n * m)]
-    return DomainMatrix(rows, (n * m, n * m), QQ)
-
-
-def modulus_squared(f: EigenFactor, index: int) -> AlgebraicReal | None:
-    """``|theta|^2`` exactly for root ``index`` of ``f``.
-
-    Rational ``theta``: ``theta^2``.  Real ``theta``: a root of
-    ``charpoly(C_f^2)``.  Non-real ``theta``: ``theta * conj(theta)`` is a
-    root of ``charpoly(C_f (x) C_f)`` (eigenvalues ``theta_i theta_j``); the
-    irreducible factor that has it as a real root is its minimal polynomial.
-    Returns ``None`` when ``deg f`` exceeds :data:`MAX_MODULUS_DEGREE` for a
-    non-real root.
+    Returns
+    -------
+    classes, relation, certified, notes
+        The classes (sorted lists of roots), the relation ``(u, v) -> (m,
+        k)`` meaning ``v / u = exp(2 pi i k / m)``, whether every decision
+        was certified, and notes for the report.
     """
-    if f.is_rational:
-        return AlgebraicReal.of_rational(f.rational_root**2)
-    theta = f.roots[index]
-    with mpmath.workdps(DIGITS + 10):
-        target = abs(theta) ** 2
-    is_real = f.is_real_root(index)
-    if is_real:
-        M = _companion(f.poly)
-        M = M * M
-    elif f.degree <= MAX_MODULUS_DEGREE:
-        M = _kron(_companion(f.poly), _companion(f.poly))
-    else:
-        return None
-    P = Poly(M.charpoly(), X, domain=QQ)
-    for h, _ in P.factor_list()[1]:
-        h = h.monic()
-        if h.degree() == 1:
-            c = -h.TC()
-            val = Fraction(int(c.numerator), int(c.denominator))
-            with mpmath.workdps(DIGITS + 10):
-                if abs(mpmath.mpf(val.numerator) / val.denominator - target) < mpmath.mpf(10) ** -(DIGITS // 2) * max(
-                    1, target
-                ):
-                    return AlgebraicReal.of_rational(val)
-            continue
-        idx = real_root_matching(h, target)
-        if idx is not None:
-            return AlgebraicReal(minpoly=h, index=idx)
-    raise NumericalFailure("|theta|^2 matches no factor of its polynomial")  # pragma: no cover
+    roots: list[Root] = [(fi, ri) for fi, f in enumerate(factors) if not f.is_zero for ri in range(f.degree)]
+    uf = _UnionFind(roots)
+    relation: dict[tuple[Root, Root], tuple[int, int]] = {}
+    with precision(START_PREC):
+        mod2 = {}
+        for fi, ri in roots:
+            z = factors[fi].root_ball(ri)
+            mod2[(fi, ri)] = (z * z.conjugate()).real
+    certified = True
+    notes: list[str] = []
+    for a, ua in enumerate(roots):
+        for ub in roots[a + 1 :]:
+            if budget is not None:
+                budget.tick("FMO classes")
+            # provably different moduli, or already related through other members
+            if not mod2[ua].overlaps(mod2[ub]) or uf.find(ua) == uf.find(ub):
+                continue
+            bound = factors[ua[0]].degree * factors[ub[0]].degree
+            rel, decided = ratio_relation(
+                _root_handle(factors[ua[0]], ua[1]), _root_handle(factors[ub[0]], ub[1]), bound
+            )
+            if not decided:  # pragma: no cover - MAX_PREC bits always sufficed
+                certified = False
+                notes.append("a root-of-unity relation could not be decided at the largest precision")
+                continue
+            if rel is None:
+                continue
+            m, k = rel
+            relation[(ua, ub)] = (m, k)
+            relation[(ub, ua)] = (m, (-k) % m)
+            uf.union(ua, ub)
+    _close_relations(relation, uf, roots)
+    groups: dict[Root, list[Root]] = {}
+    for r in roots:
+        groups.setdefault(uf.find(r), []).append(r)
+    classes = [sorted(g) for g in groups.values()]
+    classes.sort(key=lambda c: c[0])
+    return classes, relation, certified, notes
+
+
+def _close_relations(relation: dict[tuple[Root, Root], tuple[int, int]], uf: _UnionFind, roots: list[Root]) -> None:
+    """Make ``relation`` hold every pair (head, member) of each class, composing known relations.
+
+    Ratios compose: ``w / u = (w / v)(v / u)``, so ``k_uw / m_uw = k_uv / m_uv + k_vw / m_vw`` mod 1.
+    """
+    members: dict[Root, list[Root]] = {}
+    for r in roots:
+        members.setdefault(uf.find(r), []).append(r)
+    for group in members.values():
+        head = min(group)
+        turns = {head: Fraction(0)}
+        frontier = [head]
+        while frontier:
+            u = frontier.pop()
+            for v in group:
+                if v in turns or (u, v) not in relation:
+                    continue
+                m, k = relation[(u, v)]
+                turns[v] = (turns[u] + Fraction(k, m)) % 1
+                frontier.append(v)
+        for v, t in turns.items():
+            if v != head and (head, v) not in relation:
+                relation[(head, v)] = (t.denominator, t.numerator)
+                relation[(v, head)] = (t.denominator, (-t.numerator) % t.denominator)
 
 
 # ---------------------------------------------------------------------------
@@ -315,7 +376,49 @@ def _eigen_text(f: EigenFactor, index: int) -> str:
                 if abs(val - target) < mpmath.mpf(10) ** -(DIGITS // 2) * max(1, abs(target)):
                     return str(r)
     z = complex(f.roots[index])
+    bits = max(max(int(c.numerator).bit_length(), int(c.denominator).bit_length()) for c in f.poly.all_coeffs())
+    if bits > _TEXT_BITS:  # beyond Python's int-to-text limit: describe the polynomial instead
+        return f"root of a degree-{f.degree} polynomial with {bits}-bit coefficients near {z.real:.12g}{z.imag:+.12g}i"
     return f"root of {f.poly.as_expr()} near {z.real:.12g}{z.imag:+.12g}i"
+
+
+class _SingleRows:
+    """Exact rank oracle of a one-eigenvalue class (``omega = 1``: every phase has the same rows).
+
+    Entries are polynomials in ``theta`` of degree ``< deg f`` with rational
+    coefficients; ``1, theta, ..., theta^(d-1)`` is a basis of ``Q(theta)``,
+    so an entry is zero iff its coefficients are.  With one column (a simple
+    eigenvalue) the rank is 1 iff a selected entry is non-zero: no number
+    field arithmetic at all.  Several columns use ``DomainMatrix`` over
+    ``Q(theta)``.
+    """
+
+    def __init__(self, f: EigenFactor, columns: list[list[list[Fraction]]], groups: Sequence[Sequence[int]]) -> None:
+        self.f = f
+        self.columns = columns  # per column: p entries, each a coefficient list
+        self.groups = groups
+        self._cache: dict[frozenset[int], int] = {}
+
+    def _rank(self, rows: frozenset[int]) -> int:
+        if not rows:
+            return 0
+        if len(self.columns) == 1:
+            return int(any(any(c != 0 for c in self.columns[0][i]) for i in rows))
+        K = self.f.field
+        if K == QQ:
+            entries = [[QQ(col[i][0].numerator, col[i][0].denominator) for col in self.columns] for i in sorted(rows)]
+        else:
+            entries = [
+                [K.new([QQ(c.numerator, c.denominator) for c in reversed(col[i])]) for col in self.columns]
+                for i in sorted(rows)
+            ]
+        return int(DomainMatrix(entries, (len(entries), len(self.columns)), K).rank())
+
+    def __call__(self, slots: Iterable[Slot]) -> int | None:
+        rows = frozenset(i for _, g in slots for i in self.groups[g])
+        if rows not in self._cache:
+            self._cache[rows] = self._rank(rows)
+        return self._cache[rows]
 
 
 class _ExactRows:
@@ -374,7 +477,7 @@ def _cyclotomic_form(
             if rel is None:
                 return None
             m, k = rel
-            target = Poly(X ** (2 * m) - QQ(b.numerator**m, b.denominator**m), X, domain=QQ)
+            target = power_minus(2 * m, QQ(b.numerator**m, b.denominator**m))
             if not target.rem(f.poly).is_zero:
                 return None
             orders.append((m, k))
@@ -437,38 +540,59 @@ def build_block(
     values = tuple(complex(factors[fi].roots[ri]) for fi, ri in members)
     sizes = tuple(s for fi, _ in members for s in factors[fi].jordan_sizes)
     mod_sq = modulus_squared(factors[fi0], ri0)
-    with mpmath.workdps(DIGITS + 10):
-        mod_sq_float = float(abs(factors[fi0].roots[ri0]) ** 2)
+    head_factor = factors[fi0]
+
+    def ball(prec: int) -> arb:
+        z = head_factor.root_ball(ri0, prec)
+        return (z * z.conjugate()).real
+
     block_notes = list(notes)
     if mod_sq is None:
-        block_notes.append("|alpha|^2 is known to 60 digits but not as an exact algebraic number")
+        block_notes.append(
+            "|alpha|^2 is not made an exact algebraic number at this degree; comparisons use certified enclosures"
+        )
+
+    def phase_of(oracle: RankOracle | None) -> PhaseBlock:
+        return PhaseBlock(
+            base_period=N0, exponents=tuple(exponents), c_hat=c_hat, row_groups=row_groups, exact_rank=oracle
+        )
+
     orders = [relation[(head, m)] if m != head else (1, 0) for m in members]
     N0 = reduce(math.lcm, (m for m, _ in orders), 1)
     member_exp = [k * (N0 // m) % N0 for m, k in orders]
 
-    Cd = to_domain(C)
+    Cq = to_fmpq_mat(C)
     p = len(C)
     columns_num: list[np.ndarray] = []
     exponents: list[int] = []
     exact_cols: list[tuple[Root, list[list[Fraction]]]] = []
     for (fi, ri), e in zip(members, member_exp):
         f = factors[fi]
-        CV = Cd.convert_to(f.field) * f.eigvecs.transpose()  # p x g, exact over Q(theta)
-        cols = CV.transpose().to_list()
-        with mpmath.workdps(DIGITS + 10):
-            for col in cols:
-                coeffs = [f.coeffs_of(x) for x in col]
+        with precision(START_PREC):
+            theta = f.root_ball(ri)
+            for vec in f.eigvec_coeffs:
+                d = len(vec[0])
+                CB = Cq * fmpq_mat(len(vec), d, [fmpq(c.numerator, c.denominator) for comp in vec for c in comp])
+                entries = CB.entries()
+                coeffs = [[Fraction(int(x.p), int(x.q)) for x in entries[i * d : (i + 1) * d]] for i in range(p)]
                 exact_cols.append(((fi, ri), coeffs))
-                v = np.array([complex(f.value_at(cs, ri)) for cs in coeffs], dtype=complex)
-                nrm = np.linalg.norm(v)
-                columns_num.append(v / nrm if nrm > 0 else v)
+                vals = [horner(cs, theta) for cs in coeffs]
+                nrm = sum((abs(v) ** 2 for v in vals), arb(0)).sqrt()
+                if nrm > 0:
+                    vals = [v / nrm for v in vals]
+                columns_num.append(np.array([complex(to_float(v.real), to_float(v.imag)) for v in vals]))
                 exponents.append(e)
     c_hat = np.column_stack(columns_num) if columns_num else np.zeros((p, 0), dtype=complex)
+
+    if len(members) == 1:
+        only = factors[fi0]
+        oracle: RankOracle | None = _SingleRows(only, [c for _, c in exact_cols], row_groups)
+        return _block(members, texts, values, sizes, mod_sq, ball, phase_of(oracle), certified, block_notes)
 
     oracle = None
     try:
         K, member_vals = _member_field_and_values(members, factors, mod_sq)
-    except Exception:  # noqa: BLE001 - SymPy may fail to build a large compositum
+    except (BasePolynomialError, ArithmeticError, NotImplementedError, ValueError):  # SymPy could not build or embed in the compositum
         K, member_vals = None, {}
     if K is not None:
         theta0 = member_vals[head]
@@ -488,9 +612,22 @@ def build_block(
         oracle = _ExactRows(K, cols_k, omegas, row_groups, N0)
     else:
         block_notes.append("ranks of this block are numerical: its number field is too large for exact arithmetic")
-    phase = PhaseBlock(
-        base_period=N0, exponents=tuple(exponents), c_hat=c_hat, row_groups=row_groups, exact_rank=oracle
-    )
+    return _block(members, texts, values, sizes, mod_sq, ball, phase_of(oracle), certified, block_notes)
+
+
+def _block(
+    members: Sequence[Root],
+    texts: tuple[str, ...],
+    values: tuple[complex, ...],
+    sizes: tuple[int, ...],
+    mod_sq: AlgebraicReal | None,
+    ball: Callable[[int], arb],
+    phase: PhaseBlock,
+    certified: bool,
+    notes: Sequence[str],
+) -> FmoBlock:
+    with precision(START_PREC):
+        mod_sq_float = to_float(ball(START_PREC))
     return FmoBlock(
         members=tuple(members),
         eigenvalue_texts=texts,
@@ -500,7 +637,8 @@ def build_block(
         modulus_sq_float=mod_sq_float,
         phase=phase,
         certified=certified,
-        notes=tuple(block_notes),
+        notes=tuple(notes),
+        modulus_sq_ball=ball,
     )
 
 
@@ -515,13 +653,17 @@ def fmo_blocks(system: System, budget: Budget | None = None) -> list[FmoBlock]:
     >>> [(b.eigenvalue_texts, b.phase.base_period) for b in fmo_blocks(s)]
     [(('2', '-2'), 2)]
     """
-    factors = eigen_factors(system.A)
+    factors = eigen_factors(system.A, budget)
     if system.sensors is None:
         groups: tuple[tuple[int, ...], ...] = (tuple(range(system.p)),)
     else:
         groups = tuple(s.rows for s in system.sensors)
     classes, relation, certified, notes = fmo_classes(factors, budget)
-    blocks = [build_block(c, relation, factors, system.C, groups, certified, notes) for c in classes]
+    blocks = []
+    for c in classes:
+        if budget is not None:
+            budget.tick("FMO blocks", 64)
+        blocks.append(build_block(c, relation, factors, system.C, groups, certified, notes))
     blocks.sort(key=lambda b: -b.modulus_sq_float)
     for fi, f in enumerate(factors):
         if f.is_zero:

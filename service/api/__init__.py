@@ -1,11 +1,11 @@
-"""HTTP routes, one module per resource (analyze, bounds, simulate, plots, health)."""
+"""HTTP routes, one module per resource (analyze, bounds, simulate, plots, jobs, health)."""
 
 from fastapi import APIRouter
 
-from . import analyze, bounds, health, plots, simulate
+from . import analyze, bounds, health, jobs, plots, simulate, sweeps
 
 api_router = APIRouter()
-for _module in (health, analyze, bounds, simulate, plots):
+for _module in (health, analyze, bounds, simulate, plots, jobs, sweeps):
     api_router.include_router(_module.router)
 
 __all__ = ["api_router"]

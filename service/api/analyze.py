@@ -6,6 +6,6 @@ router = report_router(
     "/v1/analyze",
     job="analyze",
     schema="StabilityReport",
-    summary="Exact stability verdict (seed 001, Theorem 1)",
+    summary="Exact stability verdict (Rohr, Marelli and Fu 2014, Theorem 1)",
     description="Decides whether the expected error covariance of the Kalman filter stays bounded.",
 )

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from fastapi import APIRouter
+from fastapi import APIRouter, Request
 from fastapi.responses import JSONResponse
 
 from ..problems import Problem, ProblemError
@@ -29,9 +29,13 @@ async def healthz() -> JSONResponse:
     response_class=JSONResponse,
     responses={**json_response("Readiness", "Ready to take requests"), **problem_responses(503)},
 )
-async def readyz(dispatcher: DispatcherDep) -> JSONResponse:
+async def readyz(request: Request, dispatcher: DispatcherDep) -> JSONResponse:
     if not dispatcher.pool.ready:
         raise ProblemError(
             Problem(503, "not-ready", "Service not ready", "the worker pool is not running yet", retry_after=1)
         )
-    return JSONResponse({"status": "ready", "pool": dispatcher.pool.stats(), "cache": dispatcher.cache.stats()})
+    body = {"status": "ready", "pool": dispatcher.pool.stats(), "cache": dispatcher.cache.stats()}
+    jobs = getattr(request.app.state, "jobs", None)
+    if jobs is not None:
+        body["jobs"] = jobs.stats()
+    return JSONResponse(body)

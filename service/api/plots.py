@@ -25,7 +25,7 @@ _ERRORS = problem_responses(413, 422, 501, 503, 504)
 
 @router.post(
     "/phase-transition",
-    summary="Traces of S_bar and V_bar against lambda, critical values marked (seed 004, Figs. 1-3)",
+    summary="Traces of S_bar and V_bar against lambda, critical values marked (Sinopoli et al. 2004, Figs. 1-3)",
     description=(
         "One packet over a Bernoulli channel.  Draws trace(S_bar) (lower bound on the limit of E[P]) and "
         "trace(V_bar) (upper bound) on a grid of arrival probabilities, with the lower bound "
@@ -60,12 +60,12 @@ async def phase_transition(
 
 @router.post(
     "/region",
-    summary="Stability region for two sensors (seed 000, Figs. 4-5)",
+    summary="Stability region for two sensors (Liu and Goldsmith 2004, Figs. 4-5)",
     description=(
         "Two sensors over Bernoulli channels.  Colours the (lambda_1, lambda_2) square as the bounds report's "
         "region map does (unstable by the lower bound, stable by the LMI, undecided between them), marks kfio's "
         "exact verdict on every cell and draws the exact boundary lambda_2 = h(lambda_1) (an extension of "
-        "seed 001), and marks the request's own point."
+        "Rohr, Marelli and Fu 2014), and marks the request's own point."
     ),
     response_class=Response,
     responses={**_PNG, **_ERRORS},

@@ -11,7 +11,12 @@ from __future__ import annotations
 
 from typing import Any
 
+from kfio._version import __version__
+
 _NUMBER_PATTERN = r"^\s*[+-]?(\d+(\.\d*)?|\.\d+)([eE][+-]?\d+)?\s*(/\s*[+-]?(\d+(\.\d*)?|\.\d+)([eE][+-]?\d+)?\s*)?$"
+
+
+_KFIO_VERSION = {"type": "string", "description": "The version of kfio that made the report", "examples": [__version__]}
 
 
 def _ref(name: str) -> dict[str, str]:
@@ -41,7 +46,7 @@ def _channel(
     }
 
 
-# -- examples (MATH.md section 4, from the seeds) ---------------------------
+# -- examples: the reference cases of the papers (docs/theory.md) -----------
 
 _SEED004_SCALAR = {
     "system": {"A": [[-1.25]], "C": [[1]], "Q": [[1]], "R": [[2.5]]},
@@ -92,8 +97,9 @@ _SEED000_TWO_SENSORS = {
 
 #: ``kfio analyze --json`` on ``_SEED004_SCALAR`` (lambda_c = 9/25, as seed 004 finds).
 _SEED004_SCALAR_REPORT = {
+    "kfio_version": __version__,
     "verdict": "stable",
-    "theorem": "seed 001 (Rohr, Marelli, Fu), Theorem 1",
+    "theorem": "Rohr, Marelli and Fu 2014, Theorem 1",
     "blocks": [
         {
             "eigenvalues": ["-5/4"],
@@ -110,7 +116,7 @@ _SEED004_SCALAR_REPORT = {
             "certified": True,
             "blind_set": [],
             "basis": "theorem",
-            "notes": ["non-degenerate block: only the empty set is blind (seed 001, Lemma 2)"],
+            "notes": ["non-degenerate block: only the empty set is blind (Rohr, Marelli and Fu 2014, Lemma 2)"],
         }
     ],
     "critical_arrival_probability": 0.36,
@@ -123,13 +129,14 @@ _SEED004_SCALAR_REPORT = {
 
 #: ``kfio bounds --json`` on ``_SEED004_SCALAR`` (abbreviated: P_hat_N for N = 1 and 8 only).
 _SEED004_SCALAR_BOUNDS = {
+    "kfio_version": __version__,
     "command": "bounds",
     "packets": [{"name": None, "rows": [0], "arrival_probability": 0.5, "arrival_probability_exact": "1/2"}],
     "spectral_radius_A": 1.25,
     "hypotheses": {"A_unstable": True, "A_C_detectable": True, "A_Q_controllable": True},
     "operating_point": {
         "verdict_by_bounds": "stable",
-        "reason": "the stability LMI is feasible here, certificate re-checked (seed 004 Theorems 3 and 5)",
+        "reason": "the stability LMI is feasible here, certificate re-checked (Sinopoli et al. 2004, Theorems 3 and 5)",
         "certificate": {"method": "exact_rational", "at": ["1/2"], "margin": 0.21875},
     },
     "critical_probability": {
@@ -162,6 +169,7 @@ _SEED004_SCALAR_BOUNDS = {
 
 #: ``kfio simulate --json`` on ``_SEED004_SCALAR`` with steps 4, 1000 trajectories, seed 1 (rounded).
 _SEED004_SCALAR_SIMULATION = {
+    "kfio_version": __version__,
     "steps": 4,
     "trajectories": 1000,
     "seed": 1,
@@ -186,27 +194,27 @@ _SEED004_SCALAR_SIMULATION = {
 
 REQUEST_EXAMPLES: dict[str, dict[str, Any]] = {
     "seed004-scalar": {
-        "summary": "Seed 004, scalar system: lambda_c = 0.36 (stable at 0.5)",
+        "summary": "Sinopoli et al. 2004, scalar system: lambda_c = 0.36 (stable at 0.5)",
         "value": _SEED004_SCALAR,
     },
     "seed004-3x3": {
-        "summary": "Seed 004, 3x3 system with one unstable eigenvalue: lambda_c = 0.36",
+        "summary": "Sinopoli et al. 2004, 3x3 system with one unstable eigenvalue: lambda_c = 0.36",
         "value": _SEED004_3X3,
     },
     "seed002-2x2": {
-        "summary": "Seeds 002/004, 2x2 system whose bounds differ (0.36 and about 0.48)",
+        "summary": "Sinopoli et al. 2004; Rohr, Marelli and Fu 2010, 2x2 system whose bounds differ (0.36 and about 0.48)",
         "value": _SEED002_2X2,
     },
     "seed001-degenerate-gilbert-elliott": {
-        "summary": "Seed 001, degenerate pair alpha diag(1, -1) over a Gilbert-Elliott channel (exact fractions as strings)",
+        "summary": "Rohr, Marelli and Fu 2014, degenerate pair alpha diag(1, -1) over a Gilbert-Elliott channel (exact fractions as strings)",
         "value": _SEED001_DEGENERATE_GE,
     },
     "seed001-markov-order-2": {
-        "summary": "Seed 001, Markov channel of order 2 with a 10 s budget",
+        "summary": "Rohr, Marelli and Fu 2014, Markov channel of order 2 with a 10 s budget",
         "value": _SEED001_MARKOV,
     },
     "seed000-two-sensors": {
-        "summary": "Seed 000, two packets: exact region lambda_1 > 0.84, lambda_2 > 5/9",
+        "summary": "Liu and Goldsmith 2004, two packets: exact region lambda_1 > 0.84, lambda_2 > 5/9",
         "value": _SEED000_TWO_SENSORS,
     },
 }
@@ -253,7 +261,7 @@ COMPONENTS: dict[str, dict[str, Any]] = {
     },
     "System": {
         "type": "object",
-        "description": "x[t+1] = A x + w, w ~ N(0, Q); y = C x + v, v ~ N(0, R) (MATH.md section 1).",
+        "description": "x[t+1] = A x + w, w ~ N(0, Q); y = C x + v, v ~ N(0, R) (see docs/theory.md, The model).",
         "properties": {
             "A": {**_ref("Matrix"), "description": "n x n state matrix"},
             "C": {**_ref("Matrix"), "description": "p x n output matrix"},
@@ -269,7 +277,7 @@ COMPONENTS: dict[str, dict[str, Any]] = {
         "bernoulli",
         {"arrival_probability": _ref("Probability")},
         ["arrival_probability"],
-        "i.i.d. arrivals with P(arrival) = arrival_probability (seed 004).",
+        "i.i.d. arrivals with P(arrival) = arrival_probability (Sinopoli et al. 2004).",
         _SEED004_SCALAR["channel"],
     ),
     "GilbertElliottChannel": _channel(
@@ -291,7 +299,7 @@ COMPONENTS: dict[str, dict[str, Any]] = {
             },
         },
         ["order", "arrival_probability"],
-        "Finite-state Markov channel of order nu (seed 001, Definition 2); all 2^order histories are required.",
+        "Finite-state Markov channel of order nu (Rohr, Marelli and Fu 2014, Definition 2); all 2^order histories are required.",
         _SEED001_MARKOV["channel"],
     ),
     "PerSensorChannel": _channel(
@@ -304,7 +312,7 @@ COMPONENTS: dict[str, dict[str, Any]] = {
             }
         },
         ["channels"],
-        "Independent packet channels, one per sensor (seeds 000/003).",
+        "Independent packet channels, one per sensor (Liu and Goldsmith 2004).",
         _SEED000_TWO_SENSORS["channel"],
     ),
     "PacketChannel": {
@@ -347,10 +355,12 @@ COMPONENTS: dict[str, dict[str, Any]] = {
     "StabilityReport": {
         "type": "object",
         "description": (
-            "The report of `kfio analyze --json`: the verdict of seed 001, Theorem 1, with its evidence per "
-            'FMO block.  Exact values are strings ("9/25"), their float approximations numbers.'
+            "The report of `kfio analyze --json`: the verdict of Rohr, Marelli and Fu 2014, Theorem 1, with its evidence per "
+            "finite multiplicative order (FMO) block: eigenvalues whose ratios are roots of unity.  "
+            'Exact values are strings ("9/25"), their float approximations numbers.'
         ),
         "properties": {
+            "kfio_version": _KFIO_VERSION,
             "verdict": {"type": "string", "enum": ["stable", "unstable", "boundary"]},
             "theorem": {"type": "string"},
             "blocks": {"type": "array", "items": {"type": "object"}},
@@ -361,17 +371,18 @@ COMPONENTS: dict[str, dict[str, Any]] = {
             "assumptions": {"type": "array", "items": {"type": "string"}},
             "warnings": {"type": "array", "items": {"type": "string"}},
         },
-        "required": ["verdict", "blocks"],
+        "required": ["kfio_version", "verdict", "blocks"],
         "examples": [_SEED004_SCALAR_REPORT],
     },
     "BoundsReport": {
         "type": "object",
         "description": (
             "The report of `kfio bounds --json`: bounds on the critical arrival probability (closed-form lower, "
-            "certified LMI upper), S_bar <= lim E[P_t] <= V_bar at the operating point, seed 002's P_hat_N for "
+            "certified LMI upper), S_bar <= lim E[P_t] <= V_bar at the operating point, the P_hat_N of Rohr, Marelli and Fu 2010 for "
             "one packet, and the region map for two packets when options.bounds.grid is set."
         ),
         "properties": {
+            "kfio_version": _KFIO_VERSION,
             "command": {"const": "bounds"},
             "packets": {"type": "array", "items": {"type": "object"}},
             "spectral_radius_A": {"type": ["number", "null"]},
@@ -389,7 +400,7 @@ COMPONENTS: dict[str, dict[str, Any]] = {
             "region": {"type": ["object", "null"]},
             "notes": {"type": "array", "items": {"type": "string"}},
         },
-        "required": ["command", "packets", "operating_point", "covariance"],
+        "required": ["kfio_version", "command", "packets", "operating_point", "covariance"],
         "examples": [_SEED004_SCALAR_BOUNDS],
     },
     "SimulationReport": {
@@ -399,6 +410,7 @@ COMPONENTS: dict[str, dict[str, Any]] = {
             "t = 0..steps (null where a trajectory diverged)."
         ),
         "properties": {
+            "kfio_version": _KFIO_VERSION,
             "steps": {"type": "integer"},
             "trajectories": {"type": "integer"},
             "seed": {"type": "integer"},
@@ -413,7 +425,7 @@ COMPONENTS: dict[str, dict[str, Any]] = {
             "checks": {"type": "object"},
             "exact": {"type": ["object", "null"]},
         },
-        "required": ["steps", "trajectories", "seed", "mean_trace", "percentiles", "diverged"],
+        "required": ["kfio_version", "steps", "trajectories", "seed", "mean_trace", "percentiles", "diverged"],
         "examples": [_SEED004_SCALAR_SIMULATION],
     },
     "Problem": {
@@ -453,6 +465,11 @@ COMPONENTS: dict[str, dict[str, Any]] = {
             "status": {"type": "string", "enum": ["ready"]},
             "pool": {"type": "object", "additionalProperties": {"type": "integer"}},
             "cache": {"type": "object", "additionalProperties": {"type": "integer"}},
+            "jobs": {
+                "type": "object",
+                "description": "the job lane: its workers, the queue bound, and jobs held by status",
+                "additionalProperties": {"type": "integer"},
+            },
         },
         "required": ["status", "pool", "cache"],
         "examples": [
@@ -469,8 +486,11 @@ COMPONENTS: dict[str, dict[str, Any]] = {
 def problem_responses(*statuses: int) -> dict[int | str, dict[str, Any]]:
     """OpenAPI ``responses`` entries for problem documents."""
     texts = {
+        404: "No such job (unknown, forgotten after the retention limit, or the server restarted)",
+        409: "The job is not in a state that allows this (already finished, or no result yet)",
         413: "Request body larger than the deployment's limit (1 MiB by default)",
         422: "Invalid request: the problem names the field (JSON pointer) and the rule",
+        429: "Too many jobs are queued (the deployment's `KFIO_MAX_JOBS`); retry later",
         501: "This part of the analyzer is not available in this build",
         503: "No worker became free in time, or a worker died; retry later",
         504: "The computation did not finish within its time budget",

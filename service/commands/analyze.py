@@ -4,8 +4,6 @@ from __future__ import annotations
 
 import argparse
 
-from kfio import analyze, load_request
-
 from .. import exitcodes
 from ..io import add_request_arguments, dump_json, read_request_text, run_guarded
 
@@ -18,10 +16,12 @@ def register(sub: argparse._SubParsersAction) -> None:
         "Exit 0 stable, 1 unstable, 3 boundary, 2 invalid input.",
     )
     add_request_arguments(p)
-    p.set_defaults(func=_run)
+    p.set_defaults(func=_run, quick_exit=True)
 
 
 def _run(args: argparse.Namespace) -> int:
+    from kfio import analyze, load_request  # here, not at import: `kfio --help` stays fast
+
     def body() -> int:
         report = analyze(load_request(read_request_text(args.file)))
         print(dump_json(report.to_dict()) if args.json else report.summary())

@@ -9,9 +9,6 @@ from __future__ import annotations
 
 import argparse
 
-from kfio import load_request
-from kfio.mare._compute import compute_bounds
-
 from .. import exitcodes
 from ..io import add_request_arguments, dump_json, read_request_text, run_guarded
 
@@ -28,10 +25,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--grid", type=int, metavar="K", help="K x K region map of two sensors' probabilities (2..41)")
     p.add_argument("--horizon", type=int, metavar="N", help="largest N of P_hat_N (one packet; default 8)")
     p.add_argument("--tolerance", type=float, metavar="T", help="bisection tolerance of lambda_upper (default 1e-6)")
-    p.set_defaults(func=_run)
+    p.set_defaults(func=_run, quick_exit=True)
 
 
 def _run(args: argparse.Namespace) -> int:
+    from kfio import load_request  # here, not at import: CVXPY takes seconds to load
+    from kfio.mare._compute import compute_bounds
+
     def body() -> int:
         request = load_request(read_request_text(args.file))
         flags = {k: getattr(args, k) for k in ("grid", "horizon", "tolerance") if getattr(args, k) is not None}

@@ -11,15 +11,13 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-from typing import Any
-
-from kfio import load_request
-from kfio.model._types import Request
-from kfio.simulation._setup import packets_of
-from kfio.simulation._simulate import simulate
+from typing import TYPE_CHECKING, Any
 
 from .. import exitcodes
 from ..io import add_request_arguments, dump_json, read_request_text, run_guarded
+
+if TYPE_CHECKING:
+    from kfio.model._types import Request
 
 #: ``--exact`` without ``options.simulate.exact_steps`` enumerates at most 2^16 sequences.
 DEFAULT_EXACT_SEQUENCES_LOG2 = 16
@@ -45,11 +43,13 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="also compute the exact E[P_t] by enumerating arrival sequences "
         f"(options.simulate.exact_steps, or up to 2^{DEFAULT_EXACT_SEQUENCES_LOG2} sequences)",
     )
-    p.set_defaults(func=_run)
+    p.set_defaults(func=_run, quick_exit=True)
 
 
 def with_overrides(request: Request, args: argparse.Namespace) -> Request:
     """The request with command-line flags written into ``options.simulate``."""
+    from kfio.simulation._setup import packets_of
+
     raw: dict[str, Any] = dict(request.options.get("simulate", {}))
     for key in ("steps", "trajectories", "seed"):
         val = getattr(args, key)
@@ -63,6 +63,9 @@ def with_overrides(request: Request, args: argparse.Namespace) -> Request:
 
 
 def _run(args: argparse.Namespace) -> int:
+    from kfio import load_request  # here, not at import: `kfio --help` stays fast
+    from kfio.simulation._simulate import simulate
+
     def body() -> int:
         request = with_overrides(load_request(read_request_text(args.file)), args)
         report = simulate(request)

@@ -18,7 +18,7 @@ from hypothesis import strategies as st
 
 from kfio.errors import NumericalFailure
 from kfio.mare import _riccati as riccati
-from kfio.mare._phat import BatchedMare, max_horizon, p_hat_sequence
+from kfio.mare._phat import BatchedMare, max_horizon, p_hat, p_hat_sequence
 from kfio.mare._vech import unvech, vech
 
 SCALAR = (np.array([[-1.25]]), np.array([[1.0]]), np.array([[1.0]]), np.array([[2.5]]))
@@ -227,8 +227,8 @@ def test_batched_g_n_with_chunking_equals_without(monkeypatch) -> None:
 
 def test_p_hat_one_is_v_bar_and_p_hat_is_a_fixed_point() -> None:
     A, C, Q, R = THREE
-    np.testing.assert_allclose(riccati.p_hat(A, C, Q, R, 0.4, 1), riccati.v_bar(A, C, Q, R, 0.4))
-    P4 = riccati.p_hat(A, C, Q, R, 0.4, 4)
+    np.testing.assert_allclose(p_hat(A, C, Q, R, 0.4, 1), riccati.v_bar(A, C, Q, R, 0.4))
+    P4 = p_hat(A, C, Q, R, 0.4, 4)
     back = unvech(BatchedMare(A, C, Q, R, 0.4).g_n(vech(P4), 4), 3)
     assert np.linalg.norm(back - P4) <= 1e-9 * np.linalg.norm(P4)
 
@@ -255,7 +255,7 @@ def test_p_hat_scalar_improvement_at_20_matches_seed002() -> None:
 def test_p_hat_raises_where_it_does_not_exist() -> None:
     A, C, Q, R = SCALAR
     with pytest.raises(NumericalFailure, match="P_hat_2"):
-        riccati.p_hat(A, C, Q, R, 0.2, 2)
+        p_hat(A, C, Q, R, 0.2, 2)
 
 
 def test_max_horizon_limits() -> None:

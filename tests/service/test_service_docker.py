@@ -135,3 +135,15 @@ def test_dockerfile_install_and_start_commands_work(tmp_path: Path) -> None:
         assert subprocess.run(probe, env=env, timeout=30).returncode == 0
         r = httpx.post(f"{server.url}/v1/analyze", json=REQUEST_EXAMPLES["seed004-scalar"]["value"], timeout=60)
         assert r.status_code == 200 and r.json()["verdict"] == "stable"
+        # the web page, its examples and the docs' assets ship inside the installed (non-editable) package
+        for path in (
+            "/",
+            "/static/app.js",
+            "/static/app.css",
+            "/static/examples/index.json",
+            "/docs-assets/swagger-ui-bundle.js",
+        ):
+            assert httpx.get(f"{server.url}{path}", timeout=10).status_code == 200, path
+        examples = httpx.get(f"{server.url}/static/examples/index.json").json()
+        for example in examples:
+            assert httpx.get(f"{server.url}/static/examples/{example['id']}.json").status_code == 200, example

@@ -1,0 +1,355 @@
+"""The Python API: ``kfio.analyze``, ``kfio.bounds``, ``kfio.simulate``, ``kfio.expected_covariance``.
+
+One code path: every function here writes its arguments as the JSON tree of a
+request file (:mod:`kfio.model._coerce`), validates it with the same
+:func:`kfio.model._request.parse_request` as the CLI and the HTTP service, and
+calls the same function they call.  So ``kfio.analyze(sys, ch).to_dict()`` is
+the report ``kfio analyze --json`` prints for the same numbers, and an invalid
+argument gets the JSON route's message with the Python argument as the field
+(``A[0][1]``, ``channel['arrival_probability']``, ``steps``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING, Any
+
+from ._budget import Budget
+from ._system import System
+from .errors import InvalidInput
+from .model import _types
+from .model._channels import channel_tree
+from .model._coerce import Route, json_ready, python_tree, renamed
+from .model._limits import DEFAULT_LIMITS, Limits
+from .model._request import parse_request
+from .model._types import Request
+
+if TYPE_CHECKING:
+    from .mare._report import BoundsReport
+    from .simulation._finite_horizon import FiniteHorizonReport
+    from .simulation._simulate import SimulationReport
+    from .stability._verdict import StabilityReport
+
+
+def _budget_of(budget: Any) -> tuple[Budget | None, Any]:
+    """``(Budget object, seconds for options.time_budget_s)``: one of them, or neither."""
+    if budget is None or isinstance(budget, Budget):
+        return budget, None
+    return None, python_tree(budget)
+
+
+def request_dict(
+    system: System,
+    channel: Any,
+    *,
+    command: str | None = None,
+    options: Mapping[str, Any] | None = None,
+    budget: Any = None,
+) -> dict[str, Any]:
+    """The request file for ``system`` and ``channel``, as a JSON-ready dict.
+
+    ``json.dump`` it and ``kfio <command> FILE`` (or ``POST /v1/<command>``)
+    answers exactly what :func:`analyze`, :func:`bounds` or :func:`simulate`
+    return for the same arguments.
+
+    Examples
+    --------
+    >>> from kfio import bernoulli
+    >>> request_dict(System(A=[[1.1]], C=[[1]]), bernoulli(0.5), command="analyze", budget=10)
+    {'system': {'A': [['11/10']], 'C': [['1']]}, 'channel': {'model': 'bernoulli', 'arrival_probability': '1/2'}, \
+'options': {'time_budget_s': 10}}
+    """
+    tree, _ = _tree(system, channel, command, options, budget)
+    return json_ready(tree)
+
+
+def _tree(
+    system: Any,
+    channel: Any,
+    command: str | None,
+    options: Any,
+    budget: Any,
+    keywords: Mapping[str, Any] = {},
+    limits: Limits = DEFAULT_LIMITS,
+) -> tuple[dict[str, Any], list[Route]]:
+    if not isinstance(system, _types.System):
+        raise InvalidInput("system", f"expected a kfio.System; got a {type(system).__name__}")
+    if not isinstance(system, System):
+        system = System(system.A, system.C, system.Q, system.R, system.sensors, limits=limits)
+    ch = channel_tree(channel)
+    if not isinstance(ch, dict):
+        raise InvalidInput(
+            "channel",
+            "expected a channel: kfio.bernoulli(p), kfio.gilbert_elliott(...), kfio.markov({...}), "
+            f"kfio.per_sensor({{...}}) or a channel's JSON object; got a {type(channel).__name__}",
+        )
+    tree: dict[str, Any] = {"system": system.to_dict(), "channel": ch}
+    routes: list[Route] = []
+    opts: dict[str, Any] = {}
+    if options is not None or keywords:
+        if command is None:
+            raise InvalidInput("options", "options need a command")
+        if options is not None and not isinstance(options, Mapping):
+            raise InvalidInput(
+                "options", f"expected a mapping of option names to values; got a {type(options).__name__}"
+            )
+        group = {**python_tree(dict(options or {})), **{k: python_tree(v) for k, v in keywords.items()}}
+        opts[command] = group
+        routes += [(f"/options/{command}/{k}", k, group[k], False) for k in keywords]
+        routes.append((f"/options/{command}", "options", group, False))
+    _, seconds = _budget_of(budget)
+    if seconds is not None:
+        opts["time_budget_s"] = seconds
+        routes.append(("/options/time_budget_s", "budget", seconds, False))
+    if opts:
+        tree["options"] = opts
+    if isinstance(ch, dict) and ch.get("model") == "per_sensor" and isinstance(ch.get("channels"), dict):
+        routes.append(("/channel/channels", "channel", ch["channels"], False))
+    routes += [("/options", "options", opts, False), ("/channel", "channel", ch, False)]
+    routes.append(("/system", "system", tree["system"], True))
+    return tree, routes
+
+
+def build_request(
+    system: System | Request,
+    channel: Any = None,
+    *,
+    command: str | None = None,
+    options: Mapping[str, Any] | None = None,
+    budget: Any = None,
+    limits: Limits | None = None,
+    keywords: Mapping[str, Any] | None = None,
+) -> tuple[Request, Budget | None, list[Route]]:
+    """The validated :class:`~kfio.model._types.Request` that the JSON route builds from the same values.
+
+    A :class:`Request` passes through unchanged (the entry of the CLI and the
+    service).  Returns the request, the :class:`~kfio.Budget` object if one
+    was given, and the routes that rename later errors to Python arguments.
+    ``limits`` default to those the :class:`System` was built with.
+    """
+    if isinstance(system, Request):
+        if channel is not None or options is not None or keywords:
+            raise InvalidInput("channel", "a validated Request already holds its channel and options")
+        work, seconds = _budget_of(budget)
+        if seconds is not None:
+            work = Budget(seconds=float(python_tree(seconds)))
+        return system, work, []
+    if channel is None:
+        raise InvalidInput("channel", "a channel is required, e.g. kfio.bernoulli(0.5)")
+    if limits is None:
+        limits = getattr(system, "_limits", DEFAULT_LIMITS)
+    tree, routes = _tree(system, channel, command, options, budget, keywords or {}, limits)
+    work, _ = _budget_of(budget)
+    try:
+        return parse_request(tree, limits), work, routes
+    except InvalidInput as exc:
+        raise renamed(exc, routes) from None
+
+
+def _run(fn: Any, routes: Sequence[Route], *args: Any, **kwargs: Any) -> Any:
+    try:
+        return fn(*args, **kwargs)
+    except InvalidInput as exc:
+        raise renamed(exc, routes) from None
+
+
+def analyze(
+    system: System | Request, channel: Any = None, *, options: Mapping[str, Any] | None = None, budget: Any = None
+) -> StabilityReport:
+    """Decide whether the Kalman filter's expected error covariance stays bounded.
+
+    The exact verdict of Rohr, Marelli and Fu (2014), Theorem 1: bounded iff
+    ``|alpha_k|^2 sigma_k < 1`` for every FMO block ``k`` (groups of
+    eigenvalues of ``A`` of one modulus whose ratios are roots of unity),
+    where ``sigma_k`` is the per-step rate at which the probability of
+    staying blind to block ``k`` decays; unbounded if ``> 1`` for some block;
+    ``boundary`` at equality.  For a Bernoulli channel the report also gives
+    the exact critical arrival probability.
+
+    Parameters
+    ----------
+    system:
+        A :class:`System`, or a validated request (the CLI's and the
+        service's entry: ``analyze(load_request(text))``).
+    channel:
+        :func:`kfio.bernoulli`, :func:`kfio.gilbert_elliott`,
+        :func:`kfio.markov`, :func:`kfio.per_sensor`, or a channel's JSON object.
+    options:
+        ``options.analyze`` of a request (analyze takes none today).
+    budget:
+        Seconds (as ``options.time_budget_s``, in ``(0, 3600]``) or a
+        :class:`kfio.Budget`; default 120 s.
+
+    Returns
+    -------
+    StabilityReport
+        ``verdict``, ``critical_arrival_probability``, ``blocks[k].sigma``, ...;
+        ``to_dict()`` is the JSON of ``kfio analyze --json``.
+
+    Raises
+    ------
+    InvalidInput, AssumptionViolation
+        A bad argument (named), or a channel probability of 0 or 1 (Rohr,
+        Marelli and Fu 2014, Assumption 1).
+    BudgetExceeded
+        The computation did not fit the budget.
+
+    Examples
+    --------
+    >>> import kfio, numpy as np
+    >>> sys = kfio.System(A=np.array([[1.25, 0], [1, 1.1]]), C=[[1, 1]], Q=20 * np.eye(2), R=[[2.5]])
+    >>> r = kfio.analyze(sys, kfio.bernoulli(0.5))
+    >>> r.verdict, r.critical_arrival_probability_exact, r.blocks[0].sigma
+    ('stable', '9/25', 0.5)
+    """
+    from .stability._verdict import analyze as _analyze
+
+    request, work, routes = build_request(system, channel, command="analyze", options=options, budget=budget)
+    return _run(_analyze, routes, request, budget=work)
+
+
+def bounds(
+    system: System | Request, channel: Any = None, *, options: Mapping[str, Any] | None = None, budget: Any = None
+) -> BoundsReport:
+    """Bounds on the critical arrival probability and on ``lim E[P_t]``.
+
+    Sinopoli et al. (2004), Theorems 3-5 (``S_bar <= lim E[P_t] <= V_bar``,
+    ``lambda_lower <= lambda_c <= lambda_upper`` from an LMI whose certificate
+    is re-checked exactly), Liu and Goldsmith (2004) for several sensors, and
+    the ``P_hat_N`` sequence of Rohr, Marelli and Fu (2010) for one packet.
+    Needs ``Q`` and ``R`` and i.i.d. (Bernoulli) channels.  Imports CVXPY.
+
+    Parameters
+    ----------
+    system, channel, budget:
+        As in :func:`analyze`.
+    options:
+        ``options.bounds`` of a request: ``tolerance``, ``horizon``, ``grid``,
+        ``arrival_probability``.
+
+    Returns
+    -------
+    BoundsReport
+        ``to_dict()`` is the JSON of ``kfio bounds --json``.
+
+    Examples
+    --------
+    >>> import kfio
+    >>> b = kfio.bounds(kfio.System(A=[[-1.25]], C=[[1]], Q=[[1]], R=[[2.5]]), kfio.bernoulli(0.4))
+    >>> round(b.critical[0].lower, 9), b.verdict
+    (0.36, 'stable')
+    """
+    from .mare._compute import compute_bounds
+
+    request, work, routes = build_request(system, channel, command="bounds", options=options, budget=budget)
+    return _run(compute_bounds, routes, request, work)
+
+
+def simulate(
+    system: System | Request,
+    channel: Any = None,
+    *,
+    steps: int | None = None,
+    trajectories: int | None = None,
+    seed: int | None = None,
+    exact_steps: int | None = None,
+    P0: Any = None,
+    initial_channel: str | None = None,
+    options: Mapping[str, Any] | None = None,
+    budget: Any = None,
+) -> SimulationReport:
+    """Monte Carlo of the error covariance ``P_t`` of the intermittent Kalman filter.
+
+    Runs the random Riccati recursion (Rohr, Marelli and Fu 2014, eq. (2))
+    along random arrival sequences and reports ``trace(P_t)``: mean with a
+    95% band, median, 90% and 99% percentiles; with ``exact_steps`` also the
+    exact ``E[P_t]`` (see :func:`expected_covariance`) to compare with.
+
+    Parameters
+    ----------
+    system, channel, budget:
+        As in :func:`analyze`; ``Q`` and ``R`` are needed.
+    steps, trajectories, seed, exact_steps, P0, initial_channel:
+        The keys of ``options.simulate`` (defaults: 200 steps, as many
+        trajectories as the work cap allows, seed 0, ``P0 = Q``, stationary
+        channel); a keyword wins over the same key in ``options``, as the
+        CLI's flags do.
+
+    Returns
+    -------
+    SimulationReport
+        ``to_dict()`` is the JSON of ``kfio simulate --json``.
+
+    Examples
+    --------
+    >>> import kfio
+    >>> sys = kfio.System(A=[[1.2]], C=[[1]], Q=[[1]], R=[[1]])
+    >>> rep = kfio.simulate(sys, kfio.bernoulli(0.5), steps=20, trajectories=1000, seed=1)
+    >>> rep.mean_trace.shape, rep.mean_diverged_at
+    ((21,), None)
+    """
+    from .simulation._simulate import simulate as _simulate
+
+    given = dict(
+        steps=steps,
+        trajectories=trajectories,
+        seed=seed,
+        exact_steps=exact_steps,
+        P0=P0,
+        initial_channel=initial_channel,
+    )
+    keywords = {k: v for k, v in given.items() if v is not None}
+    request, work, routes = build_request(
+        system, channel, command="simulate", options=options, budget=budget, keywords=keywords
+    )
+    return _run(_simulate, routes, request, work)
+
+
+def expected_covariance(
+    system: System | Request,
+    channel: Any = None,
+    steps: Any = None,
+    *,
+    P0: Any = None,
+    initial_channel: str | None = None,
+    budget: Any = None,
+) -> FiniteHorizonReport:
+    """The exact ``E[P_t]``, ``t = 0..steps``, by summing over every arrival sequence.
+
+    ``E[P_t] = sum_g P(g) P_t(g)`` over the ``2^(m t)`` arrival sequences
+    ``g`` of ``m`` packets (Rohr, Marelli and Fu 2014, eq. (7)), with the
+    Markov channel's probabilities; exact up to float rounding of the
+    Riccati steps.  For short horizons: ``2^(m steps)`` is limited.
+
+    Parameters
+    ----------
+    system, channel, budget:
+        As in :func:`analyze`; ``Q`` and ``R`` are needed.  With a validated
+        request, pass the horizon by keyword: ``expected_covariance(request, steps=4)``.
+    steps:
+        Horizon ``T >= 0`` (required).
+    P0, initial_channel:
+        Initial covariance (default ``Q``) and channel history before
+        ``t = 0`` (``"stationary"``, ``"all_lost"`` or ``"all_arrived"``).
+
+    Examples
+    --------
+    Scalar ``a = 2``, ``lambda = 1/2``, ``P_0 = Q = R = 1``:
+    ``E[P_1] = (1/2)(4 + 1) + (1/2)(4 - 4/2 + 1) = 4``.
+
+    >>> import kfio
+    >>> rep = kfio.expected_covariance(kfio.System(A=[[2]], C=[[1]], Q=[[1]], R=[[1]]), kfio.bernoulli(0.5), 1)
+    >>> float(rep.mean_trace[1])
+    4.0
+    """
+    from .simulation._finite_horizon import expected_covariance as _expected
+
+    if steps is None:
+        raise InvalidInput("steps", "the horizon is required: expected_covariance(system, channel, steps)")
+    keywords = {k: v for k, v in dict(P0=P0, initial_channel=initial_channel).items() if v is not None}
+    request, work, routes = build_request(system, channel, command="simulate", budget=budget, keywords=keywords)
+    routes = [("/options/simulate/exact_steps", "steps", steps, False), *routes]
+    return _run(_expected, routes, request, python_tree(steps), work)
+
+
+__all__ = ["System", "analyze", "bounds", "build_request", "expected_covariance", "request_dict", "simulate"]

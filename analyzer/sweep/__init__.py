@@ -1,0 +1,48 @@
+"""Sweeps and batches: one base request and axes (a grid or a zip), or a list of requests.
+
+Every point is validated before any work starts; the eigenstructure is
+derived once per plant; the points run serially or on Dask distributed (an
+embedded LocalCluster by default, or an existing cluster).  Results are one
+row per point (:mod:`kfio.sweep._rows`), as JSON Lines, CSV or Parquet.
+
+Examples
+--------
+>>> from kfio.sweep import load_sweep, run_sweep
+>>> spec = load_sweep('{"command": "analyze", '
+...     '"base": {"system": {"A": [[2]], "C": [[1]]}, '
+...     '"channel": {"model": "bernoulli", "arrival_probability": "1/2"}}, '
+...     '"axes": [{"pointer": "/channel/arrival_probability", "from": "1/2", "to": "9/10", "num": 3}]}')
+>>> spec.size
+3
+>>> [r.fields["verdict"] for r in run_sweep(spec, engine="serial").rows]
+['unstable', 'unstable', 'stable']
+"""
+
+from ._engine import SweepResult, SweepRow, iter_sweep, run_sweep
+from ._evaluate import cache_stats, clear_caches, evaluate_point
+from ._rows import FIELDS, row_from_report
+from ._spec import Axis, SweepPointInvalid, SweepSpec, load_sweep, parse_sweep, point_at, points, validate_points
+from ._table import FORMATS, format_of, write_table
+
+__all__ = [
+    "FIELDS",
+    "FORMATS",
+    "Axis",
+    "SweepPointInvalid",
+    "SweepResult",
+    "SweepRow",
+    "SweepSpec",
+    "cache_stats",
+    "clear_caches",
+    "evaluate_point",
+    "format_of",
+    "iter_sweep",
+    "load_sweep",
+    "parse_sweep",
+    "point_at",
+    "points",
+    "row_from_report",
+    "run_sweep",
+    "validate_points",
+    "write_table",
+]

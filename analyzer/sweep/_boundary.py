@@ -1,0 +1,67 @@
+"""The exact boundary a sweep's plot can draw, where kfio knows it in closed form.
+
+For a 2-D ``analyze`` sweep whose axes are the arrival probabilities of the two
+sensors of a per-sensor Bernoulli channel, the stable region is known exactly
+(kfio's per-sensor extension of Rohr, Marelli and Fu (2014), Theorem 1; see
+:mod:`kfio.stability._regions`): its boundary curve is taken from the report of
+the base request.  For a 1-D ``analyze`` sweep of a one-packet Bernoulli
+arrival probability, the boundary is the exact critical probability.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from ..errors import AnalyzerError
+from ..model import parse_request
+from ._spec import SweepSpec
+
+
+def exact_boundary(spec: SweepSpec) -> dict[str, Any] | None:
+    """``{"kind": "curve", "x": [...], "y": [...], "axes": (name_x, name_y)}`` or
+    ``{"kind": "threshold", "value": float, "exact": str, "axis": name}``, else ``None``."""
+    if spec.command != "analyze" or spec.requests is not None or spec.base is None:
+        return None
+    channel = spec.base.get("channel", {})
+    pointers = [a.pointer for a in spec.axes]
+    try:
+        if (
+            len(spec.axes) == 1
+            and pointers[0] == "/channel/arrival_probability"
+            and channel.get("model") == "bernoulli"
+        ):
+            from ..stability import analyze
+
+            rep = analyze(parse_request(spec.base)).to_dict()
+            if rep.get("critical_arrival_probability") is None:
+                return None
+            return {
+                "kind": "threshold",
+                "axis": spec.axes[0].name,
+                "value": rep["critical_arrival_probability"],
+                "exact": rep["critical_arrival_probability_exact"],
+            }
+        if len(spec.axes) == 2 and channel.get("model") == "per_sensor":
+            names = list(channel.get("channels", {}))
+            wanted = [f"/channel/channels/{n}/arrival_probability" for n in names]
+            if len(names) != 2 or sorted(pointers) != sorted(wanted):
+                return None
+            from ..stability import analyze
+
+            rep = analyze(parse_request(spec.base)).to_dict()
+            boundary = (rep.get("regions") or {}).get("boundary")
+            if not boundary or "samples" not in boundary:
+                return None
+            x, y = list(boundary["samples"]["lambda_1"]), list(boundary["samples"]["lambda_2"])
+            first = next((k for k, v in enumerate(y) if v is not None), None)
+            lam1_min = (boundary.get("envelope") or {}).get("lambda_1_min")
+            if first is not None and lam1_min is not None:
+                # the region is lambda_1 > lambda_1_min and lambda_2 > h(lambda_1): close it with the vertical edge
+                x[first:first] = [lam1_min, lam1_min]
+                y[first:first] = [1.0, y[first]]
+            if pointers != wanted:  # the sweep's first axis is the second sensor
+                x, y = y, x
+            return {"kind": "curve", "axes": (spec.axes[0].name, spec.axes[1].name), "x": x, "y": y}
+    except AnalyzerError:  # e.g. the base request breaks Assumption 1: the plot draws the rows alone
+        return None
+    return None

@@ -1,0 +1,275 @@
+"""Run a sweep: serially in this process, or on Dask distributed.
+
+The Dask engine chunks the points into tasks (thousands of points per task
+where each is fast), so the scheduler never holds millions of tasks.  By
+default it starts an embedded :class:`distributed.LocalCluster` (one worker
+process per core, no external service); ``scheduler="tcp://HOST:PORT"`` runs
+the same sweep on an existing cluster whose workers have kfio installed.
+
+Faults: a worker that dies mid-task has its tasks rescheduled by Dask; each
+task's result is taken once, so the table has exactly one row per point.  A
+task that keeps killing workers gives ``worker-lost`` rows for its points; a
+point that fails (budget, numerical failure) gets a row naming its error and
+the sweep goes on.  A total budget and a cancel event stop the sweep; points
+not reached get ``budget-exceeded`` or ``cancelled`` rows.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import os
+import threading
+import time
+from dataclasses import dataclass, field
+from typing import Any, Callable, Iterator
+
+from .._reporting import stamp
+from ..errors import InvalidInput
+from ._evaluate import evaluate_chunk
+from ._rows import FIELDS, error_row
+from ._spec import SweepSpec, request_text, validate_points
+
+#: ``progress(done, total)`` after every finished chunk.
+Progress = Callable[[int, int], None]
+
+#: Points per task at most, and tasks per worker at least (for balance).
+MAX_CHUNK = 2000
+TASKS_PER_WORKER = 8
+#: Tasks still running this long after the sweep's deadline are abandoned (each point also has its own budget).
+_GRACE_S = 5.0
+
+
+@dataclass(frozen=True)
+class SweepRow:
+    """One finished point: index, coordinates (axis name -> exact value text) and fields."""
+
+    index: int
+    coordinates: dict[str, Any]
+    fields: dict[str, Any]
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"index": self.index, **{k: _coord_text(v) for k, v in self.coordinates.items()}, **self.fields}
+
+
+def _coord_text(v: Any) -> Any:
+    return v if isinstance(v, (str, int, type(None))) else str(v)
+
+
+@dataclass
+class SweepResult:
+    """All rows of a sweep, in index order, with how it ran."""
+
+    spec: SweepSpec
+    rows: list[SweepRow]
+    engine: str
+    workers: int
+    chunks: int
+    seconds: float
+    stopped: str | None = None
+    stats: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def columns(self) -> list[str]:
+        return ["index", *self.spec.coordinate_names, *FIELDS[self.spec.command], "error"]
+
+    def records(self) -> list[dict[str, Any]]:
+        cols = self.columns
+        return [{c: r.to_dict().get(c) for c in cols} for r in self.rows]
+
+    def to_dict(self) -> dict[str, Any]:
+        """The sweep as JSON: how it ran, its columns and one record per point (index order)."""
+        return {
+            **stamp(),
+            "command": self.spec.command,
+            "points": len(self.rows),
+            "errors": sum(1 for r in self.rows if r.fields.get("error")),
+            "stopped": self.stopped,
+            "engine": self.engine,
+            "workers": self.workers,
+            "tasks": self.chunks,
+            "seconds": round(self.seconds, 3),
+            "columns": self.columns,
+            "rows": self.records(),
+        }
+
+
+def chunk_size_for(n_points: int, workers: int, requested: int | None = None) -> int:
+    """Points per task: ``requested``, else enough tasks for balance, at most :data:`MAX_CHUNK`."""
+    if requested is not None:
+        return requested
+    return max(1, min(MAX_CHUNK, math.ceil(n_points / max(1, workers * TASKS_PER_WORKER))))
+
+
+def _canonical(spec: SweepSpec) -> str:
+    obj: dict[str, Any] = {
+        "command": spec.command,
+        "combine": spec.combine,
+        "options": {"point_budget_s": repr(spec.point_budget_s)},
+    }
+    if spec.requests is not None:
+        obj["requests"] = list(spec.requests)
+    else:
+        obj["base"] = spec.base
+        obj["axes"] = [{"pointer": a.pointer, "name": a.name, "values": list(a.values)} for a in spec.axes]
+    return request_text(obj)
+
+
+def iter_sweep(
+    spec: SweepSpec,
+    *,
+    engine: str = "dask",
+    scheduler: str | None = None,
+    workers: int | None = None,
+    chunk_size: int | None = None,
+    progress: Progress | None = None,
+    cancel: threading.Event | None = None,
+    reuse: bool = True,
+    info: dict[str, Any] | None = None,
+) -> Iterator[SweepRow]:
+    """Rows as they finish (completion order).  Every point is validated before any work starts.
+
+    Parameters
+    ----------
+    engine:
+        ``"dask"`` (an embedded LocalCluster, or ``scheduler``) or ``"serial"``.
+    scheduler:
+        Address of a running Dask scheduler, e.g. ``tcp://127.0.0.1:8786``.
+    workers:
+        Worker processes of the embedded cluster (default: the machine's cores).
+    reuse:
+        Keep FMO blocks and verdicts across points (see :mod:`kfio.sweep._evaluate`);
+        ``False`` analyses every point from scratch (the benchmark's baseline).
+    info:
+        Filled with ``engine``, ``workers``, ``chunks`` and ``stopped`` as the sweep runs.
+    """
+    pts = validate_points(spec)
+    coords = {p.index: p.coordinates for p in pts}
+    del pts
+    total = spec.size
+    text = _canonical(spec)
+    deadline = None if spec.time_budget_s is None else time.time() + spec.time_budget_s
+    info = info if info is not None else {}
+    info.update(stopped=None)
+    if engine == "serial":
+        size = chunk_size_for(total, 1, chunk_size or spec.chunk_size)
+        info.update(engine="serial", workers=1, chunks=math.ceil(total / size))
+        done = 0
+        for start in range(0, total, size):
+            if cancel is not None and cancel.is_set():
+                info["stopped"] = "cancelled"
+                for i in range(start, total):
+                    yield SweepRow(i, coords[i], error_row(spec.command, "cancelled", "the sweep was cancelled"))
+                return
+            for i, row in evaluate_chunk(text, range(start, min(total, start + size)), deadline, reuse):
+                yield SweepRow(i, coords[i], row)
+            done = min(total, start + size)
+            if progress is not None:
+                progress(done, total)
+        return
+    if engine != "dask":
+        raise InvalidInput("/engine", "expected 'dask' or 'serial'")
+    yield from _iter_dask(spec, text, coords, deadline, scheduler, workers, chunk_size, progress, cancel, reuse, info)
+
+
+def _iter_dask(spec, text, coords, deadline, scheduler, workers, chunk_size, progress, cancel, reuse, info):
+    try:
+        from distributed import Client, LocalCluster, as_completed
+    except ImportError:  # pragma: no cover - the sweep extra is installed in CI
+        raise InvalidInput(
+            "/engine", "the Dask engine needs the 'sweep' extra: pip install 'kfio[sweep]' (or use engine 'serial')"
+        ) from None
+    total = spec.size
+    cluster = None
+    try:
+        if scheduler:
+            try:
+                client = Client(scheduler, timeout=5)
+            except OSError as exc:
+                raise InvalidInput("/scheduler", f"cannot reach the Dask scheduler at {scheduler}: {exc}") from None
+        else:
+            n = workers or os.cpu_count() or 1
+            cluster = LocalCluster(
+                n_workers=n,
+                threads_per_worker=1,
+                processes=True,
+                dashboard_address=None,
+                silence_logs=logging.ERROR,
+            )
+            client = Client(cluster)
+        n_workers = max(1, len(client.scheduler_info().get("workers", {})) or (workers or 1))
+        size = chunk_size_for(total, n_workers, chunk_size or spec.chunk_size)
+        starts = list(range(0, total, size))
+        info.update(engine="dask", workers=n_workers, chunks=len(starts), scheduler=scheduler or "local")
+        futures = {}
+        for start in starts:
+            idx = list(range(start, min(total, start + size)))
+            fut = client.submit(evaluate_chunk, text, idx, deadline, reuse, pure=False, retries=1)
+            futures[fut] = idx
+        pending = set(futures)
+        done_points = 0
+        seq = as_completed(list(futures), with_results=False)
+        try:
+            while pending:
+                if cancel is not None and cancel.is_set():
+                    info["stopped"] = "cancelled"
+                    break
+                if deadline is not None and time.time() > deadline + _GRACE_S:
+                    info["stopped"] = "budget-exceeded"
+                    break
+                fut = _wait_next(seq, 0.25)
+                if fut is None or fut not in pending:
+                    continue
+                pending.discard(fut)
+                idx = futures[fut]
+                try:
+                    rows = fut.result()
+                except Exception as exc:  # noqa: BLE001 - KilledWorker and friends: the rows say so
+                    rows = [(i, error_row(spec.command, "worker-lost", f"{type(exc).__name__}: {exc}")) for i in idx]
+                for i, row in rows:
+                    yield SweepRow(i, coords[i], row)
+                done_points += len(idx)
+                if progress is not None:
+                    progress(done_points, total)
+        finally:
+            if pending:
+                client.cancel(list(pending))
+        kind = info.get("stopped") or "budget-exceeded"
+        message = "the sweep was cancelled" if kind == "cancelled" else "the sweep's time budget ran out"
+        for fut in pending:
+            for i in futures[fut]:
+                yield SweepRow(i, coords[i], error_row(spec.command, kind, message))
+    finally:
+        if "client" in locals():
+            client.close()
+        if cluster is not None:
+            cluster.close()
+
+
+def _wait_next(seq: Any, seconds: float) -> Any:
+    """The next finished future of a :class:`distributed.as_completed`, or ``None`` after ``seconds``."""
+    end = time.monotonic() + seconds
+    while True:
+        if seq.has_ready():
+            return next(seq)
+        if time.monotonic() >= end:
+            return None
+        time.sleep(0.01)
+
+
+def run_sweep(spec: SweepSpec, **kwargs: Any) -> SweepResult:
+    """Run a whole sweep and return its rows in index order (see :func:`iter_sweep`)."""
+    info: dict[str, Any] = {}
+    t0 = time.perf_counter()
+    rows = sorted(iter_sweep(spec, info=info, **kwargs), key=lambda r: r.index)
+    if len(rows) != spec.size or any(r.index != i for i, r in enumerate(rows)):  # pragma: no cover - invariant
+        raise AssertionError("a sweep must give exactly one row per point")
+    return SweepResult(
+        spec,
+        rows,
+        info.get("engine", "?"),
+        info.get("workers", 0),
+        info.get("chunks", 0),
+        time.perf_counter() - t0,
+        info.get("stopped"),
+    )

@@ -1,0 +1,146 @@
+"""Evaluate a chunk of sweep points: the task one Dask worker runs.
+
+What does not change between points is computed once per worker process:
+
+* the FMO blocks (eigenstructure, reduced blocks) depend on ``A``, ``C`` and
+  the sensor split only, so a sweep that varies the channel derives them once
+  (:func:`kfio.stability.analyze` takes them as ``fmo=``);
+* the verdict does not depend on ``Q`` and ``R``: for ``analyze``, points that
+  differ only there share one row.
+
+Both caches are bounded (least recently used), keyed by exact values.
+"""
+
+from __future__ import annotations
+
+import time
+from collections import OrderedDict
+from typing import Any, Callable, Hashable, Sequence
+
+from .._budget import Budget
+from ..errors import AnalyzerError, AssumptionViolation, BudgetExceeded, InvalidInput, NumericalFailure
+from ..model import load_json, parse_request
+from ._rows import error_row, row_from_report
+from ._spec import SweepSpec, parse_sweep, point_at, request_text
+
+_CACHE_SIZE = 256
+
+
+class _LRU:
+    def __init__(self, size: int = _CACHE_SIZE):
+        self.size = size
+        self.data: OrderedDict[Hashable, Any] = OrderedDict()
+        self.hits = 0
+        self.misses = 0
+
+    def get(self, key: Hashable, make: Callable[[], Any]) -> Any:
+        if key in self.data:
+            self.data.move_to_end(key)
+            self.hits += 1
+            return self.data[key]
+        self.misses += 1
+        value = make()
+        self.data[key] = value
+        if len(self.data) > self.size:
+            self.data.popitem(last=False)
+        return value
+
+
+_STRUCTURE = _LRU()
+_VERDICT_ROWS = _LRU(4096)
+_SPECS = _LRU(8)
+
+
+def cache_stats() -> dict[str, int]:
+    """Hits and misses of this process's reuse caches (for benchmarks and tests)."""
+    return {
+        "structure_hits": _STRUCTURE.hits,
+        "structure_misses": _STRUCTURE.misses,
+        "verdict_hits": _VERDICT_ROWS.hits,
+        "verdict_misses": _VERDICT_ROWS.misses,
+    }
+
+
+def clear_caches() -> None:
+    """Forget every cached structure and verdict (tests, benchmarks)."""
+    for c in (_STRUCTURE, _VERDICT_ROWS):
+        c.data.clear()
+        c.hits = c.misses = 0
+
+
+def _structure_key(system: Any) -> Hashable:
+    sensors = None if system.sensors is None else tuple((s.name, s.rows) for s in system.sensors)
+    return (system.A, system.C, sensors)
+
+
+def _without_noise(tree: Any) -> Any:
+    if not isinstance(tree, dict) or not isinstance(tree.get("system"), dict):
+        return tree
+    system = {k: v for k, v in tree["system"].items() if k not in ("Q", "R")}
+    return {**tree, "system": system}
+
+
+def evaluate_point(command: str, tree: Any, budget_s: float, *, reuse: bool = True) -> dict[str, Any]:
+    """The row of one point (never raises for an analysis failure: the row names it)."""
+    try:
+        request = parse_request(tree)
+        budget = Budget(seconds=budget_s)
+        if command == "analyze":
+            from ..stability import analyze
+            from ..structure import fmo_blocks
+
+            if not reuse:
+                return row_from_report(command, analyze(request, budget).to_dict())
+
+            def run() -> dict[str, Any]:
+                fmo = _STRUCTURE.get(_structure_key(request.system), lambda: fmo_blocks(request.system, budget))
+                return row_from_report(command, analyze(request, budget, fmo=fmo).to_dict())
+
+            return dict(_VERDICT_ROWS.get(request_text(_without_noise(tree)), run))
+        if command == "bounds":
+            from ..mare import compute_bounds
+
+            return row_from_report(command, compute_bounds(request, budget=budget).to_dict())
+        from ..simulation import simulate
+
+        return row_from_report(command, simulate(request, budget=budget).to_dict())
+    except BudgetExceeded as exc:
+        return error_row(command, "budget-exceeded", str(exc))
+    except NumericalFailure as exc:
+        return error_row(command, "numerical-failure", str(exc))
+    except AssumptionViolation as exc:
+        return error_row(command, "assumption-violation", f"{exc.field}: {exc.rule}")
+    except InvalidInput as exc:
+        return error_row(command, "invalid-input", f"{exc.field}: {exc.rule}")
+    except AnalyzerError as exc:
+        return error_row(command, "analysis-error", str(exc))
+    except Exception as exc:  # noqa: BLE001 - one bad point must not end the sweep; the row says it is a bug
+        return error_row(command, "internal", f"{type(exc).__name__}: {exc}")
+
+
+def _spec(spec_text: str) -> SweepSpec:
+    return _SPECS.get(spec_text, lambda: parse_sweep(load_json(spec_text)))
+
+
+def evaluate_chunk(
+    spec_text: str, indices: Sequence[int], deadline: float | None, reuse: bool = True
+) -> list[tuple[int, dict[str, Any]]]:
+    """Rows of the points ``indices`` of the sweep ``spec_text`` (canonical sweep JSON).
+
+    Workers rebuild each point from the sweep itself (:func:`point_at`), so a
+    task carries a few integers, not a million requests.  ``deadline`` is the
+    sweep's total budget as a wall-clock epoch (``time.time()``); points
+    reached after it get a ``budget-exceeded`` row.
+    """
+    spec = _spec(spec_text)
+    out = []
+    for i in indices:
+        budget_s = spec.point_budget_s
+        if deadline is not None:
+            left = deadline - time.time()
+            if left <= 0:
+                out.append((i, error_row(spec.command, "budget-exceeded", "the sweep's time budget ran out")))
+                continue
+            budget_s = min(budget_s, left)
+        out.append((i, evaluate_point(spec.command, point_at(spec, i).request, budget_s, reuse=reuse)))
+    return out

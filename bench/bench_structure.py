@@ -1,0 +1,157 @@
+"""Benchmark: certified exact structure (issue 10) against the previous code, in the same run.
+
+Each case runs ``analyze`` end to end in a child process, once with the
+current ``kfio`` and once with a previous checkout (``--before``: the folder
+holding that checkout's ``analyzer/`` package, imported as ``kfio`` through a
+symlink), with the same time limit; CPU seconds of the child are reported,
+with the ratio, the verdict and how many blocks are ``certified: true``.
+
+Cases: dense random integer matrices (entries -3..3, ``C = e_1``, Bernoulli
+1/2) of size 16, 24, 40; the seed systems and structured cases of
+``bench_verdict.py`` (period 60, 12 x 12 repeated Jordan blocks); two sensors
+on periods 15, 21, 36, 60 (``2 * companion(Phi_m)`` blocks, rows ``e_1`` and
+``e_2``).
+
+Run: ``git worktree add /tmp/kfio-before 736f7c6`` then
+``python bench/bench_structure.py --before /tmp/kfio-before [--limit 120]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import random
+import subprocess
+import sys
+import tempfile
+
+from bench_verdict import cases as verdict_cases
+from flint import fmpz_poly
+
+CHILD = r"""
+import json, sys, time
+from kfio import analyze, load_request
+from kfio._budget import Budget
+body = sys.stdin.read()
+t = time.process_time()
+try:
+    rep = analyze(load_request(body), Budget(seconds=float(sys.argv[1])))
+    out = {"cpu": time.process_time() - t, "verdict": rep.verdict,
+           "certified": sum(b.certified for b in rep.blocks), "blocks": len(rep.blocks)}
+except Exception as exc:
+    out = {"cpu": time.process_time() - t, "error": type(exc).__name__}
+print(json.dumps(out))
+"""
+
+
+def dense(n: int) -> tuple[str, list, list, dict]:
+    rng = random.Random(n)
+    A = [[rng.randint(-3, 3) for _ in range(n)] for _ in range(n)]
+    return f"dense random {n}x{n}", A, [[1] + [0] * (n - 1)], {"model": "bernoulli", "arrival_probability": "1/2"}
+
+
+def companion(m: int, alpha: int = 2) -> list[list[int]]:
+    c = [int(x) for x in fmpz_poly.cyclotomic(m).coeffs()]
+    d = len(c) - 1
+    A = [[0] * d for _ in range(d)]
+    for i in range(1, d):
+        A[i][i - 1] = alpha
+    for i in range(d):
+        A[i][d - 1] = -alpha * c[i]
+    return A
+
+
+def diag(*blocks: list[list[int]]) -> list[list[int]]:
+    n = sum(len(b) for b in blocks)
+    A = [[0] * n for _ in range(n)]
+    k = 0
+    for b in blocks:
+        for i, row in enumerate(b):
+            for j, x in enumerate(row):
+                A[k + i][k + j] = x
+        k += len(b)
+    return A
+
+
+def two_sensor_bodies() -> list[tuple[str, str]]:
+    out = []
+    for name, A in [
+        ("two sensors, period 15", diag(companion(15))),
+        ("two sensors, period 21", diag(companion(21))),
+        ("two sensors, period 36", diag(companion(4), companion(9))),
+        ("two sensors, period 60", diag(companion(3), companion(4), companion(5))),
+    ]:
+        n = len(A)
+        system = {
+            "A": A,
+            "C": [[1] + [0] * (n - 1), [0, 1] + [0] * (n - 2)],
+            "sensors": [{"name": "s1", "rows": [0]}, {"name": "s2", "rows": [1]}],
+        }
+        channel = {
+            "model": "per_sensor",
+            "channels": {s: {"model": "bernoulli", "arrival_probability": "1/2"} for s in ("s1", "s2")},
+        }
+        out.append((name, json.dumps({"system": system, "channel": channel})))
+    return out
+
+
+def bodies() -> list[tuple[str, str]]:
+    out = []
+    for name, A, C, ch in [dense(16), dense(24), dense(40)] + verdict_cases():
+        out.append((name, json.dumps({"system": {"A": A, "C": C}, "channel": ch})))
+    return out + two_sensor_bodies()
+
+
+def run(body: str, limit: float, pythonpath: str | None) -> dict:
+    env = dict(os.environ)
+    if pythonpath is not None:
+        env["PYTHONPATH"] = pythonpath
+    try:
+        res = subprocess.run(
+            [sys.executable, "-c", CHILD, str(limit)],
+            input=body,
+            capture_output=True,
+            text=True,
+            timeout=limit + 30,
+            env=env,
+        )
+        return json.loads(res.stdout.strip().splitlines()[-1])
+    except (subprocess.TimeoutExpired, IndexError, json.JSONDecodeError):
+        return {"cpu": float("inf"), "error": "timeout"}
+
+
+def fmt(r: dict, limit: float) -> str:
+    if "error" in r:
+        return f"> {limit:g} s ({r['error']})" if r["error"] in ("timeout", "BudgetExceeded") else r["error"]
+    return f"{r['cpu']:.3f} s, {r['verdict']}, {r['certified']}/{r['blocks']} certified"
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--before", help="checkout of the previous code (holds analyzer/)")
+    ap.add_argument("--limit", type=float, default=120.0)
+    args = ap.parse_args()
+    before_path = None
+    if args.before:
+        before_path = tempfile.mkdtemp(prefix="kfio-before-")
+        os.symlink(os.path.join(os.path.abspath(args.before), "analyzer"), os.path.join(before_path, "kfio"))
+    print(f"{'case':42s} | {'now':40s} | {'before':40s} | ratio")
+    for name, body in bodies():
+        now = run(body, args.limit, None)
+        old = run(body, args.limit, before_path) if before_path else None
+        ratio = ""
+        if old is not None and "error" not in now:
+            ratio = (
+                f"{old['cpu'] / max(now['cpu'], 1e-9):.1f}x"
+                if "error" not in old
+                else f"> {args.limit / max(now['cpu'], 1e-9):.0f}x"
+            )
+        print(
+            f"{name:42s} | {fmt(now, args.limit):40s} | {fmt(old, args.limit) if old else '-':40s} | {ratio}",
+            flush=True,
+        )
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,136 @@
+"""``/v1/jobs``: the report endpoints as jobs (queued, polled, cancelled), for work past the synchronous budget.
+
+``POST /v1/jobs/analyze`` (``bounds``, ``simulate``) takes the body of the
+synchronous endpoint and answers 202 with a ``Location``; ``GET
+/v1/jobs/{id}`` gives the status, progress and, once finished, the report or
+the problem; ``GET /v1/jobs/{id}/result`` the report's exact bytes;
+``DELETE /v1/jobs/{id}`` cancels.  The store is :mod:`kfio.service.jobstore`.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Any
+
+from fastapi import APIRouter, Depends, Path, Request
+from fastapi.responses import Response
+
+from ..jobstore import JobStore
+from ..problems import Problem, ProblemError
+from .deps import BodyDep
+from .schemas import REQUEST_EXAMPLES, json_body, problem_responses
+
+router = APIRouter(prefix="/v1/jobs", tags=["jobs"])
+
+JOB_STATUS_SCHEMA: dict[str, Any] = {
+    "type": "object",
+    "description": (
+        "A job's state.  `result` (the report of the synchronous endpoint) is present once `status` is `done`, "
+        "`problem` (a problem document) once it is `failed`.  `progress` is set where the work reports it: "
+        "`stage`, `steps` (budget check-ins so far), `elapsed_s`, and for simulations `fraction` (0 to 1)."
+    ),
+    "required": ["id", "kind", "status", "budget_s", "created_at", "links"],
+    "properties": {
+        "id": {"type": "string"},
+        "kind": {"type": "string", "examples": ["analyze"]},
+        "status": {"enum": ["queued", "running", "done", "failed", "cancelled"]},
+        "budget_s": {"type": "number", "description": "wall-clock budget, counted from when the job starts running"},
+        "created_at": {"type": "string", "format": "date-time"},
+        "started_at": {"type": ["string", "null"], "format": "date-time"},
+        "finished_at": {"type": ["string", "null"], "format": "date-time"},
+        "progress": {"type": ["object", "null"]},
+        "links": {"type": "object", "properties": {"self": {"type": "string"}, "result": {"type": "string"}}},
+        "result": {"type": "object", "description": "the report, exactly as the synchronous endpoint returns it"},
+        "problem": {"$ref": "#/components/schemas/Problem"},
+    },
+}
+
+_STATUS_RESPONSE = {"content": {"application/json": {"schema": JOB_STATUS_SCHEMA}}}
+JobId = Annotated[str, Path(description="the id from the `Location` of `POST /v1/jobs/...`", max_length=64)]
+
+
+def get_jobstore(request: Request) -> JobStore:
+    """The app's job store (created by the lifespan; 503 before it runs)."""
+    store = getattr(request.app.state, "jobs", None)
+    if store is None:
+        raise ProblemError(Problem(503, "not-ready", "Service not ready", "the service is starting", retry_after=1))
+    return store
+
+
+JobStoreDep = Annotated[JobStore, Depends(get_jobstore)]
+
+
+def _submit_route(kind: str) -> None:
+    async def submit(body: BodyDep, store: JobStoreDep) -> Response:
+        job = store.submit(kind, body)
+        return Response(
+            store.document(job),
+            status_code=202,
+            media_type="application/json",
+            headers={"Location": f"/v1/jobs/{job.id}"},
+        )
+
+    submit.__name__ = f"submit_{kind}_job"
+    router.add_api_route(
+        f"/{kind}",
+        submit,
+        methods=["POST"],
+        status_code=202,
+        summary=f"Run `{kind}` as a job (budget up to an hour)",
+        description=(
+            f"Same body as `POST /v1/{kind}`.  Answers 202 with `Location: /v1/jobs/{{id}}` at once; poll that URL. "
+            "The job runs in a separate lane of worker processes, with the deployment's job budget "
+            "(`KFIO_JOB_TIME_BUDGET_S`, an hour by default) or less if `options.time_budget_s` asks for less.  "
+            "The request is validated when the job runs: an invalid one ends `failed` with a 422 problem.  "
+            "Jobs are kept in memory: a restart forgets them."
+        ),
+        response_class=Response,
+        responses={
+            202: {"description": "The job was queued", **_STATUS_RESPONSE},
+            **problem_responses(413, 422, 429, 503),
+        },
+        openapi_extra=json_body(REQUEST_EXAMPLES),
+    )
+
+
+for _kind in ("analyze", "bounds", "simulate"):
+    _submit_route(_kind)
+
+
+@router.get(
+    "/{job_id}",
+    summary="A job's status, progress, and result or problem",
+    response_class=Response,
+    responses={200: {"description": "The job", **_STATUS_RESPONSE}, **problem_responses(404)},
+)
+async def get_job(job_id: JobId, store: JobStoreDep) -> Response:
+    return Response(store.document(store.get(job_id)), media_type="application/json")
+
+
+@router.get(
+    "/{job_id}/result",
+    summary="A finished job's report, byte for byte as the synchronous endpoint answers",
+    description="200 with the report once the job is `done`; a failed job answers its problem (with its status); "
+    "409 while it is queued or running, or if it was cancelled.",
+    response_class=Response,
+    responses={
+        200: {"description": "The report", "content": {"application/json": {"schema": {"type": "object"}}}},
+        **problem_responses(404, 409, 422, 503, 504),
+    },
+)
+async def get_job_result(job_id: JobId, store: JobStoreDep) -> Response:
+    job = store.get(job_id)
+    if job.status == "done" and job.content is not None:
+        return Response(job.content, media_type=job.media_type)
+    if job.status == "failed" and job.problem is not None:
+        raise ProblemError(job.problem)
+    raise ProblemError(Problem(409, "job-not-done", "Job has no result", f"job {job_id} is {job.status}"))
+
+
+@router.delete(
+    "/{job_id}",
+    summary="Cancel a job (a running one's worker process is killed)",
+    response_class=Response,
+    responses={200: {"description": "The job, now cancelled", **_STATUS_RESPONSE}, **problem_responses(404, 409)},
+)
+async def cancel_job(job_id: JobId, store: JobStoreDep) -> Response:
+    return Response(store.document(store.cancel(job_id)), media_type="application/json")

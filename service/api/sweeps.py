@@ -1,0 +1,138 @@
+"""``POST /v1/sweeps``: a sweep (``kfio sweep``'s request) run as a job.
+
+The sweep is validated in full before it is queued (every axis pointer, every
+point), so a bad point is a 422 naming ``/points/<index>/<field>`` at once.
+The job is then polled at ``/v1/jobs/{id}`` (status, ``progress.fraction`` =
+points done), and its result is the table as JSON.
+"""
+
+from __future__ import annotations
+
+import asyncio
+
+from fastapi import APIRouter
+from fastapi.responses import Response
+
+from ..problems import ProblemError
+from .deps import BodyDep
+from .jobs import _STATUS_RESPONSE, JobStoreDep
+from .schemas import problem_responses
+
+router = APIRouter(prefix="/v1/sweeps", tags=["sweeps"])
+
+SWEEP_EXAMPLE = {
+    "command": "analyze",
+    "base": {
+        "system": {"A": [[1.25, 0], [1, 1.1]], "C": [[1, 1]], "Q": [[20, 0], [0, 20]], "R": [[2.5]]},
+        "channel": {"model": "bernoulli", "arrival_probability": 0.5},
+    },
+    "axes": [{"pointer": "/channel/arrival_probability", "from": "3/10", "to": "9/10", "num": 61}],
+    "combine": "grid",
+}
+
+
+SWEEP_SCHEMA = {
+    "type": "object",
+    "description": "A sweep: a base request and axes, or a list of requests (see docs/sweeps.md).",
+    "properties": {
+        "command": {"enum": ["analyze", "bounds", "simulate"], "default": "analyze"},
+        "base": {"$ref": "#/components/schemas/AnalysisRequest"},
+        "axes": {
+            "type": "array",
+            "items": {
+                "type": "object",
+                "required": ["pointer"],
+                "properties": {
+                    "pointer": {"type": "string", "pattern": "^/", "description": "RFC 6901 pointer into `base`"},
+                    "name": {"type": "string", "description": "column name (default: the pointer)"},
+                    "values": {"type": "array", "minItems": 1},
+                    "from": {"description": "exact number: first value of a range"},
+                    "to": {"description": "exact number: last value of a range"},
+                    "num": {"type": "integer", "minimum": 1, "maximum": 100000},
+                },
+                "additionalProperties": False,
+            },
+        },
+        "combine": {"enum": ["grid", "zip"], "default": "grid"},
+        "requests": {"type": "array", "minItems": 1, "items": {"$ref": "#/components/schemas/AnalysisRequest"}},
+        "options": {
+            "type": "object",
+            "properties": {
+                "point_budget_s": {"description": "each point's budget in seconds (0.01 to 3600, default 60)"},
+                "time_budget_s": {"description": "the whole sweep's budget in seconds"},
+                "chunk_size": {"type": "integer", "minimum": 1, "description": "points per task"},
+            },
+            "additionalProperties": False,
+        },
+    },
+    "additionalProperties": False,
+}
+
+
+def _validate(body: bytes, max_points: int, limits) -> int:
+    from kfio.errors import LimitExceeded
+    from kfio.sweep import load_sweep, validate_points
+
+    spec = load_sweep(body)
+    if spec.size > max_points:
+        raise LimitExceeded("/axes", f"the sweep has {spec.size} points; this service runs at most {max_points}")
+    validate_points(spec, limits)
+    return spec.size
+
+
+@router.post(
+    "",
+    status_code=202,
+    summary="Run a sweep (grid or zip of a base request, or a list of requests) as a job",
+    description=(
+        "The body is a sweep: `command` (`analyze`, `bounds` or `simulate`), `base` (a request) and `axes` "
+        "(each a JSON pointer into the request with `values`, or `from`, `to`, `num` for exactly spaced rationals), "
+        "`combine` (`grid` or `zip`); or `requests` (a list of whole requests).  Every point is validated before "
+        "the job is queued: a bad one is a 422 naming `/points/<index>/<field>`.  Answers 202 with "
+        "`Location: /v1/jobs/{id}`; poll it for `progress.fraction` (points done) and the result: "
+        "`{command, points, errors, columns, rows: [...]}`, one row per point with its coordinates and the "
+        "report's key fields (or its error).  Runs in the job lane, or on the Dask cluster the deployment "
+        "names (`KFIO_DASK_SCHEDULER`)."
+    ),
+    response_class=Response,
+    responses={
+        202: {"description": "The sweep was queued", **_STATUS_RESPONSE},
+        **problem_responses(413, 422, 429, 503),
+    },
+    openapi_extra={
+        "requestBody": {
+            "required": True,
+            "content": {
+                "application/json": {
+                    "schema": SWEEP_SCHEMA,
+                    "examples": {
+                        "channel-sweep": {
+                            "summary": "the 2x2 example of Sinopoli et al. (2004)",
+                            "value": SWEEP_EXAMPLE,
+                        }
+                    },
+                }
+            },
+        }
+    },
+)
+async def submit_sweep(body: BodyDep, store: JobStoreDep) -> Response:
+    settings = store.settings
+    try:
+        await asyncio.to_thread(_validate, body, settings.max_sweep_points, settings.limits())
+    except ProblemError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - InvalidInput and friends become their problem document
+        from ..problems import problem_from_exception
+
+        problem = problem_from_exception(exc)
+        if problem.status >= 500:
+            raise
+        raise ProblemError(problem) from None
+    job = store.submit("sweep", body)
+    return Response(
+        store.document(job), status_code=202, media_type="application/json", headers={"Location": f"/v1/jobs/{job.id}"}
+    )
+
+
+__all__ = ["router"]

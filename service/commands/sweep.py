@@ -1,0 +1,164 @@
+"""``kfio sweep FILE [--out TABLE] [--plot PNG] [--scheduler ADDR]``: many points, one table.
+
+A sweep is a base request plus axes (JSON pointers with values or ranges,
+combined as a grid or zipped), or JSON Lines of whole requests.  Rows stream
+to standard output as JSON Lines as they finish; ``--out`` writes the whole
+table (CSV, Parquet or JSON Lines, by its suffix) in index order.
+Exit 0 every point answered, 8 some points have an error row, 4 the sweep's
+time budget ran out, 2 invalid input (before any work starts).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import threading
+from typing import Any
+
+from .. import exitcodes
+from ..io import run_guarded
+
+#: A sweep file may be larger than one request (JSON Lines of plant variants).
+MAX_SWEEP_BYTES = 64 << 20
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "sweep",
+        help="run analyze/bounds/simulate over a grid of points or a list of requests (Dask)",
+        description="Run one command over many points: a base request and axes (grid or zip), or JSON Lines "
+        "of requests. Every point is validated before any work starts. Rows stream to stdout as JSON Lines. "
+        "Exit 0 all points answered, 8 some points failed (their rows say why), 4 sweep budget ran out, "
+        "2 invalid input.",
+    )
+    p.add_argument("file", metavar="FILE", help="sweep JSON (or JSON Lines of requests), or - for standard input")
+    p.add_argument("--out", metavar="TABLE", help="write the table: .csv, .parquet or .jsonl")
+    p.add_argument("--plot", metavar="PNG", help="write a plot of a 1-D or 2-D sweep")
+    p.add_argument("--scheduler", metavar="ADDR", help="run on an existing Dask cluster, e.g. tcp://127.0.0.1:8786")
+    p.add_argument("--workers", type=int, metavar="N", help="worker processes of the embedded cluster (default: cores)")
+    p.add_argument("--serial", action="store_true", help="run in this process, without Dask")
+    p.add_argument("--chunk-size", type=int, metavar="K", help="points per task (default: balanced, at most 2000)")
+    p.add_argument("--quiet", action="store_true", help="do not stream rows to standard output")
+    prog = p.add_mutually_exclusive_group()
+    prog.add_argument("--progress", dest="progress", action="store_true", default=None, help="show a progress bar")
+    prog.add_argument("--no-progress", dest="progress", action="store_false", help="no progress bar")
+    p.set_defaults(func=_run)
+
+
+def _read(path: str) -> bytes:
+    from kfio.errors import InvalidInput
+
+    try:
+        if path == "-":
+            data = sys.stdin.buffer.read(MAX_SWEEP_BYTES + 1)
+        else:
+            with open(path, "rb") as fh:
+                data = fh.read(MAX_SWEEP_BYTES + 1)
+    except OSError as exc:
+        raise InvalidInput("/", f"cannot read {path!r}: {exc.strerror}") from None
+    if len(data) > MAX_SWEEP_BYTES:
+        raise InvalidInput("/", f"a sweep file is at most {MAX_SWEEP_BYTES} bytes")
+    return data
+
+
+class _Bar:
+    """A tqdm bar on stderr (with its ETA), or plain lines where tqdm is missing."""
+
+    def __init__(self, total: int, enabled: bool):
+        self.enabled = enabled
+        self.bar: Any = None
+        self.last = 0
+        if enabled:
+            try:
+                from tqdm import tqdm
+
+                self.bar = tqdm(total=total, unit="pt", file=sys.stderr, desc="sweep", dynamic_ncols=True)
+            except ImportError:
+                self.bar = None
+
+    def __call__(self, done: int, total: int) -> None:
+        if not self.enabled:
+            return
+        if self.bar is not None:
+            self.bar.update(done - self.last)
+        else:
+            print(f"sweep: {done}/{total} points", file=sys.stderr, flush=True)
+        self.last = done
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+
+
+def _run(args: argparse.Namespace) -> int:
+    def body() -> int:
+        from kfio.errors import InvalidInput
+        from kfio.sweep import format_of, iter_sweep, load_sweep, write_table
+        from kfio.sweep._engine import SweepResult
+        from kfio.sweep._table import jsonl_line
+
+        for flag in ("workers", "chunk_size"):
+            value = getattr(args, flag)
+            if value is not None and value < 1:
+                raise InvalidInput(f"--{flag.replace('_', '-')}", "must be a positive integer")
+        if args.out:
+            format_of(args.out)
+        if args.plot and not args.plot.lower().endswith(".png"):
+            raise InvalidInput("--plot", "the plot's file name must end in .png")
+        spec = load_sweep(_read(args.file))
+        enabled = sys.stderr.isatty() if args.progress is None else args.progress
+        bar = _Bar(spec.size, enabled)
+        info: dict[str, Any] = {}
+        rows = []
+        import time
+
+        t0 = time.perf_counter()
+        try:
+            for row in iter_sweep(
+                spec,
+                engine="serial" if args.serial else "dask",
+                scheduler=args.scheduler,
+                workers=args.workers,
+                chunk_size=args.chunk_size,
+                progress=bar,
+                cancel=threading.Event(),
+                info=info,
+            ):
+                rows.append(row)
+                if not args.quiet:
+                    record = row.to_dict()
+                    print(jsonl_line(record), flush=False)
+        finally:
+            bar.close()
+            sys.stdout.flush()
+        rows.sort(key=lambda r: r.index)
+        result = SweepResult(
+            spec,
+            rows,
+            info.get("engine", "?"),
+            info.get("workers", 0),
+            info.get("chunks", 0),
+            time.perf_counter() - t0,
+            info.get("stopped"),
+        )
+        if args.out:
+            write_table(args.out, result.columns, result.records())
+        if args.plot:
+            from ..sweep_plot import sweep_png
+
+            with open(args.plot, "wb") as fh:
+                fh.write(sweep_png(result))
+        errors = sum(1 for r in rows if r.fields.get("error"))
+        rate = len(rows) / result.seconds if result.seconds > 0 else float("inf")
+        print(
+            f"kfio sweep: {len(rows)} points, {errors} with errors, engine {result.engine} "
+            f"({result.workers} workers, {result.chunks} tasks), {result.seconds:.2f} s, {rate:.1f} points/s",
+            file=sys.stderr,
+        )
+        if result.stopped == "budget-exceeded" or any(
+            str(r.fields.get("error", "")).startswith("budget-exceeded: the sweep") for r in rows
+        ):
+            return exitcodes.BUDGET
+        return exitcodes.SWEEP_ERRORS if errors else exitcodes.STABLE
+
+    return run_guarded(body)

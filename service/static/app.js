@@ -1,0 +1,565 @@
+// kfio web page: plain JavaScript, no framework, nothing loaded from another host.
+// The request is edited as one text field per member (/system/A, /channel, ...), each holding the
+// member's JSON text exactly as typed: the body sent is those texts put together, so numbers keep
+// their decimal text (1.1 stays 11/10) and no value ever goes through a JavaScript double.
+"use strict";
+
+const $ = (id) => document.getElementById(id);
+const state = { endpoint: null, report: null, reportText: null, requestText: null, job: null, examples: [] };
+
+// ---------------------------------------------------------------- JSON with source spans
+
+class JsonSyntaxError extends Error {
+  constructor(message, pos) { super(message); this.pos = pos; }
+}
+
+/** Parse JSON text into nodes {type, start, end, members|items}; every node keeps its source span. */
+function scanJson(text) {
+  let i = 0;
+  const ws = () => { while (i < text.length && " \t\n\r".includes(text[i])) i++; };
+  const fail = (msg) => { throw new JsonSyntaxError(msg, i); };
+  function value() {
+    ws();
+    const start = i, c = text[i];
+    if (c === "{") {
+      i++; const members = []; ws();
+      if (text[i] === "}") { i++; return { type: "object", start, end: i, members }; }
+      for (;;) {
+        ws(); if (text[i] !== '"') fail("expected a quoted member name");
+        const keyNode = string(); ws();
+        if (text[i] !== ":") fail("expected ':' after a member name");
+        i++;
+        members.push({ key: JSON.parse(text.slice(keyNode.start, keyNode.end)), node: value() });
+        ws();
+        if (text[i] === ",") { i++; continue; }
+        if (text[i] === "}") { i++; return { type: "object", start, end: i, members }; }
+        fail("expected ',' or '}'");
+      }
+    }
+    if (c === "[") {
+      i++; const items = []; ws();
+      if (text[i] === "]") { i++; return { type: "array", start, end: i, items }; }
+      for (;;) {
+        items.push(value()); ws();
+        if (text[i] === ",") { i++; continue; }
+        if (text[i] === "]") { i++; return { type: "array", start, end: i, items }; }
+        fail("expected ',' or ']'");
+      }
+    }
+    if (c === '"') return string();
+    const m = /^-?(0|[1-9]\d*)(\.\d+)?([eE][+-]?\d+)?/.exec(text.slice(i, i + 400));
+    if (m && m[0]) { i += m[0].length; return { type: "number", start, end: i }; }
+    for (const word of ["true", "false", "null"]) {
+      if (text.startsWith(word, i)) { i += word.length; return { type: word === "null" ? "null" : "bool", start, end: i }; }
+    }
+    fail(i >= text.length ? "unexpected end of text" : `unexpected character ${JSON.stringify(c)}`);
+  }
+  function string() {
+    const start = i; i++;
+    while (i < text.length && text[i] !== '"') { if (text[i] === "\\") i++; i++; }
+    if (i >= text.length) fail("unterminated string");
+    i++;
+    return { type: "string", start, end: i };
+  }
+  const root = value(); ws();
+  if (i < text.length) fail("unexpected text after the JSON value");
+  return root;
+}
+
+function where(text, pos) {
+  const before = text.slice(0, pos);
+  const line = before.split("\n").length;
+  return `line ${line}, column ${pos - before.lastIndexOf("\n")}`;
+}
+
+/** The member's text, matrices laid out one row per line (entries keep their source text). */
+function layout(text, node) {
+  const raw = (n) => text.slice(n.start, n.end);
+  const isMatrix = node.type === "array" && node.items.length > 0 && node.items.every((r) => r.type === "array");
+  if (!isMatrix) return raw(node);
+  return "[" + node.items.map((row) => "[" + row.items.map(raw).join(", ") + "]").join(",\n ") + "]";
+}
+
+const escapePointer = (key) => key.replace(/~/g, "~0").replace(/\//g, "~1");
+
+// ---------------------------------------------------------------- the request as fields
+
+/** Replace the fields with the members of the request ``text`` (throws JsonSyntaxError). */
+function setRequestText(text) {
+  const root = scanJson(text);
+  if (root.type !== "object") throw new JsonSyntaxError("the request must be a JSON object", root.start);
+  const fields = [];
+  for (const { key, node } of root.members) {
+    if (key === "system" && node.type === "object") {
+      for (const m of node.members) fields.push({ path: ["system", m.key], text: layout(text, m.node) });
+    } else {
+      fields.push({ path: [key], text: layout(text, node) });
+    }
+  }
+  renderFields(fields);
+}
+
+const FIELD_HELP = {
+  "/system/A": "state matrix A (n x n)",
+  "/system/C": "output matrix C (p x n)",
+  "/system/Q": "process noise covariance Q (n x n, positive semidefinite; default identity)",
+  "/system/R": "measurement noise covariance R (p x p, positive definite; default identity)",
+  "/system/sensors": "sensors: which rows of C each packet carries",
+  "/channel": "packet channel: bernoulli, gilbert_elliott, markov, or per_sensor",
+  "/options": "options (time_budget_s, bounds, simulate, ...)",
+};
+
+function renderFields(fields) {
+  const list = $("field-list");
+  list.replaceChildren();
+  fields.forEach((f, n) => {
+    const pointer = "/" + f.path.map(escapePointer).join("/");
+    const div = document.createElement("div");
+    div.className = "field";
+    div.dataset.pointer = pointer;
+    div.dataset.path = JSON.stringify(f.path);
+    const label = document.createElement("label");
+    label.htmlFor = `field-${n}`;
+    label.textContent = pointer;
+    const help = FIELD_HELP[pointer];
+    if (help) {
+      const span = document.createElement("span");
+      span.className = "note";
+      span.textContent = " - " + help;
+      label.append(span);
+    }
+    const area = document.createElement("textarea");
+    area.id = `field-${n}`;
+    area.spellcheck = false;
+    area.value = f.text;
+    area.rows = Math.min(12, Math.max(1, f.text.split("\n").length));
+    const err = document.createElement("p");
+    err.className = "field-error";
+    err.id = `field-${n}-error`;
+    err.setAttribute("role", "alert");
+    err.hidden = true;
+    area.setAttribute("aria-describedby", err.id);
+    area.addEventListener("input", () => clearError(div));
+    div.append(label, area, err);
+    list.append(div);
+  });
+}
+
+/** The request body: the fields' texts put together (throws with the field that is not JSON). */
+function assembleRequest() {
+  const top = [];
+  const system = [];
+  for (const div of document.querySelectorAll("#field-list .field")) {
+    const path = JSON.parse(div.dataset.path);
+    const area = div.querySelector("textarea");
+    const text = area.value.trim();
+    try {
+      if (!text) throw new JsonSyntaxError("empty: give a JSON value", 0);
+      scanJson(text);
+    } catch (e) {
+      if (e instanceof JsonSyntaxError) {
+        showFieldError(div, `not valid JSON (${where(text, e.pos)}): ${e.message}`);
+        const err = new Error("invalid field");
+        err.shown = true;
+        throw err;
+      }
+      throw e;
+    }
+    const member = `${JSON.stringify(path[path.length - 1])}: ${text}`;
+    if (path.length === 2) {
+      if (system.length === 0) top.push(null); // the place of "system" among the members
+      system.push(member);
+    } else {
+      top.push(member);
+    }
+  }
+  const systemText = `"system": {${system.join(",\n  ")}}`;
+  const members = top.map((m) => (m === null ? systemText : m));
+  return "{" + members.join(",\n ") + "}\n";
+}
+
+// ---------------------------------------------------------------- errors beside fields
+
+function clearError(div) {
+  const err = div.querySelector(".field-error");
+  err.hidden = true;
+  err.textContent = "";
+  div.querySelector("textarea").removeAttribute("aria-invalid");
+}
+
+function clearErrors() {
+  document.querySelectorAll("#field-list .field").forEach(clearError);
+  for (const id of ["general-error", "source-error"]) { $(id).hidden = true; $(id).textContent = ""; }
+}
+
+function showFieldError(div, message) {
+  const err = div.querySelector(".field-error");
+  err.textContent = message;
+  err.hidden = false;
+  const area = div.querySelector("textarea");
+  area.setAttribute("aria-invalid", "true");
+  area.focus();
+}
+
+/** Show a problem document beside the field its JSON pointer names (the longest matching field). */
+function showProblem(problem) {
+  const pointer = typeof problem.field === "string" && problem.in !== "query" ? problem.field : null;
+  const message = problem.rule ? `${problem.field}: ${problem.rule}` : problem.detail || problem.title;
+  let best = null;
+  if (pointer !== null) {
+    for (const div of document.querySelectorAll("#field-list .field")) {
+      const p = div.dataset.pointer;
+      if ((pointer === p || pointer.startsWith(p + "/")) && (!best || p.length > best.dataset.pointer.length)) best = div;
+    }
+  }
+  if (best) {
+    showFieldError(best, message);
+  } else {
+    $("general-error").textContent = `${problem.title || "Error"}: ${message}`;
+    $("general-error").hidden = false;
+  }
+  setStatus(`Refused (${problem.status} ${problem.title || ""}): ${message}`);
+}
+
+function setStatus(text) { $("status").textContent = text; }
+
+// ---------------------------------------------------------------- running
+
+async function run(endpoint) {
+  clearErrors();
+  let body;
+  try {
+    body = assembleRequest();
+  } catch (e) {
+    if (e.shown) { setStatus("Fix the field marked in red, then run again."); return; }
+    throw e;
+  }
+  state.requestText = body;
+  state.endpoint = endpoint;
+  $("report").replaceChildren();
+  $("plots").replaceChildren();
+  $("actions").hidden = true;
+  setBusy(true);
+  try {
+    if ($("as-job").checked) await runJob(endpoint, body);
+    else await runNow(endpoint, body);
+  } catch (e) {
+    setStatus(`The server could not be reached: ${e.message}`);
+  } finally {
+    setBusy(false);
+  }
+}
+
+function setBusy(busy) {
+  document.querySelectorAll("fieldset.run button").forEach((b) => { b.disabled = busy; });
+}
+
+const post = (path, body) => fetch(path, { method: "POST", headers: { "Content-Type": "application/json", Accept: "application/json" }, body });
+
+async function readAnswer(response) {
+  const text = await response.text();
+  let doc = null;
+  try { doc = JSON.parse(text); } catch (e) { /* not JSON */ }
+  return { ok: response.ok, status: response.status, text, doc };
+}
+
+async function runNow(endpoint, body) {
+  setStatus(`Running ${endpoint}...`);
+  const answer = await readAnswer(await post(`/v1/${endpoint}`, body));
+  if (!answer.ok) return showProblem(answer.doc || { status: answer.status, title: "Error", detail: answer.text });
+  showReport(endpoint, answer.text, answer.doc, body);
+}
+
+async function runJob(endpoint, body) {
+  setStatus(`Submitting ${endpoint} as a job...`);
+  const response = await post(`/v1/jobs/${endpoint}`, body);
+  const answer = await readAnswer(response);
+  if (response.status !== 202) return showProblem(answer.doc || { status: answer.status, title: "Error", detail: answer.text });
+  const location = response.headers.get("Location");
+  state.job = location;
+  $("job-box").hidden = false;
+  $("job-progress").removeAttribute("value");
+  for (;;) {
+    const poll = await readAnswer(await fetch(location, { headers: { Accept: "application/json" } }));
+    if (!poll.ok) { showProblem(poll.doc); break; }
+    const job = poll.doc;
+    const p = job.progress || {};
+    if (typeof p.fraction === "number") $("job-progress").value = p.fraction;
+    $("job-text").textContent = `job ${job.status}` + (p.stage ? `: ${p.stage}, ${p.steps} steps, ${p.elapsed_s} s` : "");
+    setStatus(`Job ${job.id}: ${job.status}`);
+    if (job.status === "done") {
+      const result = await fetch(`${location}/result`);
+      showReport(endpoint, await result.text(), job.result, body);
+      break;
+    }
+    if (job.status === "failed") { showProblem(job.problem); break; }
+    if (job.status === "cancelled") { setStatus(`Job ${job.id} was cancelled.`); break; }
+    if (state.job !== location) break;
+    await new Promise((r) => setTimeout(r, 500));
+  }
+  $("job-box").hidden = true;
+  state.job = null;
+}
+
+async function cancelJob() {
+  if (!state.job) return;
+  const location = state.job;
+  const answer = await readAnswer(await fetch(location, { method: "DELETE" }));
+  setStatus(answer.ok ? "Cancelling..." : `Could not cancel: ${answer.doc ? answer.doc.detail : answer.status}`);
+}
+
+// ---------------------------------------------------------------- the report
+
+const MEANING = {
+  stable: "The expected error covariance E[P_t] stays bounded: with this many packets arriving, the filter's "
+    + "mean-square error settles (Rohr, Marelli and Fu 2011, Theorem 1).",
+  unstable: "The expected error covariance E[P_t] grows without bound: too many measurements are lost "
+    + "for this system (Rohr, Marelli and Fu 2011, Theorem 1).",
+  boundary: "Exactly on the edge: some block has |alpha|^2 sigma = 1, the case the theorem leaves open "
+    + "(Rohr, Marelli and Fu 2011, Theorem 1). Any better channel is stable, any worse one unstable.",
+  undecided: "The bounds do not decide this operating point: it lies between the lower bound and the LMI "
+    + "upper bound on the critical probability (Sinopoli et al. 2003). The exact verdict (Analyze) decides it.",
+};
+
+function el(tag, text, cls) {
+  const e = document.createElement(tag);
+  if (text !== undefined && text !== null) e.textContent = String(text);
+  if (cls) e.className = cls;
+  return e;
+}
+
+function headline(verdict, extra) {
+  const box = el("div", null, `headline ${verdict}`);
+  box.id = "verdict";
+  box.append(el("strong", verdict));
+  box.append(el("p", extra || MEANING[verdict] || ""));
+  return box;
+}
+
+function facts(pairs) {
+  const dl = el("dl", null, "facts");
+  for (const [k, v] of pairs) {
+    if (v === undefined) continue;
+    dl.append(el("dt", k), el("dd", v === null ? "-" : v));
+  }
+  return dl;
+}
+
+function table(headers, rows) {
+  const wrap = el("div", null, "table-wrap");
+  const t = el("table");
+  const tr = el("tr");
+  headers.forEach((h) => { const th = el("th", h); th.scope = "col"; tr.append(th); });
+  t.append(el("thead"));
+  t.tHead.append(tr);
+  const tb = el("tbody");
+  rows.forEach((r) => { const row = el("tr"); r.forEach((c) => row.append(el("td", c))); tb.append(row); });
+  t.append(tb);
+  wrap.append(t);
+  return wrap;
+}
+
+function list(title, items) {
+  const frag = document.createDocumentFragment();
+  frag.append(el("h3", title));
+  if (!items || items.length === 0) { frag.append(el("p", "none", "note")); return frag; }
+  const ul = el("ul", null, "list");
+  items.forEach((i) => ul.append(el("li", typeof i === "string" ? i : JSON.stringify(i))));
+  frag.append(ul);
+  return frag;
+}
+
+const num = (x) => (typeof x === "number" ? (Number.isInteger(x) ? String(x) : x.toPrecision(6).replace(/\.?0+$/, "")) : x);
+const exactAndFloat = (exact, value) => (exact === null || exact === undefined ? (value === null || value === undefined ? null : num(value)) : `${exact} = ${num(value)}`);
+
+function renderAnalyze(r) {
+  const out = document.createDocumentFragment();
+  out.append(headline(r.verdict));
+  out.append(facts([
+    ["critical arrival probability", r.critical_arrival_probability_exact === null && r.critical_arrival_probability === null
+      ? "not defined for this channel (it has no single arrival probability)"
+      : exactAndFloat(r.critical_arrival_probability_exact, r.critical_arrival_probability)],
+    ["channel", r.channel ? Object.entries(r.channel).map(([k, v]) => `${k}: ${typeof v === "object" ? JSON.stringify(v) : v}`).join(", ") : null],
+    ["system", r.system ? `n = ${r.system.n}, p = ${r.system.p}` : null],
+    ["theorem", r.theorem],
+  ]));
+  out.append(el("h3", "Blocks (one per class of eigenvalues with the same modulus up to a root of unity)"));
+  out.append(table(
+    ["eigenvalues", "|alpha|", "period", "degenerate", "sigma", "rate |alpha|^2 sigma", "verdict", "basis"],
+    (r.blocks || []).map((b) => [
+      (b.eigenvalues || []).join(", "),
+      exactAndFloat(b.modulus_exact, b.modulus),
+      b.period,
+      b.degenerate ? "yes" : "no",
+      exactAndFloat(b.sigma_exact, b.sigma),
+      num(b.rate),
+      b.verdict,
+      b.basis,
+    ]),
+  ));
+  out.append(list("Warnings", r.warnings));
+  out.append(list("Assumptions", r.assumptions));
+  return out;
+}
+
+function renderBounds(r) {
+  const out = document.createDocumentFragment();
+  const op = r.operating_point || {};
+  out.append(headline(op.verdict_by_bounds || "undecided", `${MEANING[op.verdict_by_bounds] || ""} ${op.reason || ""}`.trim()));
+  const cp = r.critical_probability || {};
+  const lo = cp.lower || {}, up = cp.upper || {};
+  out.append(facts([
+    ["critical probability, lower bound", lo.value === undefined ? undefined : exactAndFloat(lo.exact, lo.value)],
+    ["critical probability, upper bound (LMI)", up.value === undefined ? undefined : exactAndFloat(up.exact, up.value)],
+    ["gap", cp.gap === undefined ? undefined : num(cp.gap)],
+    ["spectral radius of A", r.spectral_radius_A === undefined ? undefined : num(r.spectral_radius_A)],
+    ["variance threshold", r.variance_threshold ? `${num(r.variance_threshold.value)} (${r.variance_threshold.meaning})` : undefined],
+    ["trace S_bar (lower bound on E[P])", r.covariance && r.covariance.S_bar ? num(r.covariance.S_bar.trace) : undefined],
+    ["trace V_bar (upper bound on E[P])", r.covariance && r.covariance.V_bar ? num(r.covariance.V_bar.trace) : undefined],
+  ]));
+  if (r.packets) out.append(el("h3", "Packets"), table(["name", "rows", "arrival probability"], r.packets.map((p) => [p.name || "-", JSON.stringify(p.rows), exactAndFloat(p.arrival_probability_exact, p.arrival_probability)])));
+  out.append(list("Notes", r.notes));
+  return out;
+}
+
+function renderSimulate(r) {
+  const out = document.createDocumentFragment();
+  const last = (a) => (Array.isArray(a) && a.length ? a[a.length - 1] : null);
+  out.append(headline(r.diverged ? "unstable" : "stable",
+    r.diverged ? `The simulated mean of trace(P_t) diverged (at step ${r.mean_diverged_at}).`
+      : "No simulated mean of trace(P_t) diverged over the horizon. A simulation is evidence, not proof: Analyze gives the exact verdict."));
+  out.append(facts([
+    ["steps x trajectories", `${r.steps} x ${r.trajectories} (seed ${r.seed})`],
+    ["mean trace(P_t) at the last step", num(last(r.mean_trace))],
+    ["95% band at the last step", `${num(last(r.ci95_low))} to ${num(last(r.ci95_high))}`],
+    ["diverged trajectories", r.diverged_trajectories],
+    ["exact agreement", r.checks && r.checks.exact_agreement ? `${r.checks.exact_agreement.within_ci95} of ${r.checks.exact_agreement.steps_compared} exact steps inside the 95% band` : undefined],
+  ]));
+  return out;
+}
+
+function showReport(endpoint, text, doc, body) {
+  state.report = doc;
+  state.reportText = text;
+  const report = $("report");
+  report.replaceChildren();
+  const render = { analyze: renderAnalyze, bounds: renderBounds, simulate: renderSimulate }[endpoint];
+  report.append(render(doc));
+  setStatus(`Done: ${endpoint}.`);
+  showCommands(endpoint, body);
+  $("actions").hidden = false;
+  drawPlots(endpoint, body);
+  $("results").focus();
+}
+
+// ---------------------------------------------------------------- plots
+
+function plotsFor(endpoint, request) {
+  if (endpoint === "simulate") return [["simulation", "Simulated trace(P_t): mean, 95% band and percentiles"]];
+  const ch = request && request.channel;
+  if (!ch) return [];
+  if (ch.model === "bernoulli") return [["phase-transition", "trace(S_bar) and trace(V_bar) against the arrival probability, critical values marked (Sinopoli et al. 2003, Figs. 1-3)"]];
+  if (ch.model === "per_sensor" && ch.channels && Object.keys(ch.channels).length === 2) {
+    return [["region", "Stability region of the two arrival probabilities, exact boundary overlaid (Liu and Goldsmith 2004, Figs. 4-5)"]];
+  }
+  return [];
+}
+
+async function drawPlots(endpoint, body) {
+  let request = null;
+  try { request = JSON.parse(body); } catch (e) { return; } // doubles are fine here: only the channel's shape is read
+  for (const [name, title] of plotsFor(endpoint, request)) {
+    const fig = el("figure", null, "plot");
+    const cap = el("figcaption", title);
+    const wait = el("p", "drawing...", "note");
+    fig.append(cap, wait);
+    $("plots").append(fig);
+    const response = await post(`/v1/plots/${name}`, body);
+    if (response.ok) {
+      const img = el("img");
+      img.alt = title;
+      img.src = URL.createObjectURL(await response.blob());
+      wait.replaceWith(img);
+    } else {
+      const answer = await readAnswer(response);
+      wait.textContent = `no plot: ${answer.doc ? answer.doc.detail : answer.status}`;
+    }
+  }
+}
+
+// ---------------------------------------------------------------- commands and downloads
+
+const shellQuote = (s) => "'" + s.replace(/'/g, "'\\''") + "'";
+
+function showCommands(endpoint, body) {
+  const compact = body.replace(/\s*\n\s*/g, " ").trim();
+  $("curl-cmd").value = `curl -s ${location.origin}/v1/${endpoint} -H 'Content-Type: application/json' --data-binary ${shellQuote(compact)}`;
+  $("kfio-cmd").value = `kfio ${endpoint} --json request.json`;
+}
+
+function download(name, text) {
+  const a = el("a");
+  a.href = URL.createObjectURL(new Blob([text], { type: "application/json" }));
+  a.download = name;
+  document.body.append(a);
+  a.click();
+  a.remove();
+}
+
+async function copy(id) {
+  const area = $(id);
+  area.select();
+  try { await navigator.clipboard.writeText(area.value); setStatus("Copied."); } catch (e) { document.execCommand("copy"); setStatus("Copied."); }
+}
+
+// ---------------------------------------------------------------- sources: examples, upload, paste
+
+function loadText(text, what) {
+  clearErrors();
+  try {
+    setRequestText(text);
+    setStatus(`Loaded ${what}. Edit the fields, then run.`);
+    return true;
+  } catch (e) {
+    if (!(e instanceof JsonSyntaxError)) throw e;
+    $("source-error").textContent = `${what} is not valid JSON (${where(text, e.pos)}): ${e.message}`;
+    $("source-error").hidden = false;
+    return false;
+  }
+}
+
+async function loadExample() {
+  const id = $("example").value;
+  const meta = state.examples.find((e) => e.id === id);
+  const text = await (await fetch(`/static/examples/${id}.json`)).text();
+  $("example-note").textContent = meta ? meta.note : "";
+  loadText(text, `example "${meta ? meta.title : id}"`);
+}
+
+async function init() {
+  state.examples = await (await fetch("/static/examples/index.json")).json();
+  const select = $("example");
+  for (const e of state.examples) {
+    const o = el("option", `${e.title} [${e.endpoint}]`);
+    o.value = e.id;
+    select.append(o);
+  }
+  $("load-example").addEventListener("click", loadExample);
+  $("upload").addEventListener("change", async (ev) => {
+    const file = ev.target.files[0];
+    if (file) loadText(await file.text(), `file ${file.name}`);
+  });
+  $("use-paste").addEventListener("click", () => { if (loadText($("paste").value, "the pasted JSON")) $("paste-box").open = false; });
+  $("fields").addEventListener("submit", (ev) => {
+    ev.preventDefault();
+    const endpoint = ev.submitter ? ev.submitter.dataset.endpoint : "analyze";
+    run(endpoint);
+  });
+  $("job-cancel").addEventListener("click", cancelJob);
+  $("download").addEventListener("click", () => download(`kfio-${state.endpoint}.json`, state.reportText));
+  $("download-request").addEventListener("click", () => download("request.json", state.requestText));
+  document.querySelectorAll("[data-copy]").forEach((b) => b.addEventListener("click", () => copy(b.dataset.copy)));
+  await loadExample();
+}
+
+init();

@@ -1,0 +1,68 @@
+"""The worker side of ``POST /v1/sweeps``: one sweep, run inside a job-lane worker process.
+
+The sweep runs serially in the worker (which is already a process of its
+own, separate from the synchronous lane), or, when the deployment names a
+Dask scheduler (``KFIO_DASK_SCHEDULER``), on that cluster.  Progress (points
+done) is reported through the job's budget, which the job store reads when a
+client polls.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any, Mapping
+
+from kfio import Budget
+from kfio.errors import BudgetExceeded, LimitExceeded
+
+from .settings import Settings
+
+#: The stage name the progress file carries; ``sweep_fraction`` reads the total back from it.
+STAGE = "sweep of {total} points"
+
+
+def sweep_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[str, Any]) -> tuple[bytes, str]:
+    """Run the sweep in ``body`` and answer its table as JSON (:meth:`kfio.sweep.SweepResult.to_dict`)."""
+    from kfio.sweep import load_sweep, run_sweep
+
+    from .io import dump_json
+
+    spec = load_sweep(body)
+    if spec.size > settings.max_sweep_points:
+        raise LimitExceeded(
+            "/axes", f"the sweep has {spec.size} points; this service runs at most {settings.max_sweep_points}"
+        )
+    stage = STAGE.format(total=spec.size)
+    last = [0]
+
+    def progress(done: int, total: int) -> None:
+        try:
+            budget.tick(stage, done - last[0])
+        except BudgetExceeded:
+            pass  # the sweep's own deadline (below) stops it and gives the rows not reached their error
+        last[0] = done
+
+    budget.tick(stage, 0)
+    remaining = budget.remaining()
+    if remaining is not None:
+        spec = dataclasses.replace(spec, time_budget_s=min(spec.time_budget_s or remaining, max(0.01, remaining - 1.0)))
+    result = run_sweep(
+        spec,
+        engine="dask" if settings.dask_scheduler else "serial",
+        scheduler=settings.dask_scheduler,
+        progress=progress,
+    )
+    return dump_json(result.to_dict()).encode("utf-8"), "application/json"
+
+
+def sweep_fraction(options: Any, progress: Mapping[str, Any]) -> float | None:
+    """Share of a sweep's points done, from the worker's progress (``steps`` of ``sweep of N points``)."""
+    stage = progress.get("stage")
+    done = progress.get("steps")
+    if not isinstance(stage, str) or not stage.startswith("sweep of ") or not isinstance(done, int):
+        return None
+    try:
+        total = int(stage.split()[2])
+    except (IndexError, ValueError):
+        return None
+    return None if total <= 0 else min(1.0, done / total)

@@ -1,0 +1,131 @@
+"""PNG plots of 1-D and 2-D sweeps (matplotlib object API, Agg, no pyplot).
+
+Everything drawn comes from the sweep's rows and from
+:func:`kfio.sweep._boundary.exact_boundary` (library calls); this module only draws.
+Axis labels are the sweep's axis names, drawn as plain text (no mathtext).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from kfio.errors import InvalidInput
+from kfio.model import parse_number
+from kfio.sweep._boundary import exact_boundary
+from kfio.sweep._engine import SweepResult
+
+from .plots import _figure, _png
+
+_COLORS = {"stable": "#2a9d8f", "boundary": "#e9c46a", "unstable": "#e76f51", None: "#bbbbbb"}
+_METRIC = {"analyze": "worst_rate", "bounds": "trace_V_bar", "simulate": "final_mean_trace"}
+_LABEL = {"analyze": "verdict", "bounds": "verdict_by_bounds", "simulate": "diverged"}
+
+
+def _coordinate(value: Any, name: str) -> float:
+    try:
+        return float(parse_number(value, name))
+    except InvalidInput:
+        raise InvalidInput("--plot", f"axis {name!r} has non-numeric values; only numeric sweeps are plotted") from None
+
+
+def _label(command: str, fields: dict[str, Any]) -> str | None:
+    if fields.get("error"):
+        return None
+    v = fields.get(_LABEL[command])
+    if command == "simulate":
+        return None if v is None else ("unstable" if v else "stable")
+    return v
+
+
+def sweep_png(result: SweepResult) -> bytes:
+    """A 1-D sweep as the key metric against the axis; a 2-D sweep as a labelled map.
+
+    1-D ``analyze``: the worst rate ``|alpha|^2 sigma`` against the coordinate,
+    coloured by verdict, with the line rate = 1 and the exact critical
+    probability where kfio knows it.  2-D: each grid cell coloured by its
+    verdict (grey: error), with the exact boundary curve of a two-sensor sweep.
+    """
+    spec = result.spec
+    if spec.requests is not None or not 1 <= len(spec.axes) <= 2 or (len(spec.axes) == 2 and spec.combine != "grid"):
+        raise InvalidInput("--plot", "plots are drawn for sweeps with one axis, or two axes combined as a grid")
+    cmd = spec.command
+    fig = _figure()
+    ax = fig.subplots()
+    boundary = exact_boundary(spec)
+    if len(spec.axes) == 1:
+        a = spec.axes[0]
+        x = np.array([_coordinate(r.coordinates[a.name], a.name) for r in result.rows])
+        y = np.array(
+            [np.nan if r.fields.get(_METRIC[cmd]) is None else float(r.fields[_METRIC[cmd]]) for r in result.rows]
+        )
+        labels = [_label(cmd, r.fields) for r in result.rows]
+        ax.plot(x, y, color="#555555", lw=1, zorder=1)
+        for lab in ("stable", "boundary", "unstable", None):
+            sel = np.array([lb == lab for lb in labels])
+            if sel.any():
+                ax.scatter(
+                    x[sel],
+                    np.where(np.isnan(y[sel]), 0, y[sel]),
+                    s=14,
+                    color=_COLORS[lab],
+                    zorder=2,
+                    label=lab or "error / no value",
+                )
+        if cmd == "analyze":
+            ax.axhline(1.0, color="black", lw=0.8, ls="--", label="rate = 1")
+        if boundary and boundary["kind"] == "threshold":
+            ax.axvline(
+                boundary["value"], color="#264653", lw=1.2, label=f"exact critical probability {boundary['exact']}"
+            )
+        if cmd != "analyze" and np.nanmin(np.where(y > 0, y, np.nan), initial=np.inf) < np.inf:
+            ax.set_yscale("log")
+        ax.set_xlabel(a.name, parse_math=False)
+        ax.set_ylabel(
+            {"analyze": "worst rate |alpha|^2 sigma", "bounds": "trace V_bar", "simulate": "final mean trace P"}[cmd]
+        )
+        ax.legend(fontsize=8)
+    else:
+        ax_x, ax_y = spec.axes
+        xs = [_coordinate(v, ax_x.name) for v in ax_x.values]
+        ys = [_coordinate(v, ax_y.name) for v in ax_y.values]
+        codes = {"stable": 0, "boundary": 1, "unstable": 2, None: 3}
+        grid = np.full((len(ys), len(xs)), 3.0)
+        for r in result.rows:
+            i, j = divmod(r.index, len(ys))  # grid order: the last axis (y) varies fastest
+            grid[j, i] = codes[_label(cmd, r.fields)]
+        from matplotlib.colors import ListedColormap
+        from matplotlib.patches import Patch
+
+        cmap = ListedColormap([_COLORS["stable"], _COLORS["boundary"], _COLORS["unstable"], _COLORS[None]])
+        ax.pcolormesh(_edges(xs), _edges(ys), grid, cmap=cmap, vmin=-0.5, vmax=3.5, shading="flat")
+        handles = [
+            Patch(color=_COLORS[k], label=k or "error")
+            for k in ("stable", "boundary", "unstable", None)
+            if (grid == codes[k]).any()
+        ]
+        if boundary and boundary["kind"] == "curve":
+            bx = np.array([np.nan if v is None else v for v in boundary["x"]], dtype=float)
+            by = np.array([np.nan if v is None else v for v in boundary["y"]], dtype=float)
+            (line,) = ax.plot(bx, by, color="black", lw=1.5, label="exact boundary (kfio extension)")
+            handles.append(line)
+        ax.set_xlim(min(xs), max(xs)) if len(xs) > 1 else None
+        ax.set_ylim(min(ys), max(ys)) if len(ys) > 1 else None
+        ax.set_xlabel(ax_x.name, parse_math=False)
+        ax.set_ylabel(ax_y.name, parse_math=False)
+        ax.legend(handles=handles, fontsize=8, loc="lower left")
+    ax.set_title(f"kfio sweep: {cmd}, {spec.size} points", parse_math=False)
+    return _png(fig)
+
+
+def _edges(v: list[float]) -> np.ndarray:
+    """Cell edges around sorted centres (half-way between neighbours)."""
+    c = np.array(v, dtype=float)
+    if len(c) == 1:
+        return np.array([c[0] - 0.5, c[0] + 0.5])
+    mid = (c[1:] + c[:-1]) / 2
+    return np.concatenate([[c[0] - (mid[0] - c[0])], mid, [c[-1] + (c[-1] - mid[-1])]])
+
+
+__all__ = ["sweep_png"]
