@@ -1,9 +1,13 @@
 """Benchmark of ``kfio bounds`` (issue 3), each measurement against a naive baseline run in the same process.
 
-    python bench/bench_bounds.py [--systems 6] [--repeats 3] [--seed 0]
+    python bench/bench_bounds.py [--systems 6] [--repeats 3] [--seed 0] [--sizes 10,20,40] [--reference-max-n 20]
 
-1. ``lambda_upper`` to 1e-6 for random n = 10 systems (target < 5 s each), against
-   re-building the CVXPY problem at every bisection step (same algorithm, same answers).
+0. ``lambda_upper`` to 1e-6 for random systems of n = 10, 20, 40 (targets: n = 20 under 5 s, n = 40
+   under 60 s): the solver-free route (annihilating / MARE gains, continuation, exact certificates)
+   against the previous code (main at ``736f7c6``: bisection over LMI solves, run in a subprocess by
+   ``bench/_reference.py``), CPU seconds (``time.process_time``) since the machine is shared.
+1. ``lambda_upper`` to 1e-6 for random n = 10 systems by the LMI route alone (``lmi="always"``),
+   against re-building the CVXPY problem at every bisection step (same algorithm, same answers).
 2. ``P_hat_20`` for seed 004's 3x3 system at lambda = 0.4 (target < 30 s), against the
    per-sequence recursion of seed 002 eq. 4 (one ``g_N`` at N = 12 is timed both ways; the
    naive ``P_hat_20`` time is extrapolated from it, since running it would take hours).
@@ -32,13 +36,29 @@ from kfio.mare._phat import BatchedMare, p_hat_sequence  # noqa: E402
 from kfio.mare._search import CertifiedSearch  # noqa: E402
 from kfio.mare._vech import vech  # noqa: E402
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _reference import REFERENCE_COMMIT, run_reference  # noqa: E402
+
+REFERENCE_LAMBDA_UPPER = """
+import json, time
+from fractions import Fraction
+import numpy as np
+from kfio.mare._certificate import ExactPlant
+from kfio.mare._search import CertifiedSearch
+A, C, lower = np.array({A}), np.array({C}), {lower}
+ex = lambda M: tuple(tuple(Fraction(float(x)) for x in r) for r in M)
+t = time.process_time()
+ub = CertifiedSearch(A, C, [list(range(C.shape[0]))], ExactPlant(ex(A), (ex(C),))).bisect([Fraction(1)], 0, lower, 1e-6)
+print(json.dumps({{"cpu": time.process_time() - t, "value": float(ub.value), "solves": ub.steps}}))
+"""
+
 
 class RebuildingSearch(CertifiedSearch):
     """The naive baseline: a new CVXPY problem (and compilation) for every LMI solve."""
 
-    def certify(self, lambdas):
+    def certify_lmi(self, lambdas):
         self.lmi = StabilityLMI(self.A.shape[0], self.lmi.pattern_rows)
-        return super().certify(lambdas)
+        return super().certify_lmi(lambdas)
 
 
 def exact(M: np.ndarray) -> tuple[tuple[Fraction, ...], ...]:
@@ -52,6 +72,26 @@ def random_system(rng: np.random.Generator, n: int = 10, p: int = 2) -> tuple[np
     return A, np.round(rng.normal(size=(p, n)), 3)
 
 
+def bench_sizes(sizes: list[int], count: int, seed: int, reference_max_n: int) -> list[tuple]:
+    rows = []
+    for n in sizes:
+        rng = np.random.default_rng(seed)
+        for k in range(count):
+            A, C = random_system(rng, n)
+            plant = ExactPlant(exact(A), (exact(C),))
+            lower = critical_lower_bound(riccati.spectral_radius(A))
+            search = CertifiedSearch(A, C, [[0, 1]], plant)
+            t0 = time.process_time()
+            ub = search.bisect([Fraction(1)], 0, lower, 1e-6)
+            t_new = time.process_time() - t0
+            ref = None
+            if n <= reference_max_n:
+                ref = run_reference(REFERENCE_LAMBDA_UPPER.format(A=A.tolist(), C=C.tolist(), lower=lower))
+            route = ", ".join(f"{r} x{c}" for r, c in search.routes.items())
+            rows.append((n, k, lower, float(ub.value), ub.steps, route, t_new, ref))
+    return rows
+
+
 def bench_lambda_upper(count: int, seed: int, repeats: int) -> list[tuple]:
     rng = np.random.default_rng(seed)
     rows = []
@@ -63,7 +103,7 @@ def bench_lambda_upper(count: int, seed: int, repeats: int) -> list[tuple]:
         for _ in range(repeats):  # interleaved, best of `repeats`: the machine is shared
             for cls in (CertifiedSearch, RebuildingSearch):
                 t0 = time.perf_counter()
-                ub = cls(A, C, [[0, 1]], plant).bisect([Fraction(1)], 0, lower, 1e-6)
+                ub = cls(A, C, [[0, 1]], plant, lmi="always").bisect([Fraction(1)], 0, lower, 1e-6)
                 t = time.perf_counter() - t0
                 if cls not in best or t < best[cls][0]:
                     best[cls] = (t, ub)
@@ -129,14 +169,14 @@ def bench_region() -> dict:
     values = tuple(Fraction(i, K - 1) for i in range(K))
     unstable = np.array([[float((1 - a) * (1 - b)) * rho2 >= 1 for b in values] for a in values])
     t0 = time.perf_counter()
-    search = CertifiedSearch(A, C, groups, plant)
+    search = CertifiedSearch(A, C, groups, plant, lmi="always")
     labels, certified = search.region(values, unstable)
     t_fast = time.perf_counter() - t0
     t0 = time.perf_counter()
-    naive = RebuildingSearch(A, C, groups, plant)
+    naive = RebuildingSearch(A, C, groups, plant, lmi="always")
     naive_labels = [
         [
-            "unstable" if unstable[i, j] else ("stable" if naive.certify([a, b]) is not None else "undecided")
+            "unstable" if unstable[i, j] else ("stable" if naive.certify_lmi([a, b]) is not None else "undecided")
             for j, b in enumerate(values)
         ]
         for i, a in enumerate(values)
@@ -151,8 +191,41 @@ def main() -> None:
     ap.add_argument("--systems", type=int, default=6)
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--sizes", default="10,20,40", help="state dimensions of section 0")
+    ap.add_argument("--size-systems", type=int, default=3, help="systems per size in section 0")
+    ap.add_argument("--reference-max-n", type=int, default=20, help="largest n run with the previous code")
+    ap.add_argument("--sections", default="0123", help="which sections to run, e.g. 0 or 123")
     args = ap.parse_args()
 
+    if "0" in args.sections:
+        section0(args)
+    if "1" in args.sections:
+        section1(args)
+    if "2" in args.sections:
+        section2()
+    if "3" in args.sections:
+        section3()
+
+
+def section0(args) -> None:
+    print(f"0. lambda_upper to 1e-6, random systems (p = 2), CPU s; reference: main at {REFERENCE_COMMIT}")
+    print(
+        "    n  sys  lambda_lower  lambda_upper  reference     LMI solves  route                     new      "
+        "reference  ratio"
+    )
+    sizes = [int(x) for x in args.sizes.split(",") if x]
+    for n, k, lo, up, steps, route, t, ref in bench_sizes(sizes, args.size_systems, args.seed, args.reference_max_n):
+        r_up = f"{ref['value']:.7f}" if ref else "not run"
+        r_t = f"{ref['cpu']:8.2f} s" if ref else "         -"
+        ratio = f"{ref['cpu'] / t:6.1f}x" if ref else "      -"
+        print(
+            f"   {n:2d}  {k:3d}  {lo:12.6f}  {up:12.7f}  {r_up:12s}  {steps:10d}  {route[:24]:24s}  {t:6.2f} s  "
+            f"{r_t}  {ratio}"
+        )
+    print()
+
+
+def section1(args) -> None:
     print("1. lambda_upper to 1e-6, random n = 10, p = 2 (one packet)")
     print("   sys  lambda_lower  lambda_upper  solves  certificate     parametrized  rebuilt  ratio")
     for k, lo, up, steps, method, tf, ts in bench_lambda_upper(args.systems, args.seed, args.repeats):
@@ -160,6 +233,8 @@ def main() -> None:
             f"   {k:3d}  {lo:12.6f}  {up:12.6f}  {steps:6d}  {method:14s}  {tf:10.2f} s  {ts:5.2f} s  {ts / tf:4.2f}x"
         )
 
+
+def section2() -> None:
     print("\n2. P_hat_N, seed 004's 3x3 system, lambda = 0.4")
     r = bench_p_hat()
     print("   traces: " + ", ".join(f"N={N}: {t:.6g}" for N, t in r["traces"].items()))
@@ -172,6 +247,8 @@ def main() -> None:
         f"({r['t_gN_slow'] / r['t_gN_fast']:.0f}x); naive P_hat_20 extrapolated: {r['naive_p20_estimate'] / 3600:.1f} h"
     )
 
+
+def section3() -> None:
     print("\n3. 21 x 21 region map, two sensors, n = 2 (seed 000 Fig. 5 system)")
     r = bench_region()
     print(f"   monotone search, one parametrized LMI: {r['t_fast']:.2f} s ({r['solves_fast']} solves)")

@@ -24,7 +24,11 @@ Usage::
     python bench/bench_service.py --duration 10 --scenarios analyze-cached
 
 Prints a Markdown table: requests per second, p50/p99 latency, and the
-status codes seen.
+status codes seen.  The server (with its workers) and this load generator run
+on disjoint CPUs (``--server-cpus``, ``--client-cpus``; by default the last CPU
+for the client and the others for the server, so with 2 cores: workers on
+CPU 0, clients on CPU 1), set with ``os.sched_setaffinity`` before the server
+starts (its processes inherit it), so that the figures are the server's.
 """
 
 from __future__ import annotations
@@ -154,6 +158,18 @@ async def run(url: str, scenarios: list[str], clients: int, duration: float, slo
         return results
 
 
+def _cpu_split(server: str | None, client: str | None) -> tuple[set[int], set[int]]:
+    """Disjoint CPU sets for the server and the load generator (with one CPU, both share it)."""
+    cpus = sorted(os.sched_getaffinity(0))
+
+    def parse(text: str) -> set[int]:
+        return {int(x) for x in text.split(",") if x}
+
+    c = parse(client) if client else {cpus[-1]}
+    s = parse(server) if server else (set(cpus) - c or set(cpus))
+    return s, c
+
+
 def main(argv: list[str] | None = None) -> int:
     all_scenarios = ["analyze-cached", "analyze-uncached", "bounds-uncached", "simulate-uncached", "fast-under-slow"]
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -163,21 +179,35 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--slow", type=int, default=4, help="clients sending slow requests in fast-under-slow")
     p.add_argument("--duration", type=float, default=30.0, help="seconds per scenario")
     p.add_argument("--scenarios", nargs="+", default=all_scenarios, choices=all_scenarios)
+    p.add_argument(
+        "--server-cpus",
+        default=None,
+        help="CPUs for the started server and its workers, e.g. 0 (default: all but the last when there are 2+)",
+    )
+    p.add_argument("--client-cpus", default=None, help="CPUs for this load generator, e.g. 1 (default: the last)")
     args = p.parse_args(argv)
+    server_cpus, client_cpus = _cpu_split(args.server_cpus, args.client_cpus)
 
     def go(url: str) -> list[Result]:
         return asyncio.run(run(url, args.scenarios, args.clients, args.duration, args.slow))
 
     if args.url:
+        os.sched_setaffinity(0, client_cpus)
         results = go(args.url)
         workers = "?"
     else:
+        # The server, its forkserver and every worker inherit the affinity of the process that starts them:
+        # pin ourselves to the server's CPUs, start it, then move the load generator to its own CPUs.
+        os.sched_setaffinity(0, server_cpus)
         with LiveServer(workers=args.workers) as server:
+            os.sched_setaffinity(0, client_cpus)
             results = go(server.url)
         workers = str(args.workers)
     print(
         f"kfio service on 127.0.0.1, {workers} workers, {os.cpu_count()} cores, Python {platform.python_version()}; "
-        f"{args.clients} clients x {args.duration:g} s per scenario ({args.slow} slow clients in fast-under-slow)\n"
+        f"{args.clients} clients x {args.duration:g} s per scenario ({args.slow} slow clients in fast-under-slow); "
+        f"server pinned to CPUs {sorted(server_cpus)}, load generator to CPUs {sorted(client_cpus)} "
+        f"(os.sched_setaffinity; load average at the end {os.getloadavg()[0]:.1f})\n"
     )
     print("| scenario | requests | req/s | p50 ms | p99 ms | status codes |")
     print("|---|---:|---:|---:|---:|---|")

@@ -41,6 +41,7 @@ PRELOAD = (
     "kfio.mare._compute",
     "kfio.simulation._simulate",
     "matplotlib.figure",
+    "kfio.service.warmup",  # last: runs one tiny request of each kind (SymPy sub-imports, CVXPY's first solve)
 )
 
 JSON = "application/json"

@@ -19,8 +19,8 @@ checks, reported as the certificate's ``method``:
 * ``"exact_rational"``: ``K_S`` and ``X`` are rationalized (every float is a
   dyadic rational), ``M = X - L_K(X)`` is formed over ``Q`` with the user's
   exact ``A``, ``C`` and arrival probabilities, and ``X > 0``, ``M > 0`` are
-  decided exactly (signs of the characteristic polynomial,
-  :func:`kfio.model._request.is_psd`).
+  decided exactly (Sylvester's criterion by a fraction-free LU over the
+  integers, :func:`positive_definite_exact`).
 * ``"eigenvalue_margin"`` (prefilter, and fallback): NumPy eigenvalues of
   ``X`` and ``M`` exceed an explicit rounding allowance.
 """
@@ -34,8 +34,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from .._json import json_float
-from ..model._request import is_psd
-from ..model._types import Matrix, to_domain
+from ..model._types import Matrix
 from ._riccati import ArrivalModel, closed_loop_operator
 from ._vech import unvech, vech
 
@@ -69,6 +68,9 @@ class StabilityCertificate:
         The solver's optimal ``t`` in ``Psi >= t I`` (its own claim).
     X, K:
         The certificate, in the user's coordinates.
+    route:
+        What produced the gains ``K``: ``"LMI"``, ``"annihilating gains"`` or
+        ``"MARE gains by policy iteration"`` (the check is the same for all).
     """
 
     lambdas: tuple[Fraction, ...]
@@ -77,6 +79,7 @@ class StabilityCertificate:
     solver_margin: float | None
     X: np.ndarray
     K: tuple[np.ndarray, ...]
+    route: str = "LMI"
 
     def describe(self) -> dict[str, Any]:
         checked = (
@@ -88,6 +91,7 @@ class StabilityCertificate:
             "method": self.method,
             "checked": checked
             + " (Sinopoli et al. 2004, Theorem 5(b); Liu and Goldsmith 2004, Theorem 5(b) for several packets)",
+            "gains_from": self.route,
             "at": [str(x) for x in self.lambdas],
             "margin": json_float(self.margin),
             "closed_loop_spectral_radius_at_most": json_float(1.0 - self.margin),
@@ -131,12 +135,37 @@ def float_check(model: ArrivalModel, K: Sequence[np.ndarray], X: np.ndarray) -> 
     return float(em[0] / ex[-1])
 
 
-def _rational(M: np.ndarray) -> Matrix:
-    return tuple(tuple(Fraction(float(x)) for x in row) for row in np.atleast_2d(M))
+def _fmpq_mat(rows) -> Any:
+    """A python-flint ``fmpq_mat`` from rows of floats (exactly: each float is a dyadic rational) or Fractions."""
+    import flint
+
+    def q(x) -> Any:
+        if isinstance(x, Fraction):
+            return flint.fmpq(x.numerator, x.denominator)
+        a, b = float(x).as_integer_ratio()
+        return flint.fmpq(a, b)
+
+    rows = [list(r) for r in rows]
+    return flint.fmpq_mat(len(rows), len(rows[0]) if rows else 0, [q(x) for r in rows for x in r])
 
 
-def _matrix(dm) -> Matrix:  # DomainMatrix over QQ -> tuple of tuples of Fraction
-    return tuple(tuple(Fraction(int(x.numerator), int(x.denominator)) for x in row) for row in dm.to_list())
+def positive_definite_exact(M: Any) -> bool:
+    """Decide ``M > 0`` exactly for a symmetric ``fmpq_mat`` (Sylvester's criterion).
+
+    ``M`` times the common denominator of its entries is an integer matrix
+    with the same leading principal minors' signs; its fraction-free
+    (Bareiss) LU, ``fmpz_mat.fflu``, has those minors on the diagonal of
+    ``U`` as long as no row exchange was needed, and a row exchange happens
+    only when a leading minor vanishes, which a positive definite matrix
+    never has.  So ``M > 0`` iff the permutation is the identity and every
+    ``U[k, k] > 0``.  Integer arithmetic throughout (no gcds).
+    """
+    n = M.nrows()
+    if n == 0:
+        return True
+    num, _ = M.numer_denom()  # M = num / den with den > 0
+    P, _, _, U = num.fflu()
+    return bool(P.is_one()) and all(U[k, k] > 0 for k in range(n))
 
 
 def exact_check(plant: ExactPlant, weights: Sequence[Fraction], K: Sequence[np.ndarray], X: np.ndarray) -> bool:
@@ -145,23 +174,22 @@ def exact_check(plant: ExactPlant, weights: Sequence[Fraction], K: Sequence[np.n
     ``weights`` are the exact pattern probabilities ``pi(S)`` (mask order,
     ``weights[0] = pi(empty)``).  The symmetric part of ``X`` is used (the
     float ``X`` is symmetric up to rounding; the statement is about it).
+    The products are formed over ``Q`` with python-flint ``fmpq_mat`` and
+    definiteness is decided by :func:`positive_definite_exact`.
     """
-    from sympy import QQ
+    import flint
 
-    Xs = 0.5 * (X + X.T)
-    Xq = to_domain(_rational(Xs))
-    Aq = to_domain(plant.A)
-
-    def scaled(dm, w: Fraction):
-        return dm * QQ(w.numerator, w.denominator)
-
-    M = Xq - scaled(Aq * Xq * Aq.transpose(), weights[0])
+    Xq = _fmpq_mat(0.5 * (X + X.T))
+    if not positive_definite_exact(Xq):
+        return False
+    Aq = _fmpq_mat(plant.A)
+    M = Xq - (Aq * Xq * Aq.transpose()) * flint.fmpq(weights[0].numerator, weights[0].denominator)
     for w, Ks, Cs in zip(weights[1:], K, plant.C_S):
         if w == 0:
             continue
-        F = Aq + to_domain(_rational(Ks)) * to_domain(Cs)
-        M = M - scaled(F * Xq * F.transpose(), w)
-    return is_psd(_matrix(Xq), strict=True, exact=True) and is_psd(_matrix(M), strict=True, exact=True)
+        F = Aq + _fmpq_mat(np.atleast_2d(Ks)) * _fmpq_mat(Cs)
+        M = M - (F * Xq * F.transpose()) * flint.fmpq(w.numerator, w.denominator)
+    return positive_definite_exact(M)
 
 
 def certify(
@@ -172,23 +200,30 @@ def certify(
     K: Sequence[np.ndarray],
     solver_margin: float | None,
     exact: bool = True,
+    route: str = "LMI",
 ) -> StabilityCertificate | None:
     """Re-check gains ``K`` (user coordinates) at ``lambdas``; a certificate or ``None``.
 
-    ``model`` carries the same probabilities as floats.  The float check runs
-    first (cheap, and it rejects gains that do not stabilize); the exact one
-    then decides, unless ``exact`` is false.
+    ``model`` carries the same probabilities as floats.  A float test runs
+    first (cheap, and it rejects gains that do not stabilize): with ``exact``
+    the signs of the eigenvalues of ``X`` and ``X - L_K(X)``, then the exact
+    check decides; without, :func:`float_check` with its rounding allowance
+    is the verdict.
     """
     X = lyapunov_certificate(model, K)
     if X is None:
         return None
-    margin = float_check(model, K, X)
+    if exact:  # the float test only has to reject gains that do not stabilize: signs, no allowance
+        M, _ = _float_residual(model, K, X)
+        ex, em = np.linalg.eigvalsh(0.5 * (X + X.T)), np.linalg.eigvalsh(M)
+        margin = float(em[0] / ex[-1]) if ex[0] > 0 and em[0] > 0 else None
+    else:
+        margin = float_check(model, K, X)
     if margin is None:
         return None
     method = "eigenvalue_margin"
     if exact:
         if not exact_check(plant, weights, K, X):
             return None
-        M, _ = _float_residual(model, K, X)
         method = "exact_rational"
-    return StabilityCertificate(tuple(lambdas), method, margin, solver_margin, X, tuple(K))
+    return StabilityCertificate(tuple(lambdas), method, margin, solver_margin, X, tuple(K), route)

@@ -319,7 +319,7 @@ class BoundsReport(Report):
             who = "lambda_c" if self.one_packet else f"critical probability of {p.name}"
             up = c.upper
             upper = (
-                f"{float(up.value):.9g} (LMI, certificate re-checked: {up.certificate.method})"
+                f"{float(up.value):.9g} (certificate re-checked: {up.certificate.method}, gains from {up.certificate.route})"
                 if up.value is not None and up.certificate is not None
                 else f"none ({up.reason})"
             )

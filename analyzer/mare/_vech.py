@@ -25,7 +25,19 @@ def vech_layout(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 def congruence_matrix(M: np.ndarray) -> np.ndarray:
-    """The matrix ``T`` with ``vech(M X M') = T vech(X)`` for symmetric ``X``.
+    r"""The matrix ``T`` with ``vech(M X M') = T vech(X)`` for symmetric ``X``.
+
+    Entry by entry, with ``p = (i, j)`` and ``q = (k, l)`` running over the
+    upper triangle (``i <= j``, ``k <= l``):
+
+    .. math::
+
+        T_{pq} = M_{ik} M_{jl} + M_{il} M_{jk} \ (k < l), \qquad T_{pq} = M_{ik} M_{jk} \ (k = l),
+
+    since ``(M X M')_ij = sum_{k,l} M_ik X_kl M_jl`` and ``X_kl = X_lk``.
+    Formed from the ``N x n^2`` products ``M_ik M_jl`` (``N = n(n+1)/2``) by two
+    column gathers, with no ``n^2 x n^2`` Kronecker product: ``O(n^4)`` work
+    instead of ``O(n^6)``, and the same floating-point sums entry by entry.
 
     Examples
     --------
@@ -34,9 +46,15 @@ def congruence_matrix(M: np.ndarray) -> np.ndarray:
     >>> bool(np.allclose(congruence_matrix(M) @ vech(X), vech(M @ X @ M.T)))
     True
     """
+    M = np.asarray(M, float)
     n = M.shape[0]
-    iu, ju, dup = vech_layout(n)
-    return (np.kron(M, M) @ dup)[iu * n + ju]
+    iu, ju, _ = vech_layout(n)
+    P, Q = M[iu], M[ju]  # rows M_i. and M_j. for every p = (i, j)
+    W = (P[:, :, None] * Q[:, None, :]).reshape(len(iu), n * n)  # W[p, k n + l] = M_ik M_jl
+    T = W[:, iu * n + ju]
+    T += W[:, ju * n + iu]
+    T[:, iu == ju] *= 0.5  # k = l: both terms are M_ik M_jk, and halving 2ab is exact
+    return T
 
 
 def vech(X: np.ndarray) -> np.ndarray:

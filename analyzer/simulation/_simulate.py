@@ -48,7 +48,15 @@ from .._reporting import Report, stamp
 from ..model._types import Request
 from ._channel import JointChannel
 from ._finite_horizon import FiniteHorizonReport, expected_covariance
-from ._kernel import PRECISION_RATIO, GroupedRiccatiStep, RiccatiStep, healthy, traces
+from ._kernel import (
+    DIVERGENCE_TRACE,
+    PRECISION_RATIO,
+    GroupedRiccatiStep,
+    PackedRiccatiStep,
+    RiccatiStep,
+    healthy,
+    traces,
+)
 from ._setup import (
     DEFAULT_SIMULATION_LIMITS,
     PERCENTILES,
@@ -271,20 +279,24 @@ def run_monte_carlo(
     sim: SimSystem,
     opts: SimulateOptions,
     budget: Budget | None = None,
-    update: RiccatiStep | GroupedRiccatiStep | None = None,
+    update: PackedRiccatiStep | RiccatiStep | GroupedRiccatiStep | None = None,
 ) -> MonteCarloRun:
     """Propagate ``opts.trajectories`` covariances for ``opts.steps`` steps.
 
-    ``update`` is the batched Riccati step; default the masked
-    :class:`kfio.simulation._kernel.RiccatiStep` (the benchmark also passes
-    :class:`kfio.simulation._kernel.GroupedRiccatiStep`).
+    ``update`` is the batched Riccati step; default the structure-of-arrays
+    :class:`kfio.simulation._kernel.PackedRiccatiStep` (the benchmark and the
+    agreement tests also pass :class:`kfio.simulation._kernel.RiccatiStep`
+    and :class:`kfio.simulation._kernel.GroupedRiccatiStep`).  The random
+    stream does not depend on the kernel, so seeded runs agree across
+    kernels to rounding.
     """
-    step = update or RiccatiStep.build(sim.A, sim.Q, sim.C, sim.R)
+    step = update or PackedRiccatiStep.build(sim.A, sim.Q, sim.C, sim.R)
     rng = np.random.Generator(np.random.PCG64(opts.seed))
     chan = JointChannel.from_packets(sim.packets)
     M, T = opts.trajectories, opts.steps
     hist = chan.sample_initial(opts.initial_channel, M, rng)
     P = np.broadcast_to(opts.P0, (M, sim.n, sim.n)).copy()
+    h = step.pack(P) if isinstance(step, PackedRiccatiStep) else np.empty((0, M))
     alive = np.ones(M, dtype=bool)
     mean, std = np.empty(T + 1), np.empty(T + 1)
     pct = np.empty((len(PERCENTILES), T + 1))
@@ -297,21 +309,41 @@ def run_monte_carlo(
                 budget.tick("Monte Carlo simulation", M)
             g = rng.random((M, chan.m)) < chan.arrival_probability(hist)
             arrivals += g.sum(axis=0)
-            P, ratio = step.apply(P, g.astype(float) if chan.m == 1 else sim.row_mask(g))
+            mask = g.astype(float) if chan.m == 1 else sim.row_mask(g)
+            if isinstance(step, PackedRiccatiStep):
+                h, ratio = step.apply_packed(h, mask)
+                tr = step.traces(h)
+                ok = _healthy_packed(h, tr)
+            else:
+                P, ratio = step.apply(P, mask)
+                tr = traces(P)
+                ok = healthy(P, tr)
             hist = chan.advance(hist, g)
-            tr = traces(P)
-            ok = healthy(P, tr) & (ratio <= PRECISION_RATIO)
+            ok &= ratio <= PRECISION_RATIO
             if not ok[alive].all():
                 alive &= ok
-                P[~alive] = 0.0  # frozen: keeps NaN and overflow out of later arithmetic
+                if isinstance(step, PackedRiccatiStep):  # frozen: keeps NaN and overflow out of later arithmetic
+                    h[:, ~alive] = 0.0
+                else:
+                    P[~alive] = 0.0
             diverged[t + 1] = M - int(alive.sum())
             mean[t + 1], std[t + 1], pct[:, t + 1] = _record(tr, alive)
+    if isinstance(step, PackedRiccatiStep):
+        P = step.unpack(h)
     final = P.mean(axis=0) if alive.all() else None
     stats = TraceStatistics(mean=mean, std=std, percentiles=pct, diverged=diverged, trajectories=M)
     final_traces = np.where(alive, traces(P), np.inf)
     return MonteCarloRun(
         stats=stats, final_mean_covariance=final, arrival_rate=arrivals / (M * T), final_traces=final_traces
     )
+
+
+def _healthy_packed(h: np.ndarray, tr: np.ndarray) -> np.ndarray:
+    """:func:`kfio.simulation._kernel.healthy` on the packed batch ``(N, M)``."""
+    ok = tr <= DIVERGENCE_TRACE  # False for NaN
+    if not np.isfinite(h.sum()):
+        ok &= np.isfinite(h).all(axis=0)
+    return ok
 
 
 def simulate(

@@ -1,0 +1,46 @@
+"""Run the previous code (a commit of this repository) in a subprocess, for same-run ratios in the benchmarks.
+
+``git archive COMMIT analyzer`` is unpacked once into a temporary folder as the package ``kfio`` and put
+first on ``PYTHONPATH`` of a child interpreter, which runs a snippet and prints one JSON line.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import os
+import subprocess
+import sys
+import tarfile
+import tempfile
+from pathlib import Path
+from typing import Any
+
+#: The layout commit before issue 15's work.
+REFERENCE_COMMIT = "736f7c6"
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def reference_tree(commit: str = REFERENCE_COMMIT) -> Path:
+    """A folder holding ``kfio/`` (the library) as of ``commit``."""
+    dest = Path(tempfile.gettempdir()) / f"kfio-reference-{commit}"
+    if not (dest / "kfio" / "__init__.py").exists():
+        blob = subprocess.run(["git", "archive", commit, "analyzer"], cwd=ROOT, check=True, capture_output=True).stdout
+        with tarfile.open(fileobj=io.BytesIO(blob)) as tar:
+            tar.extractall(dest / "_x", filter="data")
+        (dest / "_x" / "analyzer").rename(dest / "kfio")
+    return dest
+
+
+def run_reference(code: str, commit: str = REFERENCE_COMMIT, timeout: float = 3600) -> Any:
+    """Run ``code`` against the library of ``commit``; it must print a JSON document on its last line."""
+    env = dict(os.environ, PYTHONPATH=str(reference_tree(commit)))
+    out = subprocess.run(
+        [sys.executable, "-c", "import kfio, sys; assert 'kfio-reference' in kfio.__file__, kfio.__file__\n" + code],
+        env=env,
+        check=True,
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+    )
+    return json.loads(out.stdout.strip().splitlines()[-1])
