@@ -89,20 +89,29 @@ def retire_worker(result: Any) -> bool:
     return isinstance(result, tuple) and result[0] == "problem" and result[1].get("kind") == MEMORY_EXCEEDED
 
 
+def job_pool(settings: Settings, size: int, max_waiting: int) -> WorkerPool:
+    """A pool of ``size`` worker processes running :func:`kfio.service.jobs.run_job` (preloaded, memory-limited).
+
+    The synchronous lane (:class:`Dispatcher`) and the job lane
+    (:class:`kfio.service.jobstore.JobStore`) are two such pools.
+    """
+    return WorkerPool(
+        size,
+        "kfio.service.jobs:run_job",
+        preload=PRELOAD,
+        max_waiting=max_waiting,
+        kill_grace_s=settings.kill_grace_s,
+        memory_bytes=settings.memory_bytes(),
+        retire=retire_worker,
+    )
+
+
 class Dispatcher:
     """Answers job requests for one app: owns its worker pool and its cache."""
 
     def __init__(self, settings: Settings) -> None:
         self.settings = settings
-        self.pool = WorkerPool(
-            settings.workers,
-            "kfio.service.jobs:run_job",
-            preload=PRELOAD,
-            max_waiting=settings.max_queue,
-            kill_grace_s=settings.kill_grace_s,
-            memory_bytes=settings.memory_bytes(),
-            retire=retire_worker,
-        )
+        self.pool = job_pool(settings, settings.workers, settings.max_queue)
         self._parser = ThreadPoolExecutor(PARSE_THREADS, thread_name_prefix="kfio-parse")
         self.cache = AnswerCache(settings.cache_entries, settings.cache_bytes)
         self._inflight: dict[str, asyncio.Task[CachedAnswer]] = {}

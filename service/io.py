@@ -21,18 +21,18 @@ DEFAULT_TIME_BUDGET_S = 120.0
 MAX_REQUEST_BYTES = 1 << 20
 
 
-def read_request_text(path: str) -> bytes:
-    """Read a request from ``path`` (``-`` for stdin), at most 1 MiB."""
+def read_request_text(path: str, max_bytes: int = MAX_REQUEST_BYTES, what: str = "request") -> bytes:
+    """Read a request from ``path`` (``-`` for stdin), at most ``max_bytes`` (1 MiB)."""
     try:
         if path == "-":
-            data = sys.stdin.buffer.read(MAX_REQUEST_BYTES + 1)
+            data = sys.stdin.buffer.read(max_bytes + 1)
         else:
             with open(path, "rb") as fh:
-                data = fh.read(MAX_REQUEST_BYTES + 1)
+                data = fh.read(max_bytes + 1)
     except OSError as exc:
         raise InvalidInput("/", f"cannot read {path!r}: {exc.strerror}") from None
-    if len(data) > MAX_REQUEST_BYTES:
-        raise InvalidInput("/", f"request is larger than {MAX_REQUEST_BYTES} bytes")
+    if len(data) > max_bytes:
+        raise InvalidInput("/", f"{what} is larger than {max_bytes} bytes")
     return data
 
 

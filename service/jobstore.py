@@ -66,10 +66,9 @@ from typing import Any, Mapping
 
 from kfio import load_json
 
-from .dispatch import retire_worker
+from .dispatch import job_pool
 from .io import requested_budget
-from .jobs import PRELOAD
-from .pool import PoolTimeout, WorkerPool
+from .pool import PoolTimeout
 from .problems import Problem, ProblemError, problem_from_exception
 from .progress import PROGRESS_KEY, read_progress
 from .settings import Settings
@@ -224,15 +223,7 @@ class JobStore:
 
     def __init__(self, settings: Settings) -> None:
         self.settings = settings
-        self.pool = WorkerPool(
-            settings.job_workers,
-            "kfio.service.jobs:run_job",
-            preload=PRELOAD,
-            max_waiting=settings.job_workers,
-            kill_grace_s=settings.kill_grace_s,
-            memory_bytes=settings.memory_bytes(),
-            retire=retire_worker,
-        )
+        self.pool = job_pool(settings, settings.job_workers, settings.job_workers)
         self.kinds: dict[str, JobKind] = {}
         self._jobs: OrderedDict[str, Job] = OrderedDict()
         self._queue: asyncio.Queue[Job] = asyncio.Queue()

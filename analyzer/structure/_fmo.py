@@ -43,7 +43,7 @@ from ._eigen import DIGITS, EigenFactor, X, eigen_factors
 from ._modulus import modulus_squared
 from ._phases import PhaseBlock, RankOracle, Slot
 from ._unity import Root as UnityRoot
-from ._unity import ratio_relation
+from ._unity import euler_phi, ratio_relation
 
 _Y = symbols("y")
 #: Largest ``deg f * deg g`` for which the resultant test is run exactly.
@@ -150,22 +150,9 @@ def _cyclotomic_index(h: Poly, d: int) -> int:
     from sympy import cyclotomic_poly
 
     for m in range(1, 2 * d * d + 3):
-        if _euler_phi(m) == d and Poly(cyclotomic_poly(m, X), X, domain=QQ) == h.monic():
+        if euler_phi(m) == d and Poly(cyclotomic_poly(m, X), X, domain=QQ) == h.monic():
             return m
     raise NumericalFailure("cyclotomic factor of unknown order")  # pragma: no cover
-
-
-def _euler_phi(m: int) -> int:
-    result, k, p = m, m, 2
-    while p * p <= k:
-        if k % p == 0:
-            while k % p == 0:
-                k //= p
-            result -= result // p
-        p += 1
-    if k > 1:
-        result -= result // k
-    return result
 
 
 def _order_of_ratio(r: mpmath.mpc, max_order: int) -> tuple[int, int] | None:
@@ -506,7 +493,7 @@ def _member_field_and_values(
         b, L, ks = form
         r_expr = sqrt(Rational(b.numerator, b.denominator))
         gens = ([] if r_expr.is_Rational else [r_expr]) + ([exp(2 * pi * I / L)] if L > 2 else [])
-        if _euler_phi(L) * (1 if r_expr.is_Rational else 2) <= MAX_EXACT_FIELD_DEGREE:
+        if euler_phi(L) * (1 if r_expr.is_Rational else 2) <= MAX_EXACT_FIELD_DEGREE:
             K = QQ.algebraic_field(*gens) if gens else QQ
             zeta = K.from_sympy(exp(2 * pi * I / L)) if L > 2 else K.convert(QQ(-1) if L == 2 else QQ(1))
             rq = K.from_sympy(r_expr)

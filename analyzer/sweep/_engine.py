@@ -69,6 +69,22 @@ class SweepResult:
     stopped: str | None = None
     stats: dict[str, Any] = field(default_factory=dict)
 
+    @classmethod
+    def collect(cls, spec: SweepSpec, rows: list[SweepRow], info: dict[str, Any], seconds: float) -> SweepResult:
+        """The result of rows from :func:`iter_sweep` (any order) and the ``info`` it filled."""
+        rows = sorted(rows, key=lambda r: r.index)
+        if len(rows) != spec.size or any(r.index != i for i, r in enumerate(rows)):  # pragma: no cover - invariant
+            raise AssertionError("a sweep must give exactly one row per point")
+        return cls(
+            spec,
+            rows,
+            info.get("engine", "?"),
+            info.get("workers", 0),
+            info.get("chunks", 0),
+            seconds,
+            info.get("stopped"),
+        )
+
     @property
     def columns(self) -> list[str]:
         return ["index", *self.spec.coordinate_names, *FIELDS[self.spec.command], "error"]
@@ -261,15 +277,5 @@ def run_sweep(spec: SweepSpec, **kwargs: Any) -> SweepResult:
     """Run a whole sweep and return its rows in index order (see :func:`iter_sweep`)."""
     info: dict[str, Any] = {}
     t0 = time.perf_counter()
-    rows = sorted(iter_sweep(spec, info=info, **kwargs), key=lambda r: r.index)
-    if len(rows) != spec.size or any(r.index != i for i, r in enumerate(rows)):  # pragma: no cover - invariant
-        raise AssertionError("a sweep must give exactly one row per point")
-    return SweepResult(
-        spec,
-        rows,
-        info.get("engine", "?"),
-        info.get("workers", 0),
-        info.get("chunks", 0),
-        time.perf_counter() - t0,
-        info.get("stopped"),
-    )
+    rows = list(iter_sweep(spec, info=info, **kwargs))
+    return SweepResult.collect(spec, rows, info, time.perf_counter() - t0)

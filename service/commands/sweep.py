@@ -16,7 +16,7 @@ import threading
 from typing import Any
 
 from .. import exitcodes
-from ..io import run_guarded
+from ..io import read_request_text, run_guarded
 
 #: A sweep file may be larger than one request (JSON Lines of plant variants).
 MAX_SWEEP_BYTES = 64 << 20
@@ -43,22 +43,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     prog.add_argument("--progress", dest="progress", action="store_true", default=None, help="show a progress bar")
     prog.add_argument("--no-progress", dest="progress", action="store_false", help="no progress bar")
     p.set_defaults(func=_run)
-
-
-def _read(path: str) -> bytes:
-    from kfio.errors import InvalidInput
-
-    try:
-        if path == "-":
-            data = sys.stdin.buffer.read(MAX_SWEEP_BYTES + 1)
-        else:
-            with open(path, "rb") as fh:
-                data = fh.read(MAX_SWEEP_BYTES + 1)
-    except OSError as exc:
-        raise InvalidInput("/", f"cannot read {path!r}: {exc.strerror}") from None
-    if len(data) > MAX_SWEEP_BYTES:
-        raise InvalidInput("/", f"a sweep file is at most {MAX_SWEEP_BYTES} bytes")
-    return data
 
 
 class _Bar:
@@ -105,7 +89,7 @@ def _run(args: argparse.Namespace) -> int:
             format_of(args.out)
         if args.plot and not args.plot.lower().endswith(".png"):
             raise InvalidInput("--plot", "the plot's file name must end in .png")
-        spec = load_sweep(_read(args.file))
+        spec = load_sweep(read_request_text(args.file, MAX_SWEEP_BYTES, "a sweep file"))
         enabled = sys.stderr.isatty() if args.progress is None else args.progress
         bar = _Bar(spec.size, enabled)
         info: dict[str, Any] = {}
@@ -131,16 +115,7 @@ def _run(args: argparse.Namespace) -> int:
         finally:
             bar.close()
             sys.stdout.flush()
-        rows.sort(key=lambda r: r.index)
-        result = SweepResult(
-            spec,
-            rows,
-            info.get("engine", "?"),
-            info.get("workers", 0),
-            info.get("chunks", 0),
-            time.perf_counter() - t0,
-            info.get("stopped"),
-        )
+        result = SweepResult.collect(spec, rows, info, time.perf_counter() - t0)
         if args.out:
             write_table(args.out, result.columns, result.records())
         if args.plot:
