@@ -50,6 +50,7 @@ from ._channel import JointChannel
 from ._filtered import filtered_covariance
 from ._finite_horizon import FiniteHorizonReport, expected_covariance
 from ._kernel import PRECISION_RATIO, GroupedRiccatiStep, RiccatiStep, healthy, traces
+from ._outage_target import outage_target, parse_outage_target
 from ._setup import (
     DEFAULT_SIMULATION_LIMITS,
     PERCENTILES,
@@ -60,7 +61,6 @@ from ._setup import (
     parse_options,
     sim_system,
 )
-from ._outage_target import outage_target, parse_outage_target
 from ._stationary import StationaryReport, parse_thresholds, stationary_report
 
 #: Seconds the simulation may spend on Theorem 1's report (tail exponent, growth rate) before going without it.
