@@ -349,9 +349,9 @@ class BoundsReport(Report):
         else:
             lines.append(f"  V_bar: none ({cov.v_bar.reason})")
         if cov.filtered is not None and (cov.filtered.lower is not None or cov.filtered.upper is not None):
-            lo, up = cov.filtered.lower, cov.filtered.upper
-            lo_t = "none" if lo is None else f"{np.trace(lo):.6g}"
-            up_t = "none" if up is None else f"{np.trace(up):.6g}"
+            f_lo, f_up = cov.filtered.lower, cov.filtered.upper
+            lo_t = "none" if f_lo is None else f"{np.trace(f_lo):.6g}"
+            up_t = "none" if f_up is None else f"{np.trace(f_up):.6g}"
             lines.append(f"  filtered P(t|t): trace of lim E in [{lo_t}, {up_t}] (from S_bar and V_bar)")
         if self.p_hat is not None:
             parts = []
