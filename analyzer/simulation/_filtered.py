@@ -44,17 +44,17 @@ def filtered_covariance(P: np.ndarray, C: np.ndarray, R: np.ndarray, rowmask: np
     >>> filtered_covariance(P, np.eye(1), np.eye(1), np.array([[1.0], [0.0]]))[:, 0, 0].tolist()
     [0.8, 4.0]
     """
-    CP = np.einsum("pn,mnk->mpk", C, P)
+    CP = np.matmul(C, P)
     if rowmask is not None:
         CP = CP * rowmask[:, :, None]
-    S = np.einsum("mpk,qk->mpq", CP, C) + R
+    S = np.matmul(CP, C.T) + R
     if rowmask is not None:
         outer = rowmask[:, :, None] * rowmask[:, None, :]
         S = S * outer + np.eye(C.shape[0]) * (1.0 - rowmask)[:, :, None]
     if C.shape[0] == 1:
         corr = CP[:, 0, :, None] * CP[:, 0, None, :] / S[:, 0, 0, None, None]
     else:
-        corr = np.einsum("mpk,mpl->mkl", CP, np.linalg.solve(S, CP))
+        corr = np.matmul(np.swapaxes(CP, 1, 2), np.linalg.solve(S, CP))
         corr = 0.5 * (corr + np.swapaxes(corr, 1, 2))
     return P - corr
 
