@@ -41,7 +41,8 @@ def filtered_covariance(P: np.ndarray, C: np.ndarray, R: np.ndarray, rowmask: np
     >>> import numpy as np
     >>> from kfio.simulation._filtered import filtered_covariance
     >>> P = np.full((2, 1, 1), 4.0)
-    >>> filtered_covariance(P, np.eye(1), np.eye(1), np.array([[1.0], [0.0]]))[:, 0, 0].tolist()
+    >>> out = filtered_covariance(P, np.eye(1), np.eye(1), np.array([[1.0], [0.0]]))
+    >>> np.round(out[:, 0, 0], 12).tolist()
     [0.8, 4.0]
     """
     CP = np.matmul(C, P)
