@@ -451,5 +451,5 @@ def _exact_analysis(request: Request) -> Any | None:
             dataclasses.replace(request, options={}),
             Budget(seconds=min(EXACT_ANALYSIS_S, request.time_budget_s or EXACT_ANALYSIS_S)),
         )
-    except AnalyzerError:
+    except (AnalyzerError, ArithmeticError):  # e.g. an OverflowError of the tail exponent at a 1e160 modulus
         return None
