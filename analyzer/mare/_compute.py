@@ -26,6 +26,7 @@ from .._budget import Budget
 from ..errors import InvalidInput
 from ..model._types import Request, to_float
 from ._certificate import ExactPlant
+from ._filtered import filtered_bounds, filtered_mean
 from ._lmi import v_bar_sdp
 from ._options import BoundsOptions, parse_bounds_options
 from ._phat import PHat, p_hat_sequence
@@ -112,9 +113,12 @@ def _covariance(model: ArrivalModel, budget: Budget) -> CovarianceBounds:
     S = s_bar(model.A, model.Q, p0)
     res = None if S is None else lyapunov_residual(S, model.A, model.Q, p0)
     it = solve_v_bar(model, budget=budget)
+    filtered = filtered_bounds(model, S, it.matrix)
     if it.matrix is None:
-        return CovarianceBounds(S, res, it, None, "not solved: V_bar does not exist, the SDP would be unbounded")
-    return CovarianceBounds(S, res, it, v_bar_sdp(model), None)
+        return CovarianceBounds(
+            S, res, it, None, "not solved: V_bar does not exist, the SDP would be unbounded", filtered
+        )
+    return CovarianceBounds(S, res, it, v_bar_sdp(model), None, filtered)
 
 
 def _p_hat(A, C, Q, R, lam: float, horizon: int, budget: Budget) -> PHatBounds:
@@ -124,7 +128,10 @@ def _p_hat(A, C, Q, R, lam: float, horizon: int, budget: Budget) -> PHatBounds:
         why = "(1 - lambda) rho(A)^2 >= 1: E[P_t] diverges, and P_hat_N >= lim E[P_t]"
         return PHatBounds(horizon, tuple(PHat(N, None, 0, None, 0, why) for N in wanted))
     seq = p_hat_sequence(A, C, Q, R, lam, wanted, budget=budget)
-    return PHatBounds(horizon, tuple(seq[N] for N in wanted))
+    model = ArrivalModel(A, Q, (C,), (R,), (1.0 - lam, lam))
+    entries = tuple(seq[N] for N in wanted)
+    filtered = tuple(None if e.matrix is None else filtered_mean(model, e.matrix) for e in entries)
+    return PHatBounds(horizon, entries, filtered)
 
 
 def _region(search: CertifiedSearch, opts: BoundsOptions, rho: float, request: Request, budget: Budget) -> RegionMap:

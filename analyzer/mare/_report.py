@@ -18,6 +18,7 @@ from .._reporting import Report, stamp
 from ..model._exact import fraction_text
 from ..model._types import Packet
 from ._certificate import StabilityCertificate
+from ._filtered import FilteredBounds
 from ._lmi import SDPSolution
 from ._phat import PHat
 from ._riccati import VBarIteration
@@ -88,6 +89,7 @@ class CovarianceBounds:
     v_bar: VBarIteration
     sdp: SDPSolution | None
     sdp_reason: str | None
+    filtered: FilteredBounds | None = None
 
     @property
     def sdp_difference(self) -> float | None:
@@ -145,6 +147,8 @@ class CovarianceBounds:
                 "S_bar_le_V_bar": None if order is None else bool(order >= -1e-9),
                 "min_eigenvalue_of_difference_relative": num(order),
             },
+            "covariance": "predictor P(t|t-1): S_bar <= lim E[P(t|t-1)] <= V_bar",
+            "filtered": None if self.filtered is None else self.filtered.to_dict(),
         }
 
 
@@ -154,6 +158,8 @@ class PHatBounds:
 
     horizon: int
     entries: tuple[PHat, ...]
+    #: ``(1 - lambda) P_hat_N + lambda F(P_hat_N)`` per entry: the filtered counterpart (kfio.mare._filtered)
+    filtered: tuple[np.ndarray | None, ...] = ()
 
     def subsequences_monotone(self) -> bool | None:
         """``P_hat_{cN} <= P_hat_N`` (seed 002 Theorem 1, eq. 18) for every pair present, up to rounding."""
@@ -169,7 +175,8 @@ class PHatBounds:
     def to_dict(self) -> dict[str, Any]:
         t1 = next((_trace(e.matrix) for e in self.entries if e.N == 1), None)
         out = []
-        for e in self.entries:
+        filtered = self.filtered or (None,) * len(self.entries)
+        for e, f in zip(self.entries, filtered):
             t = _trace(e.matrix)
             out.append(
                 {
@@ -182,12 +189,15 @@ class PHatBounds:
                     "started_from_N": e.start,
                     "last_step": num(e.last_step),
                     "reason": e.reason,
+                    "filtered_trace": _trace(f),
                 }
             )
         return {
             "horizon": self.horizon,
             "method": "fixed point of g_N (Rohr, Marelli and Fu 2010, eqs. 11, 15, 22), g_N evaluated level by level on batches",
             "entries": out,
+            "covariance": "predictor P(t|t-1); filtered_trace is the trace of sum_S pi(S) F_S(P_hat_N), an upper "
+            "bound of lim sup E[P(t|t)] by the concavity argument of the filtered V_bar",
             "monotone_subsequences_hold": self.subsequences_monotone(),
         }
 
@@ -330,14 +340,19 @@ class BoundsReport(Report):
         cov = self.covariance
         s = cov.s_bar
         s_text = f"trace {np.trace(s):.6g}" if s is not None else "none"
-        lines.append(f"  S_bar (lower bound of lim E[P]): {s_text}")
+        lines.append(f"  S_bar (lower bound of lim E[P(t|t-1)]): {s_text}")
         V = cov.v_bar.matrix
         if V is not None:
             d = cov.sdp_difference
             agree = f"SDP agrees to {d:.1e}" if d is not None else f"SDP: {cov.sdp_reason or 'no answer'}"
-            lines.append(f"  V_bar (upper bound of lim E[P]): trace {np.trace(V):.6g} ({agree})")
+            lines.append(f"  V_bar (upper bound of lim E[P(t|t-1)]): trace {np.trace(V):.6g} ({agree})")
         else:
             lines.append(f"  V_bar: none ({cov.v_bar.reason})")
+        if cov.filtered is not None and (cov.filtered.lower is not None or cov.filtered.upper is not None):
+            f_lo, f_up = cov.filtered.lower, cov.filtered.upper
+            lo_t = "none" if f_lo is None else f"{np.trace(f_lo):.6g}"
+            up_t = "none" if f_up is None else f"{np.trace(f_up):.6g}"
+            lines.append(f"  filtered P(t|t): trace of lim E in [{lo_t}, {up_t}] (from S_bar and V_bar)")
         if self.p_hat is not None:
             parts = []
             t1 = None

@@ -47,6 +47,7 @@ from ..errors import InvalidInput, LimitExceeded
 from ..model._exact import value_text
 from ..model._types import Request
 from ._channel import JointChannel
+from ._filtered import filtered_covariance
 from ._kernel import PRECISION_RATIO, RiccatiStep
 from ._setup import (
     DEFAULT_SIMULATION_LIMITS,
@@ -78,7 +79,10 @@ class FiniteHorizonReport(Report):
     P0:
         The initial covariance.
     mean_covariance:
-        ``(T + 1, n, n)``; NaN from the first step at which float64 overflowed.
+        ``(T + 1, n, n)``: the predictor ``E[P(t|t-1)]``; NaN from the first
+        step at which float64 overflowed.
+    filtered_mean_covariance:
+        ``(T + 1, n, n)``: the filtered ``E[P(t|t)]`` over the same sequences.
     imprecise_probability:
         ``(T + 1,)``: probability of the sequences that went through a
         measurement update beyond :data:`kfio.simulation._kernel.PRECISION_RATIO`
@@ -92,6 +96,13 @@ class FiniteHorizonReport(Report):
     P0: np.ndarray
     mean_covariance: np.ndarray
     imprecise_probability: np.ndarray
+    filtered_mean_covariance: np.ndarray | None = None
+
+    @property
+    def filtered_mean_trace(self) -> np.ndarray | None:
+        """``trace(E[P(t|t)])`` for ``t = 0..T`` (NaN after divergence), or ``None``."""
+        f = self.filtered_mean_covariance
+        return None if f is None else np.einsum("tii->t", f)
 
     @property
     def mean_trace(self) -> np.ndarray:
@@ -125,13 +136,19 @@ class FiniteHorizonReport(Report):
     def to_dict(self) -> dict[str, Any]:
         growth = self.growth_per_step()
         last_ok = self.mean_covariance[-1]
+        ftr = self.filtered_mean_trace
         return {
             **stamp(),
             "steps": self.steps,
             "sequences": self.sequences,
             "initial_channel": self.initial_channel,
+            "covariance": "predictor P(t|t-1): mean_trace, final_mean_covariance",
             "mean_trace": [json_float(x) for x in self.mean_trace],
             "final_mean_covariance": matrix_or_none(last_ok),
+            "filtered_mean_trace": None if ftr is None else [json_float(x) for x in ftr],
+            "final_filtered_mean_covariance": None
+            if self.filtered_mean_covariance is None
+            else matrix_or_none(self.filtered_mean_covariance[-1]),
             "diverged": self.diverged_at is not None,
             "diverged_at": self.diverged_at,
             "imprecise_probability": json_float(self.imprecise_probability[-1]),
@@ -142,10 +159,12 @@ class FiniteHorizonReport(Report):
         lines = [
             f"Exact E[P_t] over {self.sequences} arrival sequences (t = 0..{self.steps}, "
             f"channel history at t = 0: {self.initial_channel})",
-            "   t   trace E[P_t]",
+            "   t   trace E[P(t|t-1)]   trace E[P(t|t)]",
         ]
+        ftr = self.filtered_mean_trace
         for t, x in enumerate(self.mean_trace):
-            lines.append(f"{t:4d}   {x:.6g}" if math.isfinite(x) else f"{t:4d}   diverged (float64 overflow)")
+            f = f"   {ftr[t]:15.6g}" if ftr is not None and math.isfinite(ftr[t]) else ""
+            lines.append(f"{t:4d}   {x:17.6g}{f}" if math.isfinite(x) else f"{t:4d}   diverged (float64 overflow)")
         growth = self.growth_per_step()
         if growth is not None:
             lines.append(f"growth per step over the second half: x{growth:.4g}")
@@ -233,8 +252,14 @@ def enumerate_expectation(
     steps: int,
     initial_channel: str = "stationary",
     budget: Budget | None = None,
+    filtered_out: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """``E[P_t]`` for ``t = 0..steps``, and the probability of imprecise sequences.
+
+    If ``filtered_out`` (shape ``(steps + 1, n, n)``, zeros) is given, it
+    receives the exact filtered mean ``E[P(t|t)] = sum_S P(Gamma_t = S, g_t = g)
+    (P_S - P_S C_g'(C_g P_S C_g' + R_gg)^-1 C_g P_S)`` over the same sequences
+    and the arrival pattern ``g`` at ``t`` (:mod:`kfio.simulation._filtered`).
 
     The low-level route (no option parsing, no limits): ``sim`` and ``P0``
     as arrays.  With a Bernoulli channel, ``enumerate_expectation(sim, X,
@@ -267,6 +292,11 @@ def enumerate_expectation(
             weights = batch.w.sum(axis=1)
             sums[t] += np.einsum("k,kij->ij", weights, batch.P)
             imprecise[t] += weights[batch.imprecise].sum()
+            if filtered_out is not None:
+                for g in chan.patterns():
+                    wg = (batch.w * chan.pattern_probability(batch.hist, g)).sum(axis=1)
+                    mask = np.broadcast_to(sim.row_mask(np.array(g, dtype=float)), (len(batch), sim.C.shape[0]))
+                    filtered_out[t] += np.einsum("k,kij->ij", wg, filtered_covariance(batch.P, sim.C, sim.R, mask))
             if t == steps:
                 continue
             if budget is not None:
@@ -275,9 +305,10 @@ def enumerate_expectation(
             if t + 1 >= collapse_at and children.w.shape[1] > 1:
                 children = children.collapse()
             stack.extend((t + 1, c) for c in children.chunks(chunk))
-    bad = ~np.isfinite(sums).all(axis=(1, 2))
-    if bad.any():
-        sums[int(np.flatnonzero(bad)[0]) :] = np.nan
+    for arr in (sums,) if filtered_out is None else (sums, filtered_out):
+        bad = ~np.isfinite(arr).all(axis=(1, 2))
+        if bad.any():
+            arr[int(np.flatnonzero(bad)[0]) :] = np.nan
     return sums, imprecise
 
 
@@ -349,9 +380,11 @@ def expected_covariance(
     if budget is None and request.time_budget_s is not None:
         budget = Budget(seconds=request.time_budget_s)
     chan = JointChannel.from_packets(sim.packets)
-    means, imprecise = enumerate_expectation(sim, opts.P0, steps, opts.initial_channel, budget)
+    filtered = np.zeros((steps + 1, sim.n, sim.n))
+    means, imprecise = enumerate_expectation(sim, opts.P0, steps, opts.initial_channel, budget, filtered)
     means.setflags(write=False)
     imprecise.setflags(write=False)
+    filtered.setflags(write=False)
     return FiniteHorizonReport(
         steps=steps,
         sequences=1 << (chan.m * steps),
@@ -359,4 +392,5 @@ def expected_covariance(
         P0=opts.P0,
         mean_covariance=means,
         imprecise_probability=imprecise,
+        filtered_mean_covariance=filtered,
     )

@@ -55,7 +55,17 @@ from ..model._types import Matrix, Packet, Request, packets_of, to_float
 OPTIONS_FIELD = "/options/simulate"
 PERCENTILES = (50, 90, 99)
 INITIAL_CHANNELS = ("stationary", "all_arrived", "all_lost")
-_KEYS = {"steps", "trajectories", "seed", "P0", "exact_steps", "initial_channel", "percentiles", "outage_thresholds"}
+_KEYS = {
+    "steps",
+    "trajectories",
+    "seed",
+    "P0",
+    "exact_steps",
+    "initial_channel",
+    "percentiles",
+    "outage_thresholds",
+    "outage_target",
+}
 
 
 @dataclass(frozen=True)

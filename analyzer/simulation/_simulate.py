@@ -47,6 +47,7 @@ from .._json import json_float
 from .._reporting import Report, stamp
 from ..model._types import Request
 from ._channel import JointChannel
+from ._filtered import filtered_covariance
 from ._finite_horizon import FiniteHorizonReport, expected_covariance
 from ._kernel import (
     DIVERGENCE_TRACE,
@@ -57,6 +58,7 @@ from ._kernel import (
     healthy,
     traces,
 )
+from ._outage_target import outage_target, parse_outage_target
 from ._setup import (
     DEFAULT_SIMULATION_LIMITS,
     PERCENTILES,
@@ -100,6 +102,9 @@ class MonteCarloRun:
     final_mean_covariance: np.ndarray | None
     arrival_rate: np.ndarray  # empirical, per packet
     final_traces: np.ndarray | None = None  # trace(P_T) per trajectory, +inf where diverged
+    filtered_stats: TraceStatistics | None = None  # the same statistics of trace(P(t|t))
+    final_mean_filtered_covariance: np.ndarray | None = None
+    final_filtered_traces: np.ndarray | None = None
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -113,7 +118,10 @@ class SimulationReport(Report):
     stats:
         Per-step statistics of ``trace(P_t)``.
     final_mean_covariance:
-        Sample mean of ``P_T``; ``None`` if a trajectory diverged.
+        Sample mean of the predictor ``P_T = P(T|T-1)``; ``None`` if a trajectory diverged.
+    filtered_stats, final_mean_filtered_covariance:
+        The same for the filtered ``P(t|t)`` (:mod:`kfio.simulation._filtered`),
+        computed per trajectory from the predictor and the same arrivals.
     arrival_rate, stationary_arrival_rate:
         Observed and long-run fraction of arrivals per packet (a check on the
         channel sampler).
@@ -131,6 +139,9 @@ class SimulationReport(Report):
     packet_names: tuple[str, ...]
     exact: FiniteHorizonReport | None = None
     stationary: StationaryReport | None = None
+    filtered_stats: TraceStatistics | None = None
+    final_mean_filtered_covariance: np.ndarray | None = None
+    outage_target: Any = None  # kfio.simulation._outage_target.OutageTarget when asked
 
     @property
     def mean_trace(self) -> np.ndarray:
@@ -214,6 +225,23 @@ class SimulationReport(Report):
             },
             "exact": None if self.exact is None else self.exact.to_dict(),
             "stationary": None if self.stationary is None else self.stationary.to_dict(),
+            "covariance": "predictor P(t|t-1): mean_trace, ci95_*, percentiles and final_mean_covariance",
+            "filtered": self._filtered_dict(),
+            "outage_target": None if self.outage_target is None else self.outage_target.to_dict(),
+        }
+
+    def _filtered_dict(self) -> dict[str, Any] | None:
+        f = self.filtered_stats
+        if f is None:
+            return None
+        half = Z95 * f.sem
+        return {
+            "covariance": "filtered P(t|t) = P - P C_S'(C_S P C_S' + R_SS)^-1 C_S P, from the same arrivals",
+            "mean_trace": _series(f.mean),
+            "ci95_low": _series(np.maximum(f.mean - half, 0.0)),
+            "ci95_high": _series(f.mean + half),
+            "percentiles": {str(q): _series(f.percentiles[i]) for i, q in enumerate(PERCENTILES)},
+            "final_mean_covariance": matrix_or_none(self.final_mean_filtered_covariance),
         }
 
     def summary(self) -> str:
@@ -223,6 +251,7 @@ class SimulationReport(Report):
         lines += [
             f"Monte Carlo: {o.trajectories} trajectories x {o.steps} steps, seed {o.seed}, "
             f"channel history at t = 0: {o.initial_channel}, P0 = {'Q' if o.P0_is_default else 'given'}",
+            "trace of the predictor P(t|t-1) (the filtered P(t|t) is in the JSON under 'filtered')",
             f"{'t':>6}  {'mean trace(P_t)':>14}  {'95% band':>25}  {'median':>11}  {'90%':>11}  {'99%':>11}",
         ]
         for t in _display_times(o.steps):
@@ -244,8 +273,16 @@ class SimulationReport(Report):
                 f"exact E[P_t] (t <= {self.exact.steps}): inside the 95% band at {agree['within_ci95']} of "
                 f"{agree['steps_compared']} steps (max |z| = {'n/a' if max_z is None else f'{max_z:.3g}'})"
             )
+        if self.filtered_stats is not None:
+            f = self.filtered_stats
+            lines.append(
+                f"filtered P(t|t) at t = {o.steps}: mean trace {_fmt(f.mean[-1])}, median "
+                f"{_fmt(f.percentiles[PERCENTILES.index(50)][-1])}"
+            )
         if self.stationary is not None:
             lines.extend(w for w in self.stationary.summary_lines() if not w.startswith("warning"))
+        if self.outage_target is not None:
+            lines.extend(self.outage_target.summary_lines())
         return "\n".join(lines)
 
 
@@ -302,6 +339,12 @@ def run_monte_carlo(
     pct = np.empty((len(PERCENTILES), T + 1))
     diverged = np.zeros(T + 1, dtype=np.int64)
     arrivals = np.zeros(chan.m)
+    fmean, fstd = np.empty(T + 1), np.empty(T + 1)
+    fpct = np.empty((len(PERCENTILES), T + 1))
+
+    def filtered(P: np.ndarray, g: np.ndarray) -> np.ndarray:
+        return filtered_covariance(P, sim.C, sim.R, sim.row_mask(g))
+
     with np.errstate(all="ignore"):
         mean[0], std[0], pct[:, 0] = _record(traces(P), alive)
         for t in range(T):
@@ -311,10 +354,13 @@ def run_monte_carlo(
             arrivals += g.sum(axis=0)
             mask = g.astype(float) if chan.m == 1 else sim.row_mask(g)
             if isinstance(step, PackedRiccatiStep):
+                # the filtered P(t|t) needs the full predictor P(t|t-1) of this step
+                fmean[t], fstd[t], fpct[:, t] = _record(traces(filtered(step.unpack(h), g)), alive)
                 h, ratio = step.apply_packed(h, mask)
                 tr = step.traces(h)
                 ok = _healthy_packed(h, tr)
             else:
+                fmean[t], fstd[t], fpct[:, t] = _record(traces(filtered(P, g)), alive)
                 P, ratio = step.apply(P, mask)
                 tr = traces(P)
                 ok = healthy(P, tr)
@@ -328,13 +374,24 @@ def run_monte_carlo(
                     P[~alive] = 0.0
             diverged[t + 1] = M - int(alive.sum())
             mean[t + 1], std[t + 1], pct[:, t + 1] = _record(tr, alive)
-    if isinstance(step, PackedRiccatiStep):
-        P = step.unpack(h)
+        if isinstance(step, PackedRiccatiStep):
+            P = step.unpack(h)
+        # the arrivals at T, drawn after every draw the predictor used: same seed, same predictor output
+        g = rng.random((M, chan.m)) < chan.arrival_probability(hist)
+        PfT = filtered(P, g)
+        fmean[T], fstd[T], fpct[:, T] = _record(traces(PfT), alive)
     final = P.mean(axis=0) if alive.all() else None
     stats = TraceStatistics(mean=mean, std=std, percentiles=pct, diverged=diverged, trajectories=M)
+    fstats = TraceStatistics(mean=fmean, std=fstd, percentiles=fpct, diverged=diverged, trajectories=M)
     final_traces = np.where(alive, traces(P), np.inf)
     return MonteCarloRun(
-        stats=stats, final_mean_covariance=final, arrival_rate=arrivals / (M * T), final_traces=final_traces
+        stats=stats,
+        final_mean_covariance=final,
+        arrival_rate=arrivals / (M * T),
+        final_traces=final_traces,
+        filtered_stats=fstats,
+        final_mean_filtered_covariance=PfT.mean(axis=0) if alive.all() else None,
+        final_filtered_traces=np.where(alive, traces(PfT), np.inf),
     )
 
 
@@ -358,7 +415,9 @@ def simulate(
     request:
         A validated request with ``Q`` and ``R``; ``options.simulate`` holds
         steps, trajectories, seed, P0, exact_steps and initial_channel (see
-        :mod:`kfio.simulation._setup`).
+        :mod:`kfio.simulation._setup`), ``outage_thresholds`` (see
+        :mod:`kfio.simulation._stationary`) and ``outage_target`` (see
+        :mod:`kfio.simulation._outage_target`).
     budget:
         Work budget; default: ``request.time_budget_s`` if given.
     limits:
@@ -395,9 +454,12 @@ def simulate(
     if opts.exact_steps is not None:
         exact = expected_covariance(request, opts.exact_steps, budget, limits)
     thresholds = parse_thresholds(request)
+    target_spec = parse_outage_target(request)
     run = run_monte_carlo(sim, opts, budget)
     assert run.final_traces is not None
-    stationary = stationary_report(run.final_traces, opts.steps, thresholds, _exact_analysis(request))
+    stationary = stationary_report(
+        run.final_traces, opts.steps, thresholds, _exact_analysis(request), run.final_filtered_traces
+    )
     return SimulationReport(
         options=opts,
         stats=run.stats,
@@ -407,6 +469,9 @@ def simulate(
         packet_names=tuple(pk.name if pk.per_sensor and pk.name is not None else "" for pk in sim.packets),
         exact=exact,
         stationary=stationary,
+        filtered_stats=run.filtered_stats,
+        final_mean_filtered_covariance=run.final_mean_filtered_covariance,
+        outage_target=None if target_spec is None else outage_target(sim, opts, target_spec, run_monte_carlo, budget),
     )
 
 
@@ -420,5 +485,5 @@ def _exact_analysis(request: Request) -> Any | None:
             dataclasses.replace(request, options={}),
             Budget(seconds=min(EXACT_ANALYSIS_S, request.time_budget_s or EXACT_ANALYSIS_S)),
         )
-    except AnalyzerError:
+    except (AnalyzerError, ArithmeticError):  # e.g. an OverflowError of the tail exponent at a 1e160 modulus
         return None

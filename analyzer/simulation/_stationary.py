@@ -113,8 +113,11 @@ class StationaryReport:
     step, samples:
         ``T`` and the number of trajectories ``M``.
     quantiles:
-        ``(q, value, low, high)``: the sample quantile and its 95% interval
-        (``inf`` where a diverged trajectory sits at or below it).
+        ``(q, value, low, high)``: the sample quantile of the predictor
+        ``trace(P(T|T-1))`` and its 95% interval (``inf`` where a diverged
+        trajectory sits at or below it).
+    filtered_quantiles:
+        The same for the filtered ``trace(P(T|T))`` (same trajectories and arrivals).
     outage:
         ``(threshold, probability, low, high)`` with Wilson 95% intervals.
     hill, hill_interval, hill_k:
@@ -139,6 +142,7 @@ class StationaryReport:
     growth_rate: float | None
     warnings: tuple[str, ...]
     verdict: str | None = None
+    filtered_quantiles: tuple[tuple[float, float, float, float], ...] = ()
 
     @property
     def mean_unreliable(self) -> bool:
@@ -151,7 +155,11 @@ class StationaryReport:
             "step": self.step,
             "samples": self.samples,
             "method": "one sample of P_T per trajectory (Kar, Sinopoli and Moura 2012: P_t converges in distribution)",
+            "covariance": "predictor P(T|T-1) (quantiles, outage, tail exponent)",
             "quantiles": [{"q": q, "trace": fin(v), "ci95": [fin(lo), fin(hi)]} for q, v, lo, hi in self.quantiles],
+            "filtered_quantiles": [
+                {"q": q, "trace": fin(v), "ci95": [fin(lo), fin(hi)]} for q, v, lo, hi in self.filtered_quantiles
+            ],
             "outage": [{"threshold": m, "probability": p, "ci95": [lo, hi]} for m, p, lo, hi in self.outage],
             "tail_exponent_hill": fin(self.hill),
             "tail_exponent_hill_ci95": list(self.hill_interval) if self.hill_interval else None,
@@ -167,7 +175,10 @@ class StationaryReport:
     def summary_lines(self) -> list[str]:
         lines = [w for w in (f"warning: {w}" for w in self.warnings)]
         qs = ", ".join(f"{100 * q:g}%: {v:.5g} [{lo:.4g}, {hi:.4g}]" for q, v, lo, hi in self.quantiles)
-        lines.append(f"quantiles of trace(P_{self.step}) over {self.samples} trajectories (95% CI): {qs}")
+        lines.append(f"quantiles of the predictor trace(P_{self.step}) over {self.samples} trajectories (95% CI): {qs}")
+        if self.filtered_quantiles:
+            fq = ", ".join(f"{100 * q:g}%: {v:.5g}" for q, v, _, _ in self.filtered_quantiles)
+            lines.append(f"quantiles of the filtered trace(P({self.step}|{self.step})): {fq}")
         for m, p, lo, hi in self.outage:
             lines.append(f"outage P(trace P > {m:g}) = {p:.4g}  (95% CI [{lo:.4g}, {hi:.4g}])")
         exact = f"{self.kappa:.4g}" if self.kappa is not None else "n/a"
@@ -188,7 +199,11 @@ def _quantile_ci(x: np.ndarray, q: float) -> tuple[float, float, float]:
 
 
 def stationary_report(
-    final_traces: np.ndarray, step: int, thresholds: Sequence[float], analysis: Any | None
+    final_traces: np.ndarray,
+    step: int,
+    thresholds: Sequence[float],
+    analysis: Any | None,
+    filtered_traces: np.ndarray | None = None,
 ) -> StationaryReport:
     """Quantiles, outage probabilities and tail exponents of ``trace(P_T)`` (diverged = ``inf``).
 
@@ -201,6 +216,8 @@ def stationary_report(
     analysis:
         The :class:`~kfio.stability._verdict.StabilityReport` of the same
         request, or ``None`` (then no exact exponent and no warning).
+    filtered_traces:
+        ``trace(P(T|T))`` per trajectory, for ``filtered_quantiles`` (optional).
     """
     x = np.where(np.isfinite(final_traces), final_traces, np.inf)
     M = x.size
@@ -227,8 +244,12 @@ def stationary_report(
                     else ""
                 )
             )
+    fq: tuple[tuple[float, float, float, float], ...] = ()
+    if filtered_traces is not None:
+        xf = np.where(np.isfinite(filtered_traces), filtered_traces, np.inf)
+        fq = tuple((q, *_quantile_ci(xf, q)) for q in QUANTILES)
     return StationaryReport(
-        step, M, quantiles, outage, h, interval, k, kappa, kappa_text, growth, tuple(warnings), verdict
+        step, M, quantiles, outage, h, interval, k, kappa, kappa_text, growth, tuple(warnings), verdict, fq
     )
 
 

@@ -397,7 +397,12 @@ COMPONENTS: dict[str, dict[str, Any]] = {
                 "type": "object",
                 "description": (
                     "Options of the simulate command.  outage_thresholds: a list of up to 20 positive numbers M; "
-                    "the report's stationary.outage gives P(trace P > M) with a 95% interval for each."
+                    "the report's stationary.outage gives P(trace P > M) with a 95% interval for each.  "
+                    'outage_target: {"threshold": M, "epsilon": e, "tolerance": optional, default 1/256}; the '
+                    "report's outage_target gives the smallest arrival probability at which the estimated "
+                    "stationary outage P(trace P > M) is at most e, with the bracket where its 95% interval "
+                    "straddles e (one Bernoulli packet; bisection over lambda with common random numbers; "
+                    "estimated, not certified)."
                 ),
             },
         },
@@ -480,8 +485,21 @@ COMPONENTS: dict[str, dict[str, Any]] = {
             "critical_probability": {"type": ["object", "null"]},
             "sensors": {"type": ["array", "null"]},
             "variance_threshold": {"type": ["object", "null"]},
-            "covariance": {"type": "object"},
-            "p_hat": {"type": ["object", "null"]},
+            "covariance": {
+                "type": "object",
+                "description": (
+                    "S_bar and V_bar bound lim E[P(t|t-1)], the one-step predictor (Sinopoli et al. 2004, "
+                    "Theorems 3-4).  covariance.filtered gives the filtered P(t|t) counterparts: lower "
+                    "pi(nothing arrives) S_bar, upper sum_S pi(S) (V_bar - V_bar C_S'(C_S V_bar C_S' + R_SS)^-1 "
+                    "C_S V_bar), valid because the measurement update is monotone and concave in P and the "
+                    "arrivals at t are independent of P(t|t-1)."
+                ),
+            },
+            "p_hat": {
+                "type": ["object", "null"],
+                "description": "P_hat_N bounds the predictor (Rohr, Marelli and Fu 2010); each entry's "
+                "filtered_trace bounds the filtered P(t|t) the same way as covariance.filtered.upper.",
+            },
             "region": {"type": ["object", "null"]},
             "notes": {"type": "array", "items": {"type": "string"}},
         },
@@ -508,7 +526,28 @@ COMPONENTS: dict[str, dict[str, Any]] = {
             },
             "diverged": {"type": "boolean"},
             "checks": {"type": "object"},
-            "exact": {"type": ["object", "null"]},
+            "exact": {
+                "type": ["object", "null"],
+                "description": "Exact E[P(t|t-1)] (mean_trace) and E[P(t|t)] (filtered_mean_trace) by "
+                "enumeration of the arrival sequences.",
+            },
+            "covariance": {
+                "type": "string",
+                "description": "mean_trace, ci95_*, percentiles and final_mean_covariance describe the "
+                "one-step predictor P(t|t-1).",
+            },
+            "filtered": {
+                "type": ["object", "null"],
+                "description": "The same statistics for the filtered P(t|t) = P - P C_S'(C_S P C_S' + R_SS)^-1 "
+                "C_S P, computed per trajectory from the predictor and the same arrivals.",
+            },
+            "outage_target": {
+                "type": ["object", "null"],
+                "description": "With options.simulate.outage_target: the smallest arrival probability at "
+                "which the estimated stationary outage P(trace P > M) is at most epsilon, and the bracket "
+                "[confidently_insufficient, confidently_sufficient] where its Wilson 95% interval straddles "
+                "epsilon; label 'estimated'.",
+            },
             "stationary": {
                 "type": ["object", "null"],
                 "description": (

@@ -1,0 +1,207 @@
+"""What arrival probability keeps the estimated outage ``P(trace P > M)`` below ``epsilon``?  (One Bernoulli packet.)
+
+``options.simulate.outage_target: {"threshold": M, "epsilon": e}`` asks for
+the smallest arrival probability ``lambda`` at which the stationary outage
+probability of the predictor, ``P(trace P_T > M)`` (estimated as in
+:mod:`kfio.simulation._stationary`, one sample of ``P_T`` per trajectory; Kar,
+Sinopoli and Moura 2012 for the convergence in distribution), is at most
+``e``.
+
+Common random numbers make the estimate monotone.  Every probe reruns the
+simulation with the request's seed, so the uniforms ``U_{i,t}`` are the same
+and packet ``t`` of trajectory ``i`` arrives iff ``U_{i,t} < lambda``: the
+arrival sets grow with ``lambda``.  The Riccati map is monotone in ``P`` and
+an arrival never increases it (``Phi_1(P) <= Phi_0(P)``; Sinopoli et al.
+2004, Lemma 1), so every trajectory's ``P_T`` decreases with ``lambda``, and so
+do the outage count, its estimate and both ends of its Wilson 95% interval.
+Three bisections over ``lambda`` in ``[0, 1]`` then give
+
+* ``estimate``: where the estimated outage first is at most ``e``;
+* ``bracket = [confidently_insufficient, confidently_sufficient]``: below the
+  first the whole interval lies above ``e``; from the second on it lies at
+  or below ``e``.  Between them the interval straddles ``e``: the simulation
+  cannot tell.
+
+Each end is known to the bisection tolerance.  All of it is ``estimated``:
+a Monte Carlo answer with sampling error, for one seed and horizon, not a
+certificate.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from fractions import Fraction
+from typing import Any, Callable
+
+import numpy as np
+
+from .._budget import Budget
+from ..errors import InvalidInput
+from ..model._exact import parse_number
+from ..model._types import Request
+from ._setup import SimSystem, SimulateOptions
+from ._stationary import wilson
+
+FIELD = "/options/simulate/outage_target"
+DEFAULT_TOLERANCE = 1 / 256
+_KEYS = ("threshold", "epsilon", "tolerance")
+
+
+@dataclass(frozen=True)
+class OutageTargetSpec:
+    threshold: float
+    epsilon: float
+    tolerance: float
+
+
+def parse_outage_target(request: Request) -> OutageTargetSpec | None:
+    """``options.simulate.outage_target`` or ``None``.
+
+    Raises
+    ------
+    InvalidInput
+        Naming ``/options/simulate/outage_target`` or one of its keys: not an
+        object, unknown key, ``threshold <= 0``, ``epsilon`` outside ``(0, 1)``,
+        ``tolerance`` outside ``(0, 1/4]``, or a channel other than one
+        Bernoulli packet.
+    """
+    raw = request.options.get("simulate", {}).get("outage_target")
+    if raw is None:
+        return None
+    if not isinstance(raw, dict):
+        raise InvalidInput(FIELD, 'outage_target must be an object {"threshold": M, "epsilon": e}')
+    for key in raw:
+        if key not in _KEYS:
+            raise InvalidInput(f"{FIELD}/{str(key)[:64]}", f"unknown key; allowed: {', '.join(_KEYS)}")
+    for key in ("threshold", "epsilon"):
+        if key not in raw:
+            raise InvalidInput(f"{FIELD}/{key}", f"outage_target needs {key!r}")
+    m = parse_number(raw["threshold"], f"{FIELD}/threshold")
+    if m <= 0:
+        raise InvalidInput(f"{FIELD}/threshold", "the outage threshold M must be positive")
+    e = parse_number(raw["epsilon"], f"{FIELD}/epsilon")
+    if not 0 < e < 1:
+        raise InvalidInput(f"{FIELD}/epsilon", "epsilon must lie strictly between 0 and 1")
+    tol = parse_number(raw["tolerance"], f"{FIELD}/tolerance") if "tolerance" in raw else Fraction(1, 256)
+    if not 0 < tol <= Fraction(1, 4):
+        raise InvalidInput(f"{FIELD}/tolerance", "tolerance must lie in (0, 1/4]")
+    ch = request.channel
+    if getattr(ch, "model", None) != "bernoulli" or request.system.sensors and len(request.system.sensors) > 1:
+        raise InvalidInput(FIELD, "outage_target needs one Bernoulli packet (channel.model 'bernoulli')")
+    return OutageTargetSpec(float(m), float(e), float(tol))
+
+
+@dataclass(frozen=True)
+class OutageTarget:
+    """The smallest ``lambda`` with estimated ``P(trace P_T > M) <= epsilon``; see the module docstring.
+
+    Attributes
+    ----------
+    estimate:
+        Smallest probed ``lambda`` (to ``tolerance``) whose outage estimate is
+        at most ``epsilon``; ``None`` if not even ``lambda = 1`` meets it.
+    insufficient, sufficient:
+        The bracket: below ``insufficient`` the 95% interval lies above
+        ``epsilon``; at ``sufficient`` it lies at or below.  ``None`` where no
+        probe in ``[0, 1]`` has that property.
+    probes:
+        ``(lambda, outage, low, high)`` of every simulation run, sorted.
+    """
+
+    threshold: float
+    epsilon: float
+    tolerance: float
+    steps: int
+    trajectories: int
+    seed: int
+    estimate: float | None
+    insufficient: float | None
+    sufficient: float | None
+    probes: tuple[tuple[float, float, float, float], ...]
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "label": "estimated",
+            "threshold": self.threshold,
+            "epsilon": self.epsilon,
+            "covariance": "predictor P(T|T-1)",
+            "method": "bisection over lambda on the stationary outage estimate with common random numbers "
+            "(same seed, arrival iff U < lambda), so the estimate and its Wilson 95% interval decrease with lambda",
+            "steps": self.steps,
+            "trajectories": self.trajectories,
+            "seed": self.seed,
+            "tolerance": self.tolerance,
+            "smallest_arrival_probability_estimate": self.estimate,
+            "bracket": {"confidently_insufficient": self.insufficient, "confidently_sufficient": self.sufficient},
+            "probes": [{"arrival_probability": lam, "outage": p, "ci95": [lo, hi]} for lam, p, lo, hi in self.probes],
+        }
+
+    def summary_lines(self) -> list[str]:
+        def f(x: float | None) -> str:
+            return "none in [0, 1]" if x is None else f"{x:.4g}"
+
+        return [
+            f"outage target P(trace P > {self.threshold:g}) <= {self.epsilon:g} (estimated, {self.trajectories} "
+            f"trajectories x {self.steps} steps): smallest lambda about {f(self.estimate)}; the 95% interval "
+            f"straddles epsilon between {f(self.insufficient)} and {f(self.sufficient)}"
+        ]
+
+
+def _first_true(test: Callable[[float], bool], tol: float) -> float | None:
+    """Smallest ``lambda`` in ``[0, 1]`` (to ``tol``) with ``test`` true, for a test monotone in ``lambda``."""
+    if test(0.0):
+        return 0.0
+    if not test(1.0):
+        return None
+    lo, hi = 0.0, 1.0
+    while hi - lo > tol:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (lo, mid) if test(mid) else (mid, hi)
+    return hi
+
+
+def outage_target(
+    sim: SimSystem,
+    opts: SimulateOptions,
+    spec: OutageTargetSpec,
+    run: Callable[[SimSystem, SimulateOptions, Budget | None], Any],
+    budget: Budget | None = None,
+) -> OutageTarget:
+    """Bisect ``lambda`` for ``P(trace P_T > M) <= epsilon`` (estimated); see the module docstring.
+
+    ``run`` is :func:`kfio.simulation._simulate.run_monte_carlo` (passed in to
+    avoid an import cycle); every probe uses ``opts.seed``.
+    """
+    (pk,) = sim.packets
+    cache: dict[float, tuple[float, float, float]] = {}
+
+    def probe(lam: float) -> tuple[float, float, float]:
+        if lam not in cache:
+            ch = dataclasses.replace(pk.channel, table=(Fraction(lam),))
+            s = dataclasses.replace(sim, packets=(dataclasses.replace(pk, channel=ch),))
+            x = run(s, opts, budget).final_traces
+            k, n = int(np.sum(~(x <= spec.threshold))), x.size
+            cache[lam] = (k / n, *wilson(k, n))
+        return cache[lam]
+
+    eps, tol = spec.epsilon, spec.tolerance
+    estimate = _first_true(lambda lam: probe(lam)[0] <= eps, tol)
+    sufficient = _first_true(lambda lam: probe(lam)[2] <= eps, tol)
+    not_above = _first_true(lambda lam: probe(lam)[1] <= eps, tol)
+    probes = tuple(sorted((lam, *v) for lam, v in cache.items()))
+    return OutageTarget(
+        spec.threshold,
+        eps,
+        tol,
+        opts.steps,
+        opts.trajectories,
+        opts.seed,
+        estimate,
+        not_above,
+        sufficient,
+        probes,
+    )
+
+
+__all__ = ["OutageTarget", "OutageTargetSpec", "outage_target", "parse_outage_target"]
