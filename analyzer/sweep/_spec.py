@@ -252,7 +252,10 @@ def load_sweep(text: str | bytes) -> SweepSpec:
     sweep over those requests.
     """
     if isinstance(text, bytes):
-        text = text.decode("utf-8", errors="strict")
+        try:
+            text = text.decode("utf-8")
+        except UnicodeDecodeError as exc:
+            raise InvalidInput("/", f"the sweep is not UTF-8 text (byte {exc.start})") from None
     lines = [ln for ln in text.splitlines() if ln.strip()]
     if len(lines) > 1 and lines[0].lstrip().startswith("{") and '"system"' in lines[0]:
         try:

@@ -59,8 +59,30 @@ def get_jobstore(request: Request) -> JobStore:
 JobStoreDep = Annotated[JobStore, Depends(get_jobstore)]
 
 
+async def validated(body: bytes, store: JobStore) -> None:
+    """Check a job's request with the one validator before it is queued (in a thread, off the event loop).
+
+    A bad request is a 422 naming the field at once, as on the synchronous
+    endpoint, instead of a job that fails later.
+    """
+    import asyncio
+
+    from kfio import load_request
+
+    from ..problems import problem_from_exception
+
+    try:
+        await asyncio.to_thread(load_request, body, store.settings.limits())
+    except Exception as exc:  # noqa: BLE001 - InvalidInput and friends become their problem document
+        problem = problem_from_exception(exc)
+        if problem.status >= 500:
+            raise
+        raise ProblemError(problem) from None
+
+
 def _submit_route(kind: str) -> None:
     async def submit(body: BodyDep, store: JobStoreDep) -> Response:
+        await validated(body, store)
         job = store.submit(kind, body)
         return Response(
             store.document(job),
@@ -80,7 +102,8 @@ def _submit_route(kind: str) -> None:
             f"Same body as `POST /v1/{kind}`.  Answers 202 with `Location: /v1/jobs/{{id}}` at once; poll that URL. "
             "The job runs in a separate lane of worker processes, with the deployment's job budget "
             "(`KFIO_JOB_TIME_BUDGET_S`, an hour by default) or less if `options.time_budget_s` asks for less.  "
-            "The request is validated when the job runs: an invalid one ends `failed` with a 422 problem.  "
+            "The request is validated before it is queued (422 naming the field); option values that only the "
+            "computation checks end the job `failed` with a 422 problem.  "
             "Jobs are kept in memory: a restart forgets them."
         ),
         response_class=Response,

@@ -138,7 +138,7 @@ def test_option_and_budget_errors_name_the_keyword():
         InvalidInput, match=r"^options\['x'\]: unknown option 'x'; allowed: critical_parameter, ge_grid$"
     ):
         kfio.analyze(sys, ch, options={"x": 1})
-    with pytest.raises(InvalidInput, match=r"^budget: time_budget_s must be in \(0, 3600\]$"):
+    with pytest.raises(InvalidInput, match=r"^budget: time_budget_s must be in \[0.01, 3600\] seconds$"):
         kfio.analyze(sys, ch, budget=-1.0)
     with pytest.raises(InvalidInput, match=r"^steps: the horizon must be a non-negative integer; got -1$"):
         kfio.expected_covariance(sys, ch, -1)

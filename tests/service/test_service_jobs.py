@@ -71,14 +71,20 @@ def test_a_job_gives_the_synchronous_report_byte_for_byte(client: TestClient) ->
     assert r.status_code == 409 and r.headers["content-type"] == PROBLEM
 
 
-def test_an_invalid_request_fails_the_job_with_the_field_named(client: TestClient) -> None:
+def test_an_invalid_request_is_refused_before_it_is_queued(client: TestClient) -> None:
     bad = {**SEED_2X2, "system": {**SEED_2X2["system"], "Q": [[20, 0], [0, -20]]}}
+    r = client.post("/v1/jobs/bounds", content=json.dumps(bad), headers={"content-type": "application/json"})
+    assert r.status_code == 422 and r.headers["content-type"] == PROBLEM and r.json()["field"] == "/system/Q"
+
+
+def test_an_option_only_the_computation_checks_fails_the_job_with_the_field_named(client: TestClient) -> None:
+    bad = {**SEED_2X2, "options": {"bounds": {"horizon": 0}}}
     location = submit(client, "bounds", bad)
     doc = wait_for(client, location, {"done", "failed"})
     assert doc["status"] == "failed"
-    assert doc["problem"]["status"] == 422 and doc["problem"]["field"] == "/system/Q"
+    assert doc["problem"]["status"] == 422 and doc["problem"]["field"] == "/options/bounds/horizon"
     r = client.get(location + "/result")  # the result of a failed job is its problem
-    assert r.status_code == 422 and r.json()["field"] == "/system/Q"
+    assert r.status_code == 422 and r.json()["field"] == "/options/bounds/horizon"
 
 
 def test_a_body_that_is_not_json_is_refused_at_once(client: TestClient) -> None:

@@ -122,3 +122,8 @@ def test_bad_sweep_documents(doc, field):
     with pytest.raises(InvalidInput) as info:
         load_sweep(json.dumps(doc))
     assert info.value.field == field
+
+
+def test_bytes_that_are_not_utf8_are_invalid_input():
+    with pytest.raises(InvalidInput, match="not UTF-8"):
+        load_sweep(b"\xf58\xefE\xa2")
