@@ -142,7 +142,13 @@ class TailReport:
         """Lines for the terminal summary."""
         if self.kappa is None:
             return [f"tail: {self.statement}"]
-        exact = f" (exact: {self.kappa_exact})" if self.kappa_exact else ""
+        from ..structure._display import SHORT_TEXT_CHARS  # long CRootOf texts stay in the JSON, not the terminal
+
+        exact = ""
+        if self.kappa_exact and len(self.kappa_exact) > SHORT_TEXT_CHARS:
+            exact = " (exact closed form: see --json)"
+        elif self.kappa_exact:
+            exact = f" (exact: {self.kappa_exact})"
         return [
             f"tail exponent kappa = {self.kappa:.6g}{exact}: P(trace P > M) ~ M^-kappa; "
             f"{self.statement}  [{self.basis}]"
