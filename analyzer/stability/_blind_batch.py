@@ -26,7 +26,7 @@ from dataclasses import replace
 import numpy as np
 
 from .._budget import Budget
-from ._blind import Margins, SearchResult, SlotSpace, _chunks, canonical_possible, root
+from ._blind import Margins, SearchResult, SlotSpace, _chunks, root
 
 #: Most flats expanded in one batched step.
 _BATCH = 256
@@ -143,13 +143,55 @@ def _residuals(W: np.ndarray, Q: np.ndarray, b: np.ndarray, e: np.ndarray, rank:
     return np.concatenate(parts)
 
 
+def gap_canonical_possible(space: SlotSpace, masks: np.ndarray, cores: np.ndarray) -> np.ndarray:
+    """Whether some flat in each subtree can be in *gap-canonical* rotation.
+
+    A non-empty set ``D`` is gap-canonical when, with ``g*`` the first row
+    group it meets, it holds the slot ``(0, g*)`` and the cyclic gap of the
+    phases of group ``g*`` that ends at phase 0 (from its last phase to
+    ``N0``) is the largest gap between consecutive phases of that group:
+    every shift orbit has such a rotation (start it after a largest gap).
+    Descendants ``D`` of a flat ``Q`` with core ``c`` contain ``Q`` and agree
+    with it on the slots ``<= c``, so a subtree is cut when
+
+    (a) a decided slot ``(0, h)`` is missing while ``Q`` meets group ``h``
+        and no earlier decided ``(0, g)`` is held (``D`` would start at a
+        group ``<= h`` without its phase-0 slot), or
+    (b) a gap between two decided phases of ``g*`` exceeds
+        ``N0 - (last phase of g* in Q)``, which bounds the gap before
+        phase 0 of every descendant from above.
+
+    Slot ``(0, 0)`` is decided first, so most rotations are cut at the top
+    of the search, where the window form of
+    :func:`kfio.stability._blind.canonical_possible` decides late.
+    """
+    C, G, N0 = masks.shape[0], space.n_groups, space.n_phases
+    m3 = masks.reshape(C, N0, G)
+    groups = np.arange(G)
+    decided0 = groups[None, :] <= cores[:, None]
+    held0 = decided0 & m3[:, 0, :]
+    first = np.where(held0.any(axis=1), np.argmax(held0, axis=1), G)
+    meets = m3.any(axis=1)
+    ok = ~(decided0 & (groups[None, :] < first[:, None]) & meets).any(axis=1)
+    phases = np.arange(N0)
+    for g in range(G):
+        rows = np.flatnonzero(ok & (first == g))
+        if rows.size == 0:
+            continue
+        P = m3[rows, :, g]
+        dec = P & (phases[None, :] * G + g <= cores[rows, None])
+        prev = np.maximum.accumulate(np.where(dec, phases[None, :], -1), axis=1)
+        gaps = np.where(dec[:, 1:], phases[None, 1:] - prev[:, :-1], 0).max(axis=1, initial=0)
+        last = N0 - 1 - np.argmax(P[:, ::-1], axis=1)
+        ok[rows] = gaps <= N0 - last
+    return ok
+
+
 def _expand(
     space: SlotSpace,
     masks: np.ndarray,
     cores: np.ndarray,
     K: np.ndarray,
-    W_len: int,
-    j_max: int,
     margins: Margins,
     found: _Found,
 ) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
@@ -173,7 +215,7 @@ def _expand(
     ppc = ~(new & (index[None, :] < e[:, None])).any(axis=1)
     b, e, closures = b[ppc], e[ppc], closures[ppc]
     dims = d - rank[b, e]
-    keep = canonical_possible(space, W_len, closures, e, j_max)
+    keep = gap_canonical_possible(space, closures, e)
     found.offer(closures[keep & (dims == 1)])
     inner = np.flatnonzero(keep & (dims > 1))
     if inner.size == 0:
@@ -203,7 +245,6 @@ def enumerate_orbits(space: SlotSpace, budget: Budget, margins: Margins) -> Sear
     """
     space = real_space(space)
     W_len = space.window(margins)
-    j_max = W_len * space.size // space.n_phases
     found = _Found(space)
     start = root(space, margins)
     stack = [(start.mask[None, :], np.array([start.core]), np.eye(space.n_columns, dtype=space.rows.dtype)[None, :, :])]
@@ -216,6 +257,6 @@ def enumerate_orbits(space: SlotSpace, budget: Budget, margins: Margins) -> Sear
             masks, cores, K = masks[:limit], cores[:limit], K[:limit]
         budget.tick("sigma: closure search", masks.shape[0])
         nodes += masks.shape[0]
-        stack.extend(_expand(space, masks, cores, K, W_len, j_max, margins, found))
+        stack.extend(_expand(space, masks, cores, K, margins, found))
     maximal = tuple(found.orbits[k] for k in sorted(found.orbits))
     return SearchResult(maximal=maximal, nodes=nodes, planes=0, window=W_len)
