@@ -134,8 +134,9 @@ def _residuals(W: np.ndarray, Q: np.ndarray, b: np.ndarray, e: np.ndarray, rank:
             rows = Wb[:, :, 0, :]
             ue = rows[np.arange(bb.size), ee]
             u = ue / np.linalg.norm(ue, axis=1)[:, None]
-            coef = np.einsum("csd,cd->cs", rows, u.conj())
-            parts.append(np.linalg.norm(rows - coef[:, :, None] * u[:, None, :], axis=2))
+            coef = rows @ u.conj()[:, :, None]
+            diff = rows - coef * u[:, None, :]
+            parts.append(np.sqrt(np.einsum("csd,csd->cs", diff, diff.conj()).real))
             continue
         _, _, Vh = np.linalg.svd(Wb[np.arange(bb.size), ee])
         N = Vh.conj().swapaxes(1, 2) * (np.arange(d)[None, :] >= rank[bb, ee][:, None])[:, None, :]
@@ -198,7 +199,8 @@ def _expand(
     """Expand a batch of flats sharing a kernel dimension; return the child batches to expand."""
     index = np.arange(space.size)
     d = K.shape[2]
-    W = np.einsum("spl,bld->bspd", space.rows, K)
+    S, p, L = space.rows.shape
+    W = (space.rows.reshape(1, S * p, L) @ K).reshape(K.shape[0], S, p, d)
     if W.shape[2] == 1:
         sv = np.linalg.norm(W[:, :, 0, :], axis=2)[:, :, None]
     else:
@@ -208,6 +210,13 @@ def _expand(
     blind_ext = ~Q & (rank < d)
     found.offer(Q[~blind_ext.any(axis=1)])
     b, e = np.nonzero(blind_ext & (index[None, :] > cores[:, None]))
+    # The closure only adds slots after e (or fails prefix preservation), and
+    # the gap-canonical test only cuts more as slots are added: a pair cut with
+    # Q + e in place of its closure is cut for good, before any residual.
+    grown = Q[b]
+    grown[np.arange(b.size), e] = True
+    early = gap_canonical_possible(space, grown, e)
+    b, e = b[early], e[early]
     if b.size == 0:
         return []
     closures = margins.record(_residuals(W, Q, b, e, rank)) | Q[b]
