@@ -548,17 +548,43 @@ def _lift(space: SlotSpace, mask: np.ndarray, period: int) -> frozenset:
     return frozenset((n + k * space.n_phases, g) for n, g in space.slots(mask) for k in range(period // space.n_phases))
 
 
-def _exact_checks(space: SlotSpace, found: _Found, margins: Margins, phase0: np.ndarray, degenerate: bool) -> list:
+def undominated(space: SlotSpace, masks: Sequence[np.ndarray]) -> list[np.ndarray]:
+    """The masks whose per-group miss counts ``z`` are componentwise minimal (ties all kept).
+
+    With Bernoulli channels ``rho(P_F) = prod_g (1 - lambda_g)^{z_g}``
+    (Rohr, Marelli and Fu 2014, Corollary 2) is strictly decreasing in every
+    ``z_g``, so a set whose ``z`` is dominated never attains ``sigma`` and
+    never binds a stability region, whatever the arrival probabilities.
+    """
+    if not masks:
+        return []
+    z = np.array([space.n_phases - m.reshape(space.n_phases, space.n_groups).sum(axis=0) for m in masks])
+    below = (z[None, :, :] <= z[:, None, :]).all(axis=2) & (z[None, :, :] != z[:, None, :]).any(axis=2)
+    return [m for m, dominated in zip(masks, below.any(axis=1)) if not dominated]
+
+
+def _exact_checks(
+    space: SlotSpace,
+    found: _Found,
+    margins: Margins,
+    phase0: np.ndarray,
+    degenerate: bool,
+    bernoulli: bool = False,
+) -> list:
     """``(slots, expect_blind, what)`` for every rank decision that matters.
 
     A rank drop must be confirmed on the whole set; full rank may be
     confirmed on a subset (rank is monotone), so each extension of the worst
     set is checked with a spanning subset of it plus the new slot.  Slot
     ranks are shift invariant, so the extensions of the empty set need only
-    phase 0.
+    phase 0.  With Bernoulli channels only the sets of :func:`undominated`
+    miss counts can matter, so only their rank drops are confirmed.
     """
     checks = [(space.slots(phase0), degenerate, "phase-0 rows (degeneracy)")]
-    checks += [(space.slots(m), True, "maximal blind set") for m in found.maximal or (found.worst,)]
+    sets = list(found.maximal or (found.worst,))
+    if bernoulli:
+        sets = undominated(space, sets)
+    checks += [(space.slots(m), True, "maximal blind set") for m in sets]
     basis = space.spanning_subset(found.worst, margins)
     outside = ~found.worst if found.worst.any() else phase0
     for i in np.flatnonzero(outside):
@@ -678,7 +704,9 @@ def compute_sigma(block: PhaseBlock, channels: Sequence[MarkovChannel], budget: 
     found = _find_worst(space, channels, period, degenerate, fully_blind, budget, margins)
     exponents = _bernoulli_exponents(space, found.worst, channels)
     sigma, rho = _sigma_values(space, found, channels, period, exponents)
-    certified, cert_note = _certify(block, _exact_checks(space, found, margins, phase0, degenerate), budget)
+    certified, cert_note = _certify(
+        block, _exact_checks(space, found, margins, phase0, degenerate, all(ch.order == 0 for ch in channels)), budget
+    )
     notes = [found.method, cert_note, _margin_note(margins)]
     return SigmaResult(
         period=period,

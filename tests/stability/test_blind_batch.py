@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import itertools
 import json
+from fractions import Fraction
 
 import numpy as np
 import pytest
@@ -11,8 +12,11 @@ from flint import fmpz_poly
 
 from kfio import load_request
 from kfio._budget import Budget
+from kfio.model._types import MarkovChannel
+from kfio.stability import compute_sigma
 from kfio.stability._blind import Margins, SlotSpace, search
 from kfio.stability._blind_batch import gap_canonical_possible, real_space
+from kfio.stability._sigma import undominated
 from kfio.structure import fmo_blocks
 from kfio.structure._phases import PhaseBlock
 
@@ -198,6 +202,20 @@ def test_periods_36_and_60_two_sensors(factors) -> None:
 def test_period_21_two_sensors() -> None:
     # The one-at-a-time walk needs minutes here (1.8M flats); check every orbit instead.
     block = two_sensor_block(cyclotomic_companion(21), e_rows(12))
-    found = orbits(block, "batched")
+    ch = MarkovChannel("bernoulli", 0, (Fraction(1, 2),))
+    res = compute_sigma(block, [ch, ch], Budget(max_steps=2_000_000))
+    space = SlotSpace.from_block(block)
+    found = [space.orbit_key(space.mask(sorted({(n % 21, g) for n, g in F}))) for F in res.maximal_blind_sets]
     assert len(set(found)) == len(found) > 1000
-    check_maximal_and_complete(block, found, samples=60)
+    assert res.certified, "the undominated sets are confirmed in exact arithmetic"
+    check_maximal_and_complete(block, sorted(found), samples=25)
+
+
+def test_undominated_keeps_exactly_the_minimal_miss_vectors() -> None:
+    rng = np.random.default_rng([SEED, 77])
+    space = SlotSpace.from_block(PhaseBlock(5, (0,), np.ones((2, 1), complex), ((0,), (1,))))
+    masks = [m for m in rng.random((40, space.size)) < 0.5]
+    kept = undominated(space, masks)
+    z = [tuple(5 - m.reshape(5, 2).sum(axis=0)) for m in masks]
+    minimal = {a for a in z if not any(b != a and b[0] <= a[0] and b[1] <= a[1] for b in z)}
+    assert [tuple(5 - m.reshape(5, 2).sum(axis=0)) for m in kept] == [a for a in z if a in minimal]
