@@ -173,7 +173,7 @@ def gap_canonical_possible(space: SlotSpace, masks: np.ndarray, cores: np.ndarra
     held0 = decided0 & m3[:, 0, :]
     first = np.where(held0.any(axis=1), np.argmax(held0, axis=1), G)
     meets = m3.any(axis=1)
-    ok = ~(decided0 & (groups[None, :] < first[:, None]) & meets).any(axis=1)
+    ok: np.ndarray = np.logical_not((decided0 & (groups[None, :] < first[:, None]) & meets).any(axis=1))
     phases = np.arange(N0)
     for g in range(G):
         rows = np.flatnonzero(ok & (first == g))
