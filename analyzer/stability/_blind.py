@@ -512,13 +512,7 @@ def _child(exp: Expansion, c: int) -> Flat:
     return Flat(exp.masks[c], int(exp.cores[c]), exp.kernel, exp.cuts[c], int(exp.cut_ranks[c]))
 
 
-def search(
-    space: SlotSpace,
-    budget: Budget,
-    margins: Margins,
-    objective: Objective | None = None,
-    route: str = "batched",
-) -> SearchResult:
+def search(space: SlotSpace, budget: Budget, margins: Margins, objective: Objective | None = None) -> SearchResult:
     """Depth-first closure search over flats in canonical rotation.
 
     Parameters
@@ -527,22 +521,16 @@ def search(
         ``None`` enumerates every maximal blind set (one per shift orbit);
         otherwise branch and bound returns one maximal blind set of largest
         score.
-    route:
-        Enumeration only: ``"batched"`` expands every flat of one kernel
-        dimension on the stack together
-        (:func:`kfio.stability._blind_batch.enumerate_orbits`, the same
-        flats and orbits); ``"flats"`` walks them one at a time (the
-        previous route, a test oracle).
+
+    Enumeration walks flats one at a time;
+    :func:`kfio.stability._blind_batch.enumerate_orbits` finds the same
+    orbits in batches, and this walk is its test oracle.
 
     Raises
     ------
     BudgetExceeded
         When ``budget`` runs out (one tick per expanded or resolved flat).
     """
-    if objective is None and route == "batched":
-        from ._blind_batch import enumerate_orbits
-
-        return enumerate_orbits(space, budget, margins)
     best = _Incumbent(space, objective)
     W = space.window(margins)
     stack: list[tuple[Flat, float]] = [(root(space, margins), np.inf)]

@@ -243,7 +243,7 @@ def enumerate_orbits(space: SlotSpace, budget: Budget, margins: Margins) -> Sear
     """Every shift orbit of maximal blind sets, by batched closure extension.
 
     The same flats, rank calls and orbits as
-    ``search(space, budget, margins, route="flats")`` without an objective;
+    ``search(space, budget, margins)`` without an objective;
     :attr:`SearchResult.maximal` lists one representative per orbit in
     the order of their keys.
 

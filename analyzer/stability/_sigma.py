@@ -39,6 +39,7 @@ from ..errors import AssumptionViolation, InvalidInput, NumericalFailure
 from ..model._types import MarkovChannel
 from ..structure._phases import PhaseBlock
 from ._blind import Margins, Objective, SlotSpace, search
+from ._blind_batch import enumerate_orbits
 
 #: Closure-search steps allowed when the caller passes no budget.
 DEFAULT_MAX_STEPS = 200_000
@@ -537,7 +538,7 @@ def _find_worst(
             f"window {res.window}"
         )
         return _Found(res.maximal[0], (), False, method)
-    res = search(space, budget, margins)
+    res = enumerate_orbits(space, budget, margins)
     worst = res.maximal[int(np.argmax(objective.score(np.array(res.maximal))))]
     method = f"enumerated {len(res.maximal)} shift orbits of maximal blind sets over {res.nodes} flats"
     return _Found(worst, res.maximal, True, method)

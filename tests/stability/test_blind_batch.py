@@ -15,7 +15,7 @@ from kfio._budget import Budget
 from kfio.model._types import MarkovChannel
 from kfio.stability import compute_sigma
 from kfio.stability._blind import Margins, SlotSpace, search
-from kfio.stability._blind_batch import gap_canonical_possible, real_space
+from kfio.stability._blind_batch import enumerate_orbits, gap_canonical_possible, real_space
 from kfio.stability._sigma import undominated
 from kfio.structure import fmo_blocks
 from kfio.structure._phases import PhaseBlock
@@ -72,7 +72,8 @@ def random_block(rng: np.random.Generator, N0: int, real: bool, rows: int = 1) -
 
 def orbits(block: PhaseBlock, route: str) -> list[tuple[int, ...]]:
     space = SlotSpace.from_block(block)
-    res = search(space, Budget(max_steps=2_000_000), Margins(space.tol), route=route)
+    run = enumerate_orbits if route == "batched" else search
+    res = run(space, Budget(max_steps=2_000_000), Margins(space.tol))
     return [tuple(int(i) for i in np.flatnonzero(m)) for m in res.maximal]
 
 
