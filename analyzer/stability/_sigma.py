@@ -560,8 +560,10 @@ def undominated(space: SlotSpace, masks: Sequence[np.ndarray]) -> list[np.ndarra
     if not masks:
         return []
     z = np.array([space.n_phases - m.reshape(space.n_phases, space.n_groups).sum(axis=0) for m in masks])
-    below = (z[None, :, :] <= z[:, None, :]).all(axis=2) & (z[None, :, :] != z[:, None, :]).any(axis=2)
-    return [m for m, dominated in zip(masks, below.any(axis=1)) if not dominated]
+    u, which = np.unique(z, axis=0, return_inverse=True)  # at most (N0 + 1)^G distinct vectors
+    below = (u[None, :, :] <= u[:, None, :]).all(axis=2) & (u[None, :, :] != u[:, None, :]).any(axis=2)
+    dominated = below.any(axis=1)[which.reshape(-1)]
+    return [m for m, d in zip(masks, dominated) if not d]
 
 
 def _exact_checks(
