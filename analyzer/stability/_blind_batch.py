@@ -44,14 +44,16 @@ class _Found:
         self.orbits: dict[tuple[int, ...], np.ndarray] = {}
 
     def offer(self, masks: np.ndarray) -> None:
-        index = np.arange(self.space.size)
         for m, packed in zip(masks, np.packbits(masks, axis=1)):
             raw = packed.tobytes()
             if raw in self.seen:
                 continue
             self.seen.add(raw)
             key = self.space.orbit_key(m)
-            self.orbits.setdefault(key, np.isin(index, key))
+            if key not in self.orbits:
+                rep = np.zeros(self.space.size, dtype=bool)
+                rep[list(key)] = True
+                self.orbits[key] = rep
 
 
 def real_rows(rows: np.ndarray, tol: float) -> np.ndarray | None:
