@@ -522,6 +522,10 @@ def search(space: SlotSpace, budget: Budget, margins: Margins, objective: Object
         otherwise branch and bound returns one maximal blind set of largest
         score.
 
+    Enumeration walks flats one at a time;
+    :func:`kfio.stability._blind_batch.enumerate_orbits` finds the same
+    orbits in batches, and this walk is its test oracle.
+
     Raises
     ------
     BudgetExceeded

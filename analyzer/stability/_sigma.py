@@ -39,6 +39,7 @@ from ..errors import AssumptionViolation, InvalidInput, NumericalFailure
 from ..model._types import MarkovChannel
 from ..structure._phases import PhaseBlock
 from ._blind import Margins, Objective, SlotSpace, search
+from ._blind_batch import enumerate_orbits
 
 #: Closure-search steps allowed when the caller passes no budget.
 DEFAULT_MAX_STEPS = 200_000
@@ -545,7 +546,7 @@ def _find_worst(
             f"window {res.window}"
         )
         return _Found(res.maximal[0], (), False, method)
-    res = search(space, budget, margins)
+    res = enumerate_orbits(space, budget, margins)
     worst = res.maximal[int(np.argmax(objective.score(np.array(res.maximal))))]
     method = f"enumerated {len(res.maximal)} shift orbits of maximal blind sets over {res.nodes} flats"
     return _Found(worst, res.maximal, True, method)
@@ -556,17 +557,45 @@ def _lift(space: SlotSpace, mask: np.ndarray, period: int) -> frozenset:
     return frozenset((n + k * space.n_phases, g) for n, g in space.slots(mask) for k in range(period // space.n_phases))
 
 
-def _exact_checks(space: SlotSpace, found: _Found, margins: Margins, phase0: np.ndarray, degenerate: bool) -> list:
+def undominated(space: SlotSpace, masks: Sequence[np.ndarray]) -> list[np.ndarray]:
+    """The masks whose per-group miss counts ``z`` are componentwise minimal (ties all kept).
+
+    With Bernoulli channels ``rho(P_F) = prod_g (1 - lambda_g)^{z_g}``
+    (Rohr, Marelli and Fu 2014, Corollary 2) is strictly decreasing in every
+    ``z_g``, so a set whose ``z`` is dominated never attains ``sigma`` and
+    never binds a stability region, whatever the arrival probabilities.
+    """
+    if not masks:
+        return []
+    z = np.array([space.n_phases - m.reshape(space.n_phases, space.n_groups).sum(axis=0) for m in masks])
+    u, which = np.unique(z, axis=0, return_inverse=True)  # at most (N0 + 1)^G distinct vectors
+    below = (u[None, :, :] <= u[:, None, :]).all(axis=2) & (u[None, :, :] != u[:, None, :]).any(axis=2)
+    dominated = below.any(axis=1)[which.reshape(-1)]
+    return [m for m, d in zip(masks, dominated) if not d]
+
+
+def _exact_checks(
+    space: SlotSpace,
+    found: _Found,
+    margins: Margins,
+    phase0: np.ndarray,
+    degenerate: bool,
+    bernoulli: bool = False,
+) -> list:
     """``(slots, expect_blind, what)`` for every rank decision that matters.
 
     A rank drop must be confirmed on the whole set; full rank may be
     confirmed on a subset (rank is monotone), so each extension of the worst
     set is checked with a spanning subset of it plus the new slot.  Slot
     ranks are shift invariant, so the extensions of the empty set need only
-    phase 0.
+    phase 0.  With Bernoulli channels only the sets of :func:`undominated`
+    miss counts can matter, so only their rank drops are confirmed.
     """
     checks = [(space.slots(phase0), degenerate, "phase-0 rows (degeneracy)")]
-    checks += [(space.slots(m), True, "maximal blind set") for m in found.maximal or (found.worst,)]
+    sets = list(found.maximal or (found.worst,))
+    if bernoulli:
+        sets = undominated(space, sets)
+    checks += [(space.slots(m), True, "maximal blind set") for m in sets]
     basis = space.spanning_subset(found.worst, margins)
     outside = ~found.worst if found.worst.any() else phase0
     for i in np.flatnonzero(outside):
@@ -686,7 +715,9 @@ def compute_sigma(block: PhaseBlock, channels: Sequence[MarkovChannel], budget: 
     found = _find_worst(space, channels, period, degenerate, fully_blind, budget, margins)
     exponents = _bernoulli_exponents(space, found.worst, channels)
     sigma, rho = _sigma_values(space, found, channels, period, exponents)
-    certified, cert_note = _certify(block, _exact_checks(space, found, margins, phase0, degenerate), budget)
+    certified, cert_note = _certify(
+        block, _exact_checks(space, found, margins, phase0, degenerate, all(ch.order == 0 for ch in channels)), budget
+    )
     notes = [found.method, cert_note, _margin_note(margins)]
     return SigmaResult(
         period=period,
