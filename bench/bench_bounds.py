@@ -8,8 +8,8 @@
    ``bench/_reference.py``), CPU seconds (``time.process_time``) since the machine is shared.
 1. ``lambda_upper`` to 1e-6 for random n = 10 systems by the LMI route alone (``lmi="always"``),
    against re-building the CVXPY problem at every bisection step (same algorithm, same answers).
-2. ``P_hat_20`` for seed 004's 3x3 system at lambda = 0.4 (target < 30 s), against the
-   per-sequence recursion of seed 002 eq. 4 (one ``g_N`` at N = 12 is timed both ways; the
+2. ``P_hat_20`` for Sinopoli et al. (2004)'s 3x3 system at lambda = 0.4 (target < 30 s), against the
+   per-sequence recursion of Rohr, Marelli and Fu (2010) eq. 4 (one ``g_N`` at N = 12 is timed both ways; the
    naive ``P_hat_20`` time is extrapolated from it, since running it would take hours).
 3. A 21 x 21 region map for a two-sensor, n = 2 system (target < 60 s), against labelling every
    cell independently with a freshly built LMI.
@@ -235,7 +235,7 @@ def section1(args) -> None:
 
 
 def section2() -> None:
-    print("\n2. P_hat_N, seed 004's 3x3 system, lambda = 0.4")
+    print("\n2. P_hat_N, Sinopoli et al. (2004)'s 3x3 system, lambda = 0.4")
     r = bench_p_hat()
     print("   traces: " + ", ".join(f"N={N}: {t:.6g}" for N, t in r["traces"].items()))
     print(
@@ -249,7 +249,7 @@ def section2() -> None:
 
 
 def section3() -> None:
-    print("\n3. 21 x 21 region map, two sensors, n = 2 (seed 000 Fig. 5 system)")
+    print("\n3. 21 x 21 region map, two sensors, n = 2 (Liu and Goldsmith (2004) Fig. 5 system)")
     r = bench_region()
     print(f"   monotone search, one parametrized LMI: {r['t_fast']:.2f} s ({r['solves_fast']} solves)")
     print(

@@ -7,7 +7,7 @@ clients, each sending one request at a time:
 =================  ============================================================
 scenario           what every request is
 =================  ============================================================
-analyze-cached     one of the seed systems (MATH.md section 4), answered from
+analyze-cached     one of the seed systems (docs/theory.md), answered from
                    the cache after its first time
 analyze-uncached   a seed system with an arrival probability never sent before
 bounds-uncached    the same, for ``POST /v1/bounds``

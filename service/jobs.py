@@ -65,7 +65,7 @@ def parse(body: bytes, settings: Settings) -> Request:
 
 
 def analyze_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[str, Any]) -> JobOutput:
-    """``kfio analyze``: the exact verdict (seed 001, Theorem 1)."""
+    """``kfio analyze``: the exact verdict (Rohr, Marelli and Fu (2014), Theorem 1)."""
     request = parse(body, settings)
     return report_json(resolve("kfio", "analyze")(request, budget=budget))
 

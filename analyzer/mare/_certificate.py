@@ -1,8 +1,8 @@
-"""Re-checking LMI certificates ourselves (MATH.md section 3, "Numerical soundness").
+"""Re-checking LMI certificates ourselves (docs/theory.md, "Numerical soundness").
 
 A solver's "feasible" is not a proof: near the threshold the LMI margin is
 far below the solver's tolerance.  What we prove instead is statement (b) of
-seed 004's Theorem 5 (seed 000's Theorem 5(b) for ``m`` packets):
+Sinopoli et al. (2004)'s Theorem 5 (Liu and Goldsmith (2004)'s Theorem 5(b) for ``m`` packets):
 
     there are gains ``K_S`` and ``X > 0`` with ``X - L_K(X) > 0``,
     ``L_K(X) = pi(empty) A X A' + sum_S pi(S) (A + K_S C_S) X (A + K_S C_S)'``.

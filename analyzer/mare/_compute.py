@@ -1,7 +1,7 @@
-"""The classical bounds of MATH.md section 3, for one request.
+"""The classical bounds of docs/theory.md, for one request.
 
-For Bernoulli packet losses (one packet: seed 004 and seed 002; several
-independent packets: seed 000, generalized to ``m`` packets):
+For Bernoulli packet losses (one packet: Sinopoli et al. (2004) and Rohr, Marelli and Fu (2010); several
+independent packets: Liu and Goldsmith (2004), generalized to ``m`` packets):
 
 * the critical arrival probability: the closed-form lower bound and the
   LMI upper bound (bisection, re-checked certificates), per sensor when
@@ -9,8 +9,8 @@ independent packets: seed 000, generalized to ``m`` packets):
 * at the operating point: ``S_bar <= lim E[P_t] <= V_bar`` (Lyapunov; MARE
   fixed point by iteration and by SDP, cross-checked), a stable / unstable /
   undecided verdict by the bounds;
-* one packet: seed 002's ``P_hat_N`` and the variance threshold;
-* two packets with ``grid``: the region map of seed 000, Figs. 4-5.
+* one packet: Rohr, Marelli and Fu (2010)'s ``P_hat_N`` and the variance threshold;
+* two packets with ``grid``: the region map of Liu and Goldsmith (2004), Figs. 4-5.
 
 Public entry: :func:`compute_bounds`.
 """
@@ -42,7 +42,7 @@ RANK_TOL = 1e-9
 
 
 def critical_lower_bound(rho: float, others_loss: float = 1.0) -> float:
-    """``max(0, 1 - 1/(rho^2 * others_loss))``: seed 004 Theorem 3, seed 000 Theorem 3.
+    """``max(0, 1 - 1/(rho^2 * others_loss))``: Sinopoli et al. (2004) Theorem 3, Liu and Goldsmith (2004) Theorem 3.
 
     ``others_loss = prod_{r != s} (1 - lambda_r)`` for the other packets.
 
@@ -63,7 +63,7 @@ def _full_rank(M: np.ndarray) -> bool:
 
 
 def hypotheses(A: np.ndarray, C: np.ndarray, Q: np.ndarray) -> dict[str, Any]:
-    """The hypotheses of seed 004 Theorems 2-5, by PBH rank tests in floating point.
+    """The hypotheses of Sinopoli et al. (2004) Theorems 2-5, by PBH rank tests in floating point.
 
     ``(A, C)`` detectable: ``[A - theta I; C]`` has full column rank for every
     eigenvalue ``|theta| >= 1``; ``(A, Q^1/2)`` controllable: ``[A - theta I,
@@ -124,7 +124,7 @@ def _covariance(model: ArrivalModel, budget: Budget) -> CovarianceBounds:
 def _p_hat(A, C, Q, R, lam: float, horizon: int, budget: Budget) -> PHatBounds:
     wanted = sorted({1 << k for k in range(horizon.bit_length()) if 1 << k <= horizon} | {horizon})
     if (1.0 - lam) * spectral_radius(A) ** 2 >= 1.0:
-        # P_hat_N >= lim E[P_t] >= S_bar = infinity (seed 002 Theorem 1, seed 004 Theorem 3): no need to iterate.
+        # P_hat_N >= lim E[P_t] >= S_bar = infinity (Rohr, Marelli and Fu (2010) Theorem 1, Sinopoli et al. (2004) Theorem 3): no need to iterate.
         why = "(1 - lambda) rho(A)^2 >= 1: E[P_t] diverges, and P_hat_N >= lim E[P_t]"
         return PHatBounds(horizon, tuple(PHat(N, None, 0, None, 0, why) for N in wanted))
     seq = p_hat_sequence(A, C, Q, R, lam, wanted, budget=budget)
@@ -135,11 +135,11 @@ def _p_hat(A, C, Q, R, lam: float, horizon: int, budget: Budget) -> PHatBounds:
 
 
 def _region(search: CertifiedSearch, opts: BoundsOptions, rho: float, request: Request, budget: Budget) -> RegionMap:
-    """The bounds' map of the square (seed 000, Figs. 4-5) with kfio's exact labels and boundary beside it.
+    """The bounds' map of the square (Liu and Goldsmith (2004), Figs. 4-5) with kfio's exact labels and boundary beside it.
 
     The exact part is :func:`kfio.stability._regions.exact_region_grid` (an extension
-    of seed 001, MATH.md section 3); it is absent when the request's channels
-    are outside Assumption 1 of seed 001.
+    of Rohr, Marelli and Fu (2014), docs/theory.md); it is absent when the request's channels
+    are outside Assumption 1 of Rohr, Marelli and Fu (2014).
     """
     from ..errors import AssumptionViolation
     from ..stability._regions import exact_region_grid
@@ -163,7 +163,7 @@ def _region(search: CertifiedSearch, opts: BoundsOptions, rho: float, request: R
 def compute_bounds(
     request: Request, budget: Budget | None = None, *, flags: Mapping[str, Any] | None = None
 ) -> BoundsReport:
-    """All bounds of MATH.md section 3 for ``request``.
+    """All bounds of docs/theory.md for ``request``.
 
     Parameters
     ----------

@@ -1,7 +1,7 @@
 """Stabilizing gains without an SDP solver: the candidates the certified search re-checks.
 
-Seed 004's Theorem 5 (Sinopoli et al. 2004; Liu and Goldsmith 2004 for
-several packets, seed 000's Theorem 5) makes three statements equivalent at
+Sinopoli et al. (2004)'s Theorem 5 (Sinopoli et al. 2004; Liu and Goldsmith 2004 for
+several packets, Liu and Goldsmith (2004)'s Theorem 5) makes three statements equivalent at
 an arrival probability ``lambda``: (a) some ``X`` has ``X > g_lambda(X)``,
 (b) some gains ``K`` and ``X > 0`` have ``X > L_K(X)`` (plus constants), (c)
 the LMI is feasible.  ``lambda_upper`` is where they start to hold.  Any
@@ -17,7 +17,7 @@ whatever produced ``K``.  Two routes need no solver:
   Sec. IV: invertible ``C`` and a single unstable mode are the special
   cases).
 * :func:`policy_gains`: the optimal gains of the MARE (``V_bar``'s gains,
-  seed 004 Lemma 1(a)) refined by policy iteration (Newton's method) from
+  Sinopoli et al. (2004) Lemma 1(a)) refined by policy iteration (Newton's method) from
   gains that already stabilize, with ``Q = I``, ``R = I``: the existence of
   ``V_bar`` does not depend on the choice of ``Q > 0``, ``R > 0``.
 """
@@ -75,7 +75,7 @@ def policy_gains(
     """Policy iteration from stabilizing gains ``K``: evaluate, re-optimize, repeat.
 
     The evaluations ``X_j = phi(K_j, X_j)`` decrease monotonically to ``V_bar``
-    (seed 004, Lemma 1(b) and the proof of Theorem 1), and every ``K_j`` is
+    (Sinopoli et al. (2004), Lemma 1(b) and the proof of Theorem 1), and every ``K_j`` is
     mean-square stabilizing.  Returns the last gains whose evaluation
     succeeded (``None`` when ``K`` itself does not stabilize).
     """

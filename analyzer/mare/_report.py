@@ -43,8 +43,8 @@ def _trace(M: np.ndarray | None) -> float | None:
 class CriticalInterval:
     """``lower <= lambda_c <= upper`` for one packet, the other packets held at their probabilities.
 
-    ``lower = max(0, 1 - 1/(rho(A)^2 prod_{r != s}(1 - lambda_r)))`` (seed 004
-    Theorem 3; seed 000 Theorem 3); ``upper`` is the bisection of
+    ``lower = max(0, 1 - 1/(rho(A)^2 prod_{r != s}(1 - lambda_r)))`` (Sinopoli et al. (2004)
+    Theorem 3; Liu and Goldsmith (2004) Theorem 3); ``upper`` is the bisection of
     :meth:`kfio.mare._search.CertifiedSearch.bisect`.
     """
 
@@ -82,7 +82,7 @@ class CriticalInterval:
 
 @dataclass(frozen=True)
 class CovarianceBounds:
-    """``S_bar <= lim E[P_t] <= V_bar`` at the operating point (seed 004 Theorem 4; seed 000 Theorem 4)."""
+    """``S_bar <= lim E[P_t] <= V_bar`` at the operating point (Sinopoli et al. (2004) Theorem 4; Liu and Goldsmith (2004) Theorem 4)."""
 
     s_bar: np.ndarray | None
     s_bar_residual: float | None
@@ -154,7 +154,7 @@ class CovarianceBounds:
 
 @dataclass(frozen=True)
 class PHatBounds:
-    """Seed 002's ``P_hat_N`` for ``N = 1, 2, 4, ...`` up to the horizon (and the horizon itself)."""
+    """Rohr, Marelli and Fu (2010)'s ``P_hat_N`` for ``N = 1, 2, 4, ...`` up to the horizon (and the horizon itself)."""
 
     horizon: int
     entries: tuple[PHat, ...]
@@ -162,7 +162,7 @@ class PHatBounds:
     filtered: tuple[np.ndarray | None, ...] = ()
 
     def subsequences_monotone(self) -> bool | None:
-        """``P_hat_{cN} <= P_hat_N`` (seed 002 Theorem 1, eq. 18) for every pair present, up to rounding."""
+        """``P_hat_{cN} <= P_hat_N`` (Rohr, Marelli and Fu (2010) Theorem 1, eq. 18) for every pair present, up to rounding."""
         ok = None
         have = {e.N: e.matrix for e in self.entries if e.matrix is not None}
         for N, M in have.items():
@@ -204,7 +204,7 @@ class PHatBounds:
 
 @dataclass(frozen=True)
 class RegionMap:
-    """Seed 000, Figs. 4-5: the ``(lambda_1, lambda_2)`` square labelled by the bounds."""
+    """Liu and Goldsmith (2004), Figs. 4-5: the ``(lambda_1, lambda_2)`` square labelled by the bounds."""
 
     axes: tuple[str, str]
     values: tuple[Fraction, ...]

@@ -1,14 +1,14 @@
 """Where the stability LMI is feasible: bisection for ``lambda_upper`` and the region map.
 
-Seed 004's ``lambda_upper`` is the infimum of the ``lambda`` where the LMI of
+Sinopoli et al. (2004)'s ``lambda_upper`` is the infimum of the ``lambda`` where the LMI of
 Theorem 5 is feasible (Corollary 1: bisection over LMI feasibility problems);
-seed 000 does the same for one packet's probability with the others fixed
+Liu and Goldsmith (2004) does the same for one packet's probability with the others fixed
 (Theorem 3) and draws the stable region of two packets (Figs. 4-5).
-Feasibility is monotone in every arrival probability (seed 004 Lemma 1(d),
-seed 000 Lemma 3: ``X > g(X)`` at ``lambda`` implies it at every larger
+Feasibility is monotone in every arrival probability (Sinopoli et al. (2004) Lemma 1(d),
+Liu and Goldsmith (2004) Lemma 3: ``X > g(X)`` at ``lambda`` implies it at every larger
 ``lambda``), which is what makes bisection and the region's shortcuts valid.
 
-Scaling matters (MATH.md section 3): near the threshold every feasible ``X``
+Scaling matters (docs/theory.md): near the threshold every feasible ``X``
 is badly conditioned (its component along the unstable mode blows up like
 ``1 / (lambda - lambda_c)``), and the LMI margin in ``Y = X^-1`` shrinks like
 the *square* of the distance to the threshold, below the solver's tolerance.
@@ -80,7 +80,7 @@ class CertifiedSearch:
     """Certificates at exact arrival probabilities: solver-free gains first, the LMI where they fail.
 
     Every positive answer is re-checked (:func:`kfio.mare._certificate.certify`,
-    seed 004 Theorem 5(b) over the rationals), whichever route produced the
+    Sinopoli et al. (2004) Theorem 5(b) over the rationals), whichever route produced the
     gains: the annihilating gains and the MARE's optimal gains refined by
     policy iteration (:mod:`kfio.mare._gains`), then the LMI of Theorem 5(c).
 
@@ -204,7 +204,7 @@ class CertifiedSearch:
         refinement of ``prior`` (gains certified nearby); with ``scratch``,
         the MARE's gains from 0; with ``lmi``, the LMI (per
         :attr:`lmi_mode`; not where the MARE iteration diverged, since by
-        seed 004 Theorem 5 the LMI is then infeasible too, up to rounding).
+        Sinopoli et al. (2004) Theorem 5 the LMI is then infeasible too, up to rounding).
         """
         if self.lmi_mode == "always":
             return self.certify_lmi(lambdas)
@@ -279,7 +279,7 @@ class CertifiedSearch:
         operator the two are equivalent), with the congruence matrices formed
         once: the pattern weights are affine in the coordinate.  With a
         single unstable mode the gains that zero it work all the way down to
-        the lower bound (seed 004 Sec. IV), so one solve near the threshold
+        the lower bound (Sinopoli et al. (2004) Sec. IV), so one solve near the threshold
         finishes the search.
         """
         n = self.A.shape[0]
@@ -430,7 +430,7 @@ class CertifiedSearch:
         """Label the grid ``values x values`` for two packets: stable / unstable / undecided.
 
         ``unstable[i, j]`` marks the cells the lower bound proves unstable.
-        Stable cells form an up-set (seed 000, Lemma 3), so each column
+        Stable cells form an up-set (Liu and Goldsmith (2004), Lemma 3), so each column
         ``lambda_1 = values[i]`` needs a binary search for its lowest
         certified cell, and that cell bounds the search of the next column.
         Returns the labels (``labels[i][j]`` for ``(values[i], values[j])``)

@@ -2,7 +2,7 @@
 
 Working on ``vech`` keeps every iterate symmetric by construction: on full
 ``vec`` a float asymmetry is amplified like ``rho(A)^2`` per step and wrecks
-long iterations (observed on seed 004's 3x3 example with seed 002's ``g_2``).
+long iterations (observed on Sinopoli et al. (2004)'s 3x3 example with Rohr, Marelli and Fu (2010)'s ``g_2``).
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """Exact finite-horizon ``E[P_t]`` by enumerating every arrival sequence.
 
-Seed 001, eq. (7):
+Rohr, Marelli and Fu (2014), eq. (7):
 
 .. math::
 
@@ -9,7 +9,7 @@ Seed 001, eq. (7):
 with ``Psi(P_0, S) = Phi_{S(t)} o ... o Phi_{S(1)}(P_0)`` (eqs. (4)-(5)) and
 ``Phi_0``, ``Phi_1`` the open-loop and measurement updates of eq. (2).  With
 ``m`` packets each step has ``2^m`` arrival patterns and ``Phi_S`` uses the
-rows of the packets in ``S`` (MATH.md section 1).
+rows of the packets in ``S`` (docs/theory.md).
 
 Algorithm
 ---------
@@ -119,7 +119,7 @@ class FiniteHorizonReport(Report):
         """``exp`` of the least-squares slope of ``log trace E[P_t]`` over the last ``window + 1`` steps.
 
         For an unstable system this estimates ``max_k |alpha_k|^2 sigma_k``
-        (seed 001, Theorem 1); a stable one levels off at 1.  ``window``
+        (Rohr, Marelli and Fu (2014), Theorem 1); a stable one levels off at 1.  ``window``
         defaults to half the horizon.  ``None`` if the trace is not finite
         and positive over the window, or the horizon is shorter than 2.
         """
@@ -263,7 +263,7 @@ def enumerate_expectation(
 
     The low-level route (no option parsing, no limits): ``sim`` and ``P0``
     as arrays.  With a Bernoulli channel, ``enumerate_expectation(sim, X,
-    N)[0][N]`` is seed 002's ``g_N(X)``.
+    N)[0][N]`` is Rohr, Marelli and Fu (2010)'s ``g_N(X)``.
 
     Returns
     -------

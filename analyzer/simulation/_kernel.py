@@ -1,6 +1,6 @@
 """One step of the stochastic Riccati recursion for a batch of covariances.
 
-Seed 001, eq. (2) (one packet) and MATH.md section 1 (a set ``S`` of packets):
+Rohr, Marelli and Fu (2014), eq. (2) (one packet) and docs/theory.md (a set ``S`` of packets):
 
 .. math::
 

@@ -22,10 +22,10 @@ Options
     Initial error covariance ``P_0 = P_{0|-1}`` (symmetric positive
     semidefinite, exact).  Default ``Q``: the covariance one open-loop step
     after perfect knowledge (``Phi_0(0) = Q``), which has the units of the
-    state, unlike the identity.  Seed 001, Theorem 1 holds for every
+    state, unlike the identity.  Rohr, Marelli and Fu (2014), Theorem 1 holds for every
     ``P_0 >= 0``, so the verdict does not depend on this choice.
 ``exact_steps``
-    Horizon of the exact enumeration of ``E[P_t]`` (seed 001, eq. (7)); the
+    Horizon of the exact enumeration of ``E[P_t]`` (Rohr, Marelli and Fu (2014), eq. (7)); the
     number of arrival sequences ``2^(m * exact_steps)`` (``m`` packets) is
     capped by ``max_sequences``.
 ``initial_channel``

@@ -1,8 +1,8 @@
 """Monte Carlo simulation of the stochastic Riccati recursion.
 
-Seed 001, eqs. (2)-(5): ``P_{t+1} = Phi_{g_t}(P_t)`` where ``g_t`` is the
+Rohr, Marelli and Fu (2014), eqs. (2)-(5): ``P_{t+1} = Phi_{g_t}(P_t)`` where ``g_t`` is the
 (random) arrival of the packets sent at ``t``; with several packets
-``Phi_S`` uses the rows of the packets in ``S`` (MATH.md section 1).  We draw
+``Phi_S`` uses the rows of the packets in ``S`` (docs/theory.md).  We draw
 ``M`` independent arrival processes from the request's channel and propagate
 ``M`` covariances at once, as one ``(M, n, n)`` array
 (:func:`kfio.simulation._kernel.riccati_update`).  At every ``t = 0..T`` we
@@ -128,7 +128,7 @@ class SimulationReport(Report):
     packet_names:
         Packet names (``""`` for the one-packet case).
     exact:
-        Exact ``E[P_t]`` (seed 001, eq. (7)) when ``exact_steps`` was asked.
+        Exact ``E[P_t]`` (Rohr, Marelli and Fu (2014), eq. (7)) when ``exact_steps`` was asked.
     """
 
     options: SimulateOptions

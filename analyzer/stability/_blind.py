@@ -1,8 +1,8 @@
-"""Maximal blind sets of a phase block, by closures (seed 001, Lemma 3).
+"""Maximal blind sets of a phase block, by closures (Rohr, Marelli and Fu (2014), Lemma 3).
 
 A set ``F`` of slots ``(n, g)`` (phase ``n`` in ``[0, N0)``, row group ``g``)
 is *blind* when the stacked rows ``r_n[g] = C_hat[g] diag(omega^n)`` lack full
-column rank ``L`` (MATH.md, section 2).  Equivalently some ``v != 0`` has
+column rank ``L`` (docs/theory.md, section 2).  Equivalently some ``v != 0`` has
 ``r_n[g] v = 0`` on all of ``F``: maximal blind sets are maximal *zero sets*
 ``Z(v)``, i.e. closed sets (flats) ``cl(F) = {slots killing ker F}``.  A flat
 of rank ``k < L`` is the closure of at most ``k`` slots, so the search walks

@@ -1,7 +1,7 @@
 """Enumeration of every maximal blind orbit, many flats per batched step.
 
 With several sensors every shift orbit of maximal blind sets is enumerated
-(seed 001, Lemma 3: ``sigma = max_F rho(M_F)`` over all of them, and exact
+(Rohr, Marelli and Fu (2014), Lemma 3: ``sigma = max_F rho(M_F)`` over all of them, and exact
 stability regions need every binding pattern).  The search of
 :func:`kfio.stability._blind.search` walks flats one at a time; the order of
 the walk does not matter when nothing is pruned by an incumbent (the window

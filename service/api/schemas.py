@@ -95,7 +95,7 @@ _SEED000_TWO_SENSORS = {
     },
 }
 
-#: ``kfio analyze --json`` on ``_SEED004_SCALAR`` (lambda_c = 9/25, as seed 004 finds).
+#: ``kfio analyze --json`` on ``_SEED004_SCALAR`` (lambda_c = 9/25, as Sinopoli et al. (2004) finds).
 _SEED004_SCALAR_REPORT = {
     "kfio_version": __version__,
     "verdict": "stable",

@@ -1,6 +1,6 @@
 """The solver-free routes to ``lambda_upper`` (kfio.mare._gains) against the LMI and closed forms.
 
-Sources: Sinopoli et al. 2004 (seed 004) Theorem 5 (the equivalence of MARE, gains and LMI
+Sources: Sinopoli et al. (2004) Theorem 5 (the equivalence of MARE, gains and LMI
 feasibility) and Sec. IV (bounds that coincide); the reproducer of issue 12, item 2.
 """
 
@@ -91,7 +91,7 @@ def test_policy_gains_converge_to_the_gains_of_v_bar() -> None:
 
 @pytest.mark.parametrize("seed", range(4))
 def test_solver_free_lambda_upper_agrees_with_the_lmi_bisection(seed) -> None:
-    # seed 004 Theorem 5: MARE fixed point, stabilizing gains and the LMI exist at the same lambdas, so the
+    # Sinopoli et al. (2004) Theorem 5: MARE fixed point, stabilizing gains and the LMI exist at the same lambdas, so the
     # continuation (no solver) and the bisection over LMI solves find the same lambda_upper within the tolerance.
     rng = np.random.default_rng(100 + seed)
     A, C = random_system(rng, 5, 1)  # one output, several unstable modes: no annihilating gain
