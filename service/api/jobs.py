@@ -59,20 +59,20 @@ def get_jobstore(request: Request) -> JobStore:
 JobStoreDep = Annotated[JobStore, Depends(get_jobstore)]
 
 
-async def validated(body: bytes, store: JobStore) -> None:
-    """Check a job's request with the one validator before it is queued (in a thread, off the event loop).
+async def validated(check: Any, *args: Any) -> None:
+    """Run ``check(*args)`` (a validator) in a thread, off the event loop, before a job is queued.
 
     A bad request is a 422 naming the field at once, as on the synchronous
     endpoint, instead of a job that fails later.
     """
     import asyncio
 
-    from kfio import load_request
-
     from ..problems import problem_from_exception
 
     try:
-        await asyncio.to_thread(load_request, body, store.settings.limits())
+        await asyncio.to_thread(check, *args)
+    except ProblemError:
+        raise
     except Exception as exc:  # noqa: BLE001 - InvalidInput and friends become their problem document
         problem = problem_from_exception(exc)
         if problem.status >= 500:
@@ -82,7 +82,9 @@ async def validated(body: bytes, store: JobStore) -> None:
 
 def _submit_route(kind: str) -> None:
     async def submit(body: BodyDep, store: JobStoreDep) -> Response:
-        await validated(body, store)
+        from kfio import load_request
+
+        await validated(load_request, body, store.settings.limits())
         job = store.submit(kind, body)
         return Response(
             store.document(job),

@@ -8,14 +8,11 @@ points done), and its result is the table as JSON.
 
 from __future__ import annotations
 
-import asyncio
-
 from fastapi import APIRouter
 from fastapi.responses import Response
 
-from ..problems import ProblemError
 from .deps import BodyDep
-from .jobs import _STATUS_RESPONSE, JobStoreDep
+from .jobs import _STATUS_RESPONSE, JobStoreDep, validated
 from .schemas import problem_responses
 
 router = APIRouter(prefix="/v1/sweeps", tags=["sweeps"])
@@ -118,17 +115,7 @@ def _validate(body: bytes, max_points: int, limits) -> int:
 )
 async def submit_sweep(body: BodyDep, store: JobStoreDep) -> Response:
     settings = store.settings
-    try:
-        await asyncio.to_thread(_validate, body, settings.max_sweep_points, settings.limits())
-    except ProblemError:
-        raise
-    except Exception as exc:  # noqa: BLE001 - InvalidInput and friends become their problem document
-        from ..problems import problem_from_exception
-
-        problem = problem_from_exception(exc)
-        if problem.status >= 500:
-            raise
-        raise ProblemError(problem) from None
+    await validated(_validate, body, settings.max_sweep_points, settings.limits())
     job = store.submit("sweep", body)
     return Response(
         store.document(job), status_code=202, media_type="application/json", headers={"Location": f"/v1/jobs/{job.id}"}
