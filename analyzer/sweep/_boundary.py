@@ -48,8 +48,8 @@ def exact_boundary(spec: SweepSpec) -> dict[str, Any] | None:
                 "exact": rep["critical_arrival_probability_exact"],
             }
         if len(spec.axes) == 2 and channel.get("model") == "gilbert_elliott":
-            names = {"/channel/failure_rate": "failure_rate", "/channel/recovery_rate": "recovery_rate"}
-            if sorted(pointers) != sorted(names):
+            rate_of = {"/channel/failure_rate": "failure_rate", "/channel/recovery_rate": "recovery_rate"}
+            if sorted(pointers) != sorted(rate_of):
                 return None
             from ..stability import analyze
 
@@ -58,7 +58,7 @@ def exact_boundary(spec: SweepSpec) -> dict[str, Any] | None:
             region = analyze(parse_request(base)).to_dict().get("gilbert_elliott_region") or {}
             curve = (region.get("map") or {}).get("curve") or []
             columns = (region.get("map") or {}).get("curve_columns") or ["recovery_rate", "failure_rate", "piece"]
-            ix, iy = columns.index(names[pointers[0]]), columns.index(names[pointers[1]])
+            ix, iy = columns.index(rate_of[pointers[0]]), columns.index(rate_of[pointers[1]])
             pieces: dict[Any, list[tuple[float, float]]] = {}
             for point in curve:
                 pieces.setdefault(point[columns.index("piece")], []).append((point[ix], point[iy]))
