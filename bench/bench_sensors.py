@@ -21,7 +21,7 @@ import os
 import random
 import tempfile
 
-from bench_structure import companion, diag, fmt, run
+from bench_structure import block_diagonal, cyclotomic_companion, fmt, run
 
 
 def body(A: list[list[int]], rows: list[list[int]]) -> str:
@@ -36,10 +36,10 @@ def body(A: list[list[int]], rows: list[list[int]]) -> str:
 def cases() -> list[tuple[str, str]]:
     out = []
     for period, A in [
-        (15, diag(companion(15))),
-        (21, diag(companion(21))),
-        (36, diag(companion(4), companion(9))),
-        (60, diag(companion(3), companion(4), companion(5))),
+        (15, block_diagonal(cyclotomic_companion(15))),
+        (21, block_diagonal(cyclotomic_companion(21))),
+        (36, block_diagonal(cyclotomic_companion(4), cyclotomic_companion(9))),
+        (60, block_diagonal(cyclotomic_companion(3), cyclotomic_companion(4), cyclotomic_companion(5))),
     ]:
         n = len(A)
         unit = [[1] + [0] * (n - 1), [0, 1] + [0] * (n - 2)]

@@ -27,7 +27,10 @@ import sys
 import tempfile
 
 from bench_verdict import cases as verdict_cases
-from flint import fmpz_poly
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tests"))
+
+from support.plants import block_diagonal, cyclotomic_companion  # noqa: E402
 
 CHILD = r"""
 import json, sys, time
@@ -51,36 +54,16 @@ def dense(n: int) -> tuple[str, list, list, dict]:
     return f"dense random {n}x{n}", A, [[1] + [0] * (n - 1)], {"model": "bernoulli", "arrival_probability": "1/2"}
 
 
-def companion(m: int, alpha: int = 2) -> list[list[int]]:
-    c = [int(x) for x in fmpz_poly.cyclotomic(m).coeffs()]
-    d = len(c) - 1
-    A = [[0] * d for _ in range(d)]
-    for i in range(1, d):
-        A[i][i - 1] = alpha
-    for i in range(d):
-        A[i][d - 1] = -alpha * c[i]
-    return A
-
-
-def diag(*blocks: list[list[int]]) -> list[list[int]]:
-    n = sum(len(b) for b in blocks)
-    A = [[0] * n for _ in range(n)]
-    k = 0
-    for b in blocks:
-        for i, row in enumerate(b):
-            for j, x in enumerate(row):
-                A[k + i][k + j] = x
-        k += len(b)
-    return A
-
-
 def two_sensor_bodies() -> list[tuple[str, str]]:
     out = []
     for name, A in [
-        ("two sensors, period 15", diag(companion(15))),
-        ("two sensors, period 21", diag(companion(21))),
-        ("two sensors, period 36", diag(companion(4), companion(9))),
-        ("two sensors, period 60", diag(companion(3), companion(4), companion(5))),
+        ("two sensors, period 15", block_diagonal(cyclotomic_companion(15))),
+        ("two sensors, period 21", block_diagonal(cyclotomic_companion(21))),
+        ("two sensors, period 36", block_diagonal(cyclotomic_companion(4), cyclotomic_companion(9))),
+        (
+            "two sensors, period 60",
+            block_diagonal(cyclotomic_companion(3), cyclotomic_companion(4), cyclotomic_companion(5)),
+        ),
     ]:
         n = len(A)
         system = {

@@ -8,7 +8,6 @@ from fractions import Fraction
 
 import numpy as np
 import pytest
-from flint import fmpz_poly
 
 from kfio import load_request
 from kfio._budget import Budget
@@ -20,30 +19,9 @@ from kfio.stability._sigma import undominated
 from kfio.structure import fmo_blocks
 from kfio.structure._phases import PhaseBlock
 
+from support.plants import block_diagonal, cyclotomic_companion
+
 SEED = 20261201
-
-
-def cyclotomic_companion(m: int, alpha: int = 2) -> list[list[int]]:
-    """``alpha`` times the companion matrix of ``Phi_m``: eigenvalues ``alpha`` times primitive ``m``-th roots."""
-    c = [int(x) for x in fmpz_poly.cyclotomic(m).coeffs()]
-    d = len(c) - 1
-    A = [[0] * d for _ in range(d)]
-    for i in range(1, d):
-        A[i][i - 1] = alpha
-    for i in range(d):
-        A[i][d - 1] = -alpha * c[i]
-    return A
-
-
-def block_diagonal(*blocks: list[list[int]]) -> list[list[int]]:
-    n = sum(len(b) for b in blocks)
-    A = [[0] * n for _ in range(n)]
-    k = 0
-    for b in blocks:
-        for i, row in enumerate(b):
-            A[k + i][k : k + len(row)] = row
-        k += len(b)
-    return A
 
 
 def random_block(rng: np.random.Generator, N0: int, real: bool, rows: int = 1) -> PhaseBlock:

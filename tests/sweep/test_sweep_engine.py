@@ -13,6 +13,8 @@ from kfio import analyze, compute_bounds, load_request
 from kfio.sweep import cache_stats, clear_caches, iter_sweep, load_sweep, point_at, row_from_report, run_sweep
 from kfio.sweep._spec import request_text
 
+from support.plants import block_diagonal, cyclotomic_companion
+
 SEED_2X2 = {
     "system": {"A": [[1.25, 0], [1, 1.1]], "C": [[1, 1]], "Q": [[20, 0], [0, 20]], "R": [[2.5]]},
     "channel": {"model": "bernoulli", "arrival_probability": 0.5},
@@ -25,12 +27,9 @@ GE = {
 
 # 2 blkdiag(rotation of order 3, rotation of order 4, companion of Phi_5): one FMO class of period 60,
 # an analysis slow enough (blind-set search) that a killed worker has work in flight
-_PHI5 = [[0, 0, 0, -2], [2, 0, 0, -2], [0, 2, 0, -2], [0, 0, 2, -2]]
-_A60 = [[0] * 8 for _ in range(8)]
-for _off, _blk in ((0, [[-1, -3], [1, -1]]), (2, [[0, -2], [2, 0]]), (4, _PHI5)):
-    for _i, _row in enumerate(_blk):
-        for _j, _x in enumerate(_row):
-            _A60[_off + _i][_off + _j] = _x
+_A60 = block_diagonal(
+    [[-1, -3], [1, -1]], [[0, -2], [2, 0]], cyclotomic_companion(5)
+)  # cyclotomic_companion(5) is 2 companion(Phi_5)
 PERIOD_60 = {
     "system": {"A": _A60, "C": [[1, 0, 1, 0, 1, 0, 0, 0]]},
     "channel": {"model": "bernoulli", "arrival_probability": 0.5},
