@@ -22,6 +22,7 @@ so a hyperplane reached from several rotations costs one key.
 from __future__ import annotations
 
 from dataclasses import replace
+from typing import Protocol
 
 import numpy as np
 
@@ -35,6 +36,18 @@ _BATCH = 256
 _ENTRIES = 1 << 22
 
 
+class Collector(Protocol):
+    """What the batched walk reports maximal blind sets to, and asks which subtrees to keep."""
+
+    def alive(self, masks: np.ndarray, cores: np.ndarray) -> np.ndarray:
+        """Per flat (rows of ``masks``, core slots ``cores``): whether its subtree may still matter."""
+        ...  # pragma: no cover - protocol
+
+    def offer(self, masks: np.ndarray) -> None:
+        """Record maximal blind sets (rows of ``masks``)."""
+        ...  # pragma: no cover - protocol
+
+
 class _Found:
     """Orbit representatives of the maximal blind sets found, deduplicated by their bits first."""
 
@@ -42,6 +55,10 @@ class _Found:
         self.space = space
         self.seen: set[bytes] = set()
         self.orbits: dict[tuple[int, ...], np.ndarray] = {}
+
+    def alive(self, masks: np.ndarray, cores: np.ndarray) -> np.ndarray:
+        """Every subtree may hold a new orbit: enumeration prunes nothing."""
+        return np.ones(masks.shape[0], dtype=bool)
 
     def offer(self, masks: np.ndarray) -> None:
         for m, packed in zip(masks, np.packbits(masks, axis=1)):
@@ -196,7 +213,7 @@ def _expand(
     cores: np.ndarray,
     K: np.ndarray,
     margins: Margins,
-    found: _Found,
+    found: Collector,
 ) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
     """Expand a batch of flats sharing a kernel dimension; return the child batches to expand."""
     index = np.arange(space.size)
@@ -218,6 +235,9 @@ def _expand(
     grown = Q[b]
     grown[np.arange(b.size), e] = True
     early = gap_canonical_possible(space, grown, e)
+    b, e = b[early], e[early]
+    grown = grown[early]
+    early = found.alive(grown, e)
     b, e = b[early], e[early]
     if b.size == 0:
         return []
@@ -241,6 +261,38 @@ def _expand(
     return out
 
 
+def walk(space: SlotSpace, budget: Budget, margins: Margins, found: Collector) -> int:
+    """Batched closure extension over gap-canonical flats, offering maximal blind sets to ``found``.
+
+    ``found.alive`` may prune subtrees (a branch and bound); it is asked
+    before any residual of a new pair and again when a batch leaves the
+    stack.  Returns the number of flats expanded.
+
+    Raises
+    ------
+    BudgetExceeded
+        When ``budget`` runs out (one tick per expanded flat).
+    """
+    start = root(space, margins)
+    stack = [(start.mask[None, :], np.array([start.core]), np.eye(space.n_columns, dtype=space.rows.dtype)[None, :, :])]
+    nodes = 0
+    while stack:
+        masks, cores, K = stack.pop()
+        limit = max(1, min(_BATCH, _ENTRIES // max(1, space.size * space.size * K.shape[2])))
+        if masks.shape[0] > limit:
+            stack.append((masks[limit:], cores[limit:], K[limit:]))
+            masks, cores, K = masks[:limit], cores[:limit], K[:limit]
+        live = found.alive(masks, cores)
+        if not live.all():
+            masks, cores, K = masks[live], cores[live], K[live]
+            if masks.shape[0] == 0:
+                continue
+        budget.tick("sigma: closure search", masks.shape[0])
+        nodes += masks.shape[0]
+        stack.extend(_expand(space, masks, cores, K, margins, found))
+    return nodes
+
+
 def enumerate_orbits(space: SlotSpace, budget: Budget, margins: Margins) -> SearchResult:
     """Every shift orbit of maximal blind sets, by batched closure extension.
 
@@ -257,17 +309,6 @@ def enumerate_orbits(space: SlotSpace, budget: Budget, margins: Margins) -> Sear
     space = real_space(space)
     W_len = space.window(margins)
     found = _Found(space)
-    start = root(space, margins)
-    stack = [(start.mask[None, :], np.array([start.core]), np.eye(space.n_columns, dtype=space.rows.dtype)[None, :, :])]
-    nodes = 0
-    while stack:
-        masks, cores, K = stack.pop()
-        limit = max(1, min(_BATCH, _ENTRIES // max(1, space.size * space.size * K.shape[2])))
-        if masks.shape[0] > limit:
-            stack.append((masks[limit:], cores[limit:], K[limit:]))
-            masks, cores, K = masks[:limit], cores[:limit], K[:limit]
-        budget.tick("sigma: closure search", masks.shape[0])
-        nodes += masks.shape[0]
-        stack.extend(_expand(space, masks, cores, K, margins, found))
+    nodes = walk(space, budget, margins, found)
     maximal = tuple(found.orbits[k] for k in sorted(found.orbits))
     return SearchResult(maximal=maximal, nodes=nodes, planes=0, window=W_len)

@@ -40,6 +40,7 @@ from ..model._types import MarkovChannel
 from ..structure._phases import PhaseBlock
 from ._blind import Margins, Objective, SlotSpace, search
 from ._blind_batch import enumerate_orbits
+from ._pareto import pareto_search
 
 #: Closure-search steps allowed when the caller passes no budget.
 DEFAULT_MAX_STEPS = 200_000
@@ -72,8 +73,12 @@ class SigmaResult:
         A maximal blind set of slots ``(n, g)``, ``n`` in ``[0, N)``,
         attaining ``sigma``.
     maximal_blind_sets:
-        One representative per shift orbit of every maximal blind set when
-        they were enumerated; ``()`` if only the worst one was searched.
+        Several packets: with a Markov channel among them, one representative
+        per shift orbit of every maximal blind set; with Bernoulli channels
+        only, one maximal blind set per undominated miss vector ``z`` (the
+        only ones that can attain ``sigma`` or bind a region, whatever the
+        arrival probabilities: Rohr, Marelli and Fu (2014), Corollary 2).
+        One packet: ``()`` if only the worst one was searched.
     bernoulli_exponents:
         Only if every channel is Bernoulli: ``z_g / N`` per group for the
         worst set, ``z_g`` the phases ``n`` with ``(n, g)`` not in it; then
@@ -546,9 +551,16 @@ def _find_worst(
             f"window {res.window}"
         )
         return _Found(res.maximal[0], (), False, method)
-    res = enumerate_orbits(space, budget, margins)
+    if all(ch.order == 0 for ch in channels):
+        res = pareto_search(space, budget, margins)
+        method = (
+            f"Pareto branch and bound over per-sensor miss counts: {len(res.maximal)} undominated vectors "
+            f"over {res.nodes} flats"
+        )
+    else:
+        res = enumerate_orbits(space, budget, margins)
+        method = f"enumerated {len(res.maximal)} shift orbits of maximal blind sets over {res.nodes} flats"
     worst = res.maximal[int(np.argmax(objective.score(np.array(res.maximal))))]
-    method = f"enumerated {len(res.maximal)} shift orbits of maximal blind sets over {res.nodes} flats"
     return _Found(worst, res.maximal, True, method)
 
 
@@ -661,9 +673,11 @@ def compute_sigma(block: PhaseBlock, channels: Sequence[MarkovChannel], budget: 
     one packet has only the empty blind set, ``sigma = P(g = 0 | nu zeros)``
     (Lemma 2); otherwise maximal blind sets are closures
     (:mod:`kfio.stability._blind`).  With one packet a branch and bound finds the
-    worst one (for Bernoulli the largest, Corollary 2); with several packets
-    every shift orbit is enumerated, since exact stability regions need all
-    of them.
+    worst one (for Bernoulli the largest, Corollary 2); with several Bernoulli
+    packets a Pareto branch and bound finds one set per undominated miss
+    vector (:mod:`kfio.stability._pareto`), which is all that ``sigma`` and
+    the exact stability regions depend on; with a Markov packet among several
+    every shift orbit is enumerated.
 
     Parameters
     ----------

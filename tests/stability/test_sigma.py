@@ -224,12 +224,40 @@ def maximal_blind_by_subsets(block: PhaseBlock) -> set[frozenset]:
     ],
 )
 def test_enumerated_maximal_blind_sets_are_all_orbits(c_int, exponents, N0, groups) -> None:
+    # A Markov channel: sigma depends on where the misses fall, so every orbit is enumerated.
     block = block_of(c_int, exponents, N0, groups)
-    res = compute_sigma(block, [bernoulli(F(1, 2)) for _ in groups])
+    res = compute_sigma(block, [gilbert_elliott(F(1, 3), F(1, 4))] + [bernoulli(F(1, 2)) for _ in groups[1:]])
     expected = {orbit(S, N0) for S in maximal_blind_by_subsets(block)}
     got = [orbit(S, N0) for S in res.maximal_blind_sets]
     assert len(got) == len(set(got)), "one representative per shift orbit"
     assert set(got) == expected
+
+
+def miss_vector(S, N0: int, groups: int) -> tuple[int, ...]:
+    return tuple(N0 - sum(1 for n, g in S if g == k and n < N0) for k in range(groups))
+
+
+@pytest.mark.parametrize(
+    ("c_int", "exponents", "N0", "groups"),
+    [
+        ([[1, 1], [1, 2]], (0, 1), 2, ((0,), (1,))),
+        ([[1, 1, 1], [1, -1, 2]], (0, 1, 3), 4, ((0,), (1,))),
+        ([[1, 2, 0], [0, 1, 1], [1, 0, 1]], (0, 2, 1), 3, ((0,), (1, 2))),
+        ([[1, 1, 1, 1], [2, 1, 0, 1]], (0, 2, 3, 1), 4, ((0,), (1,))),
+        ([[1, 1, 1], [1, -1, 2], [2, 0, 1]], (0, 1, 3), 4, ((0,), (1,), (2,))),
+    ],
+)
+def test_bernoulli_sensors_keep_one_set_per_undominated_miss_vector(c_int, exponents, N0, groups) -> None:
+    # Bernoulli sensors: only componentwise-minimal miss vectors can matter (Corollary 2).
+    block = block_of(c_int, exponents, N0, groups)
+    res = compute_sigma(block, [bernoulli(F(1, 2)) for _ in groups])
+    maximal = maximal_blind_by_subsets(block)
+    vectors = {miss_vector(S, N0, len(groups)) for S in maximal}
+    expected = {z for z in vectors if not any(w != z and all(a <= b for a, b in zip(w, z)) for w in vectors)}
+    got = [miss_vector(S, N0, len(groups)) for S in res.maximal_blind_sets]
+    assert sorted(got) == sorted(expected), "one set per undominated vector"
+    base = {frozenset((n, g) for n, g in S if n < N0) for S in res.maximal_blind_sets}
+    assert all(any(orbit(S, N0) == orbit(T, N0) for T in maximal) for S in base), "each is a maximal blind set"
 
 
 @pytest.mark.parametrize(

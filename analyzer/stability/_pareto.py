@@ -1,0 +1,184 @@
+"""Undominated miss vectors of maximal blind sets, by a Pareto branch and bound.
+
+With independent Bernoulli sensors (one per row group) a maximal blind set
+``F`` enters every result only through its miss vector ``z(F)``, ``z_g`` the
+phases of ``[0, N0)`` at which group ``g`` is not in ``F``:
+``rho(P_F) = prod_g (1 - lambda_g)^{z_g}`` (Rohr, Marelli and Fu (2014),
+Corollary 2) is strictly decreasing in every ``z_g``, so ``sigma`` and every
+stability region depend only on the componentwise-minimal (undominated)
+miss vectors, whatever the arrival probabilities.  This module finds those
+vectors without enumerating every shift orbit of maximal blind sets.
+
+The walk is the batched closure search of :mod:`kfio.stability._blind_batch`
+(prefix-preserving closure extension, flats in gap-canonical rotation),
+with a *front* of the undominated vectors found so far in place of the
+list of every orbit:
+
+* **decided slots**: the flats below a flat with core slot ``c`` agree
+  with it on the slots ``<= c``, so the slots ``<= c`` it misses are missed
+  by every set in its subtree, a lower bound ``b`` on their ``z``; the
+  subtree is cut when every ``z >= b`` is dominated by or equal to a vector
+  of the front;
+* **one-group bounds**: ``z_g(D) >= m_g``, ``m_g`` the fewest misses of any
+  blind set of group ``g`` alone (a subset of a blind set is blind), from
+  the one-group branch and bound of :func:`kfio.stability._blind.search`;
+* **total misses**: a vector the front does not dominate misses at most
+  ``w_max`` slots in all, the largest total over the undominated vectors of
+  the box ``m <= z <= N0``.
+
+Every vector of the final front is attained by a maximal blind set found in
+the walk, and every maximal blind set in gap-canonical rotation either was
+offered to the front or lies in a cut subtree, whose sets all have vectors
+dominated by or equal to one of the front: the front is exactly the set of
+undominated miss vectors, each with one representative set (the first one
+found).  The test oracles are the enumeration of every orbit
+(:func:`kfio.stability._blind_batch.enumerate_orbits`) followed by
+:func:`kfio.stability._sigma.undominated`, and all subsets of small blocks.
+"""
+
+from __future__ import annotations
+
+import functools
+import itertools
+
+import numpy as np
+
+from .._budget import Budget
+from ._blind import Margins, Objective, SearchResult, SlotSpace, search
+
+#: Most points of the box ``[m, N0]^G`` searched for ``w_max``; beyond it the window bound is not used.
+_BOX_POINTS = 1 << 20
+
+
+class Front:
+    """Undominated miss vectors found so far, one representative mask each.
+
+    Parameters
+    ----------
+    space:
+        The slot space (``N0`` phases, ``G`` groups).
+    lower:
+        ``m_g``: no blind set misses fewer than ``m_g`` slots of group ``g``.
+    """
+
+    def __init__(self, space: SlotSpace, lower: np.ndarray) -> None:
+        self.space = space
+        self.lower = lower
+        self.vectors = np.zeros((0, space.n_groups), dtype=int)
+        self.masks: list[np.ndarray] = []
+        self._w: int | None = None
+
+    def misses(self, masks: np.ndarray) -> np.ndarray:
+        """``z`` per row of ``masks``: per group, the phases not held."""
+        C = masks.shape[0]
+        return self.space.n_phases - masks.reshape(C, self.space.n_phases, self.space.n_groups).sum(axis=1)
+
+    def dead(self, bounds: np.ndarray) -> np.ndarray:
+        """Rows ``b`` of ``bounds`` such that every ``z >= b`` is dominated by or equal to a front vector."""
+        if self.vectors.shape[0] == 0:
+            return np.zeros(bounds.shape[0], dtype=bool)
+        b = np.maximum(bounds, self.lower[None, :])
+        return (b[:, None, :] >= self.vectors[None, :, :]).all(axis=2).any(axis=1)
+
+    def alive(self, masks: np.ndarray, cores: np.ndarray) -> np.ndarray:
+        """Whether the subtree of each flat may still hold a vector the front does not dominate or equal.
+
+        Flats below a flat with core ``c`` agree with it on the slots
+        ``<= c``, so the slots up to ``c`` it misses are missed by all of
+        them: a lower bound on their ``z``, and on their total misses.
+        """
+        decided = np.arange(self.space.size)[None, :] <= cores[:, None]
+        z = self.misses(masks | ~decided)
+        return ~self.dead(z) & (z.sum(axis=1) <= self.max_total())
+
+    def offer(self, masks: np.ndarray) -> None:
+        """Add the maximal blind sets (rows) whose miss vectors are not dominated or equalled."""
+        if masks.shape[0] == 0:
+            return
+        z = self.misses(masks)
+        for i in np.flatnonzero(~self.dead(z)):
+            zi = z[i]
+            if self.dead(zi[None, :])[0]:
+                continue  # an earlier row of this batch dominates or equals it
+            keep = ~(self.vectors >= zi[None, :]).all(axis=1)
+            self.vectors = np.concatenate([self.vectors[keep], zi[None, :]])
+            self.masks = [m for m, k in zip(self.masks, keep) if k] + [masks[i].copy()]
+            self._w = None
+
+    def max_total(self) -> int:
+        """``w_max``: the most slots in all that a vector the front does not dominate may miss."""
+        if self._w is not None:
+            return self._w
+        N0, G = self.space.n_phases, self.space.n_groups
+        sizes = [N0 + 1 - int(m) for m in self.lower]
+        if int(np.prod(sizes)) > _BOX_POINTS:
+            self._w = N0 * G
+            return self._w
+        grid = np.array(list(itertools.product(*(range(int(m), N0 + 1) for m in self.lower))), dtype=int)
+        alive = ~self.dead(grid)
+        self._w = int(grid[alive].sum(axis=1).max()) if alive.any() else -1
+        return self._w
+
+
+def group_space(space: SlotSpace, g: int) -> SlotSpace:
+    """The slots of group ``g`` alone, as a one-group space (same tolerance)."""
+    rows = space.rows[g :: space.n_groups]
+    return SlotSpace(n_phases=space.n_phases, n_groups=1, rows=np.ascontiguousarray(rows), tol=space.tol)
+
+
+def group_lower_bounds(space: SlotSpace, budget: Budget, margins: Margins) -> np.ndarray:
+    """``m_g``: the fewest slots of group ``g`` that a blind set misses.
+
+    A subset of a blind set is blind, so ``D`` blind gives ``D cap g`` blind
+    for group ``g`` alone: ``z_g(D) >= N0 - (largest blind set of g alone)``,
+    from the one-group branch and bound for the largest blind set (0 when
+    group ``g`` alone is rank-deficient).
+    """
+    out = np.zeros(space.n_groups, dtype=int)
+    for g in range(space.n_groups):
+        sub = group_space(space, g)
+        if sub.rank(np.ones(sub.size, dtype=bool), margins) < sub.n_columns:
+            continue
+        objective = Objective(score=_held, max_weight=functools.partial(_most_misses, sub.size))
+        res = search(sub, budget, margins, objective)
+        out[g] = space.n_phases - int(res.maximal[0].sum())
+    return out
+
+
+def _most_misses(size: int, best: float) -> int:
+    """Most slots a set may miss and still hold more than ``best`` slots."""
+    return size - int(best) - 1
+
+
+def _held(masks: np.ndarray) -> np.ndarray:
+    return masks.sum(axis=1).astype(float)
+
+
+def pareto_search(space: SlotSpace, budget: Budget, margins: Margins) -> SearchResult:
+    """One maximal blind set per undominated miss vector (Rohr, Marelli and Fu (2014), Corollary 2).
+
+    The batched closure walk of :func:`kfio.stability._blind_batch.walk`
+    (gap-canonical rotations, real rows where the plant is real) with
+    :class:`Front` deciding which subtrees to keep.
+
+    Returns
+    -------
+    SearchResult
+        :attr:`~SearchResult.maximal` holds one representative per
+        undominated vector ``z``, rotated to its orbit key, in the order of
+        the keys.
+
+    Raises
+    ------
+    BudgetExceeded
+        When ``budget`` runs out (one tick per expanded flat, also in the
+        one-group searches for ``m_g``).
+    """
+    from ._blind_batch import real_space, walk  # local: _blind_batch is heavier and imports _blind too
+
+    front = Front(space, group_lower_bounds(space, budget, margins))
+    real = real_space(space)
+    nodes = walk(real, budget, margins, front)
+    keys = sorted(space.orbit_key(m) for m in front.masks)
+    reps = tuple(np.isin(np.arange(space.size), key) for key in keys)
+    return SearchResult(maximal=reps, nodes=nodes, planes=0, window=real.window(margins))

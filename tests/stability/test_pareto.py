@@ -1,0 +1,252 @@
+"""The Pareto search for undominated miss vectors against enumeration, all subsets and brute force.
+
+Under independent Bernoulli sensors ``compute_sigma`` keeps one maximal blind
+set per undominated miss vector (:mod:`kfio.stability._pareto`).  Oracles:
+
+* the enumeration of every shift orbit (:func:`enumerate_orbits`, the
+  previous route) followed by :func:`undominated`;
+* every subset of the slots of tiny blocks (no closures, no rotations);
+* the covered-set dynamic programme of :mod:`bruteforce_sensors` on plants
+  built from cyclotomic blocks (floating-point eigenvectors, no FMO code).
+"""
+
+from __future__ import annotations
+
+import itertools
+import json
+import math
+from fractions import Fraction
+
+import numpy as np
+import pytest
+
+from kfio import analyze, load_request
+from kfio._budget import Budget
+from kfio.errors import BudgetExceeded
+from kfio.model._types import MarkovChannel
+from kfio.stability import compute_sigma
+from kfio.stability._blind import Margins, SlotSpace
+from kfio.stability._blind_batch import enumerate_orbits
+from kfio.stability._pareto import Front, group_lower_bounds, pareto_search
+from kfio.stability._sigma import undominated
+from kfio.structure import fmo_blocks
+from kfio.structure._phases import PhaseBlock
+
+from support.bruteforce_sensors import bernoulli, block_rates, sensor_request
+from support.plants import block_diagonal, cyclotomic_companion
+
+SEED = 20261202
+
+
+def random_block(rng: np.random.Generator, N0: int, groups: int, rows: int, real: bool) -> PhaseBlock:
+    """``groups`` row groups of ``rows`` rows over ``N0`` phases, exponents of small orders (degenerate often).
+
+    ``real``: columns in conjugate pairs (a real plant); some blocks get a
+    zero column entry or a repeated exponent, so that blind sets are large.
+    """
+    L = int(rng.integers(2, 7))
+    p = groups * rows
+    divisors = [m for m in range(1, N0 + 1) if N0 % m == 0]
+    if real:
+        exps: list[int] = []
+        cols = []
+        while len(exps) + 2 <= L:
+            m = int(rng.choice(divisors))
+            e = int(rng.integers(0, m)) * (N0 // m)
+            col = rng.integers(-2, 3, size=p) + 1j * rng.integers(-2, 3, size=p)
+            exps += [e, -e % N0]
+            cols += [col, col.conj()]
+        if len(exps) < L:
+            exps.append(0)
+            cols.append(rng.integers(-2, 3, size=p).astype(complex))
+        c = np.array(cols).T
+    else:
+        exps = [int(rng.integers(0, m)) * (N0 // m) for m in rng.choice(divisors, size=L)]
+        c = rng.integers(-2, 3, size=(p, L)) + 1j * rng.integers(-2, 3, size=(p, L))
+    if not np.abs(c).sum(axis=0).all():
+        c[0, np.abs(c).sum(axis=0) == 0] = 1
+    c = c / np.linalg.norm(c, axis=0)
+    row_groups = tuple(tuple(range(g * rows, (g + 1) * rows)) for g in range(groups))
+    return PhaseBlock(N0, tuple(exps), c, row_groups)
+
+
+def vectors(space: SlotSpace, masks) -> list[tuple[int, ...]]:
+    return sorted(
+        tuple(int(x) for x in space.n_phases - m.reshape(space.n_phases, space.n_groups).sum(axis=0)) for m in masks
+    )
+
+
+def rank(space: SlotSpace, mask: np.ndarray) -> int:
+    M = space.rows[mask].reshape(-1, space.n_columns)
+    return int(np.linalg.matrix_rank(M, tol=1e-8)) if M.shape[0] else 0
+
+
+def assert_maximal_blind(space: SlotSpace, mask: np.ndarray) -> None:
+    L = space.n_columns
+    assert rank(space, mask) < L
+    for t in np.flatnonzero(~mask):
+        assert rank(space, mask | (np.arange(space.size) == t)) == L
+
+
+def case(i: int) -> PhaseBlock:
+    rng = np.random.default_rng([SEED, i])
+    groups = 3 if i % 4 == 3 else 2
+    N0 = int(rng.integers(2, 7 if groups == 3 else 13))
+    return random_block(rng, N0, groups, rows=1 + (i % 5 == 4), real=i % 3 != 0)
+
+
+@pytest.mark.parametrize("i", range(80))
+def test_front_equals_undominated_orbits(i: int) -> None:
+    block = case(i)
+    space = SlotSpace.from_block(block)
+    budget = Budget(max_steps=2_000_000)
+    front = pareto_search(space, budget, Margins(space.tol))
+    every = enumerate_orbits(space, budget, Margins(space.tol))
+    assert vectors(space, front.maximal) == sorted(set(vectors(space, undominated(space, list(every.maximal)))))
+    for m in front.maximal:
+        assert_maximal_blind(space, m)
+        assert tuple(np.flatnonzero(m)) == space.orbit_key(m), "representatives are rotated to their orbit key"
+
+
+def subsets_front(space: SlotSpace) -> list[tuple[int, ...]]:
+    """Undominated miss vectors of all maximal rank-deficient subsets, from all ``2^S`` subsets."""
+    S, L = space.size, space.n_columns
+    blind = [
+        sub
+        for k in range(S + 1)
+        for sub in itertools.combinations(range(S), k)
+        if np.linalg.matrix_rank(space.rows[list(sub)].reshape(-1, L), tol=1e-8) < L
+    ]
+    sets = [set(b) for b in blind]
+    maximal = [np.isin(np.arange(S), sorted(b)) for b in sets if not any(b < c for c in sets)]
+    z = set(vectors(space, maximal))
+    return sorted(a for a in z if not any(b != a and all(x <= y for x, y in zip(b, a)) for b in z))
+
+
+@pytest.mark.parametrize("i", range(40))
+def test_front_equals_all_subsets(i: int) -> None:
+    rng = np.random.default_rng([SEED, 3000 + i])
+    groups = 3 if i % 3 == 2 else 2
+    N0 = int(rng.integers(2, 4 if groups == 3 else 6))
+    block = random_block(rng, N0, groups, rows=1, real=i % 2 == 0)
+    space = SlotSpace.from_block(block)
+    front = pareto_search(space, Budget(max_steps=100_000), Margins(space.tol))
+    assert vectors(space, front.maximal) == subsets_front(space)
+
+
+def test_unobserved_group_and_unobserved_column() -> None:
+    # Group 1 has a zero row: it is in every closure, m_1 = 0 and every vector has z_1 = 0.
+    block = PhaseBlock(4, (0, 1, 3), np.array([[1, 1, 1], [0, 0, 0]], dtype=complex), ((0,), (1,)))
+    space = SlotSpace.from_block(block)
+    lower = group_lower_bounds(space, Budget(max_steps=10_000), Margins(space.tol))
+    expected = subsets_front(space)
+    assert lower[1] == 0 and all(z[1] == 0 and z[0] >= lower[0] for z in expected)
+    front = pareto_search(space, Budget(max_steps=10_000), Margins(space.tol))
+    assert vectors(space, front.maximal) == expected
+    # A column nobody sees: every set is blind, the one vector is z = 0.
+    dead = PhaseBlock(3, (0, 1), np.array([[1, 0], [1, 0]], dtype=complex), ((0,), (1,)))
+    space = SlotSpace.from_block(dead)
+    assert vectors(space, pareto_search(space, Budget(max_steps=1000), Margins(space.tol)).maximal) == [(0, 0)]
+
+
+def test_front_keeps_only_undominated_vectors() -> None:
+    space = SlotSpace.from_block(PhaseBlock(4, (0,), np.ones((2, 1), complex), ((0,), (1,))))
+    front = Front(space, np.array([0, 1]))
+    rng = np.random.default_rng([SEED, 5])
+    masks = rng.random((60, space.size)) < 0.5
+    masks[:, 1] = False  # slot (0, 1) is never held: z_1 >= 1, as the lower bound promises
+    for part in np.array_split(masks, 7):
+        front.offer(part)
+    z = vectors(space, masks)
+    minimal = sorted({a for a in z if not any(b != a and all(x <= y for x, y in zip(b, a)) for b in z)})
+    assert sorted(map(tuple, front.vectors.tolist())) == minimal
+    assert vectors(space, front.masks) == minimal
+    # w_max: the largest total of a vector in [0, 4] x [1, 4] that no front vector dominates or equals.
+    box = [(a, b) for a in range(0, 5) for b in range(1, 5)]
+    alive = [v for v in box if not any(all(x >= y for x, y in zip(v, f)) for f in minimal)]
+    assert front.max_total() == max((sum(v) for v in alive), default=-1)
+
+
+def plant_case(i: int) -> tuple[list[list[int]], list[list[list[int]]], list[float]]:
+    """Cyclotomic blocks of small period, random integer sensor rows (2 or 3 sensors)."""
+    rng = np.random.default_rng([SEED, 7000 + i])
+    sensors = 3 if i % 4 == 3 else 2
+    choices = (
+        [(3,), (4,), (6,), (5,), (2, 3), (2, 4), (3, 6), (4, 2, 2)] if sensors == 2 else [(3,), (4,), (2, 2), (2, 4)]
+    )
+    factors = choices[int(rng.integers(0, len(choices)))]
+    A = block_diagonal(*[cyclotomic_companion(int(m), alpha=int(rng.choice([2, 3]))) for m in factors])
+    n = len(A)
+    while True:
+        Cs = [[[int(x) for x in rng.integers(-1, 2, size=n)]] for _ in range(sensors)]
+        C = np.array([rows[0] for rows in Cs], dtype=float)
+        obs = np.vstack([C @ np.linalg.matrix_power(np.array(A, dtype=float), k) for k in range(n)])
+        if np.linalg.matrix_rank(obs) == n:
+            break  # an unobservable mode keeps every pattern blind: the oracle's DP would visit 2^S sets
+    lambdas = [float(x) for x in rng.choice([0.3, 0.5, 0.7, 0.9], size=sensors)]
+    return A, Cs, lambdas
+
+
+@pytest.mark.parametrize("i", range(24))
+def test_block_rates_of_cyclotomic_plants_match_bruteforce(i: int) -> None:
+    A, Cs, lambdas = plant_case(i)
+    rep = analyze(sensor_request(A, Cs, lambdas, noise=False))
+    mine = sorted((round(b.modulus**2, 9), b.rate) for b in rep.blocks if b.rate is not None)
+    C = np.array([row for rows in Cs for row in rows], dtype=float)
+    groups = [[s] for s in range(len(Cs))]
+    oracle = sorted(
+        (round(beta, 9), rate)
+        for beta, rate in block_rates(np.array(A, float), C, groups, [bernoulli(x) for x in lambdas])
+    )
+    assert [b for b, _ in mine] == [b for b, _ in oracle]
+    for (_, r1), (_, r2) in zip(mine, oracle):
+        assert r1 == pytest.approx(r2, rel=1e-8)
+    assert all(b.certified for b in rep.blocks)
+
+
+def bench_block(factors: tuple[int, ...], dense: bool) -> PhaseBlock:
+    """The blocks of ``bench/bench_sensors.py``: rows ``e_1, e_2`` or dense rows from ``random.Random(period)``."""
+    import random
+
+    A = block_diagonal(*[cyclotomic_companion(m) for m in factors])
+    n, period = len(A), math.lcm(*factors)
+    if dense:
+        rng = random.Random(period)
+        rows = [[rng.randint(-3, 3) for _ in range(n)] for _ in range(2)]
+    else:
+        rows = [[1] + [0] * (n - 1), [0, 1] + [0] * (n - 2)]
+    body = {
+        "system": {"A": A, "C": rows, "sensors": [{"name": "s0", "rows": [0]}, {"name": "s1", "rows": [1]}]},
+        "channel": {
+            "model": "per_sensor",
+            "channels": {s: {"model": "bernoulli", "arrival_probability": "1/2"} for s in ("s0", "s1")},
+        },
+    }
+    (block,) = [b for b in fmo_blocks(load_request(json.dumps(body)).system) if b.phase is not None]
+    assert block.phase is not None
+    return block.phase
+
+
+@pytest.mark.parametrize("dense", [False, pytest.param(True, marks=pytest.mark.slow)])
+def test_period_15_bench_cases_equal_enumeration(dense: bool) -> None:
+    block = bench_block((15,), dense)
+    space = SlotSpace.from_block(block)
+    every = enumerate_orbits(space, Budget(max_steps=2_000_000), Margins(space.tol))
+    ch = MarkovChannel("bernoulli", 0, (Fraction(1, 2),))
+    res = compute_sigma(block, [ch, ch], Budget(max_steps=2_000_000))
+    assert vectors(space, [space.mask(sorted({(n % 15, g) for n, g in F})) for F in res.maximal_blind_sets]) == sorted(
+        set(vectors(space, undominated(space, list(every.maximal))))
+    )
+    z = [15 - m.reshape(15, 2).sum(axis=0) for m in every.maximal]
+    best = max(z, key=lambda v: -(v[0] + v[1]))
+    assert sum(res.bernoulli_exponents) == Fraction(int(best.sum()), 15), "sigma = (1/2)^(total misses / N)"
+    assert res.certified
+
+
+def test_small_budget_stops_the_search() -> None:
+    block = bench_block((21,), dense=False)
+    ch = MarkovChannel("bernoulli", 0, (Fraction(1, 2),))
+    with pytest.raises(BudgetExceeded):
+        compute_sigma(block, [ch, ch], Budget(max_steps=40))
+    with pytest.raises(BudgetExceeded):
+        compute_sigma(bench_block((21,), dense=True), [ch, ch], Budget(seconds=0.2))
