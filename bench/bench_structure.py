@@ -39,7 +39,7 @@ from kfio._budget import Budget
 body = sys.stdin.read()
 t = time.process_time()
 try:
-    rep = analyze(load_request(body), Budget(seconds=float(sys.argv[1])))
+    rep = analyze(load_request(body), budget=Budget(seconds=float(sys.argv[1])))
     out = {"cpu": time.process_time() - t, "verdict": rep.verdict,
            "certified": sum(b.certified for b in rep.blocks), "blocks": len(rep.blocks)}
 except Exception as exc:

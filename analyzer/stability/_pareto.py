@@ -126,23 +126,37 @@ def group_space(space: SlotSpace, g: int) -> SlotSpace:
     return SlotSpace(n_phases=space.n_phases, n_groups=1, rows=np.ascontiguousarray(rows), tol=space.tol)
 
 
-def group_lower_bounds(space: SlotSpace, budget: Budget, margins: Margins) -> np.ndarray:
-    """``m_g``: the fewest slots of group ``g`` that a blind set misses.
+def group_extremes(space: SlotSpace, budget: Budget, margins: Margins) -> tuple[np.ndarray, list[np.ndarray]]:
+    """``m_g``, the fewest slots of group ``g`` that a blind set misses, and a maximal blind set attaining each.
 
     A subset of a blind set is blind, so ``D`` blind gives ``D cap g`` blind
     for group ``g`` alone: ``z_g(D) >= N0 - (largest blind set of g alone)``,
     from the one-group branch and bound for the largest blind set (0 when
-    group ``g`` alone is rank-deficient).
+    group ``g`` alone is rank-deficient).  That largest set has rank
+    ``L - 1``; the zero set of its kernel line over every group is a
+    maximal blind set with ``z_g = m_g``, returned to seed the front.
     """
     out = np.zeros(space.n_groups, dtype=int)
+    seeds = []
+    index = np.arange(space.size)
     for g in range(space.n_groups):
         sub = group_space(space, g)
         if sub.rank(np.ones(sub.size, dtype=bool), margins) < sub.n_columns:
             continue
         objective = Objective(score=_held, max_weight=functools.partial(_most_misses, sub.size))
-        res = search(sub, budget, margins, objective)
-        out[g] = space.n_phases - int(res.maximal[0].sum())
-    return out
+        best = search(sub, budget, margins, objective).maximal[0]
+        out[g] = space.n_phases - int(best.sum())
+        held = np.isin(index, np.flatnonzero(best) * space.n_groups + g)
+        _, sv, vh = np.linalg.svd(space.rows[held].reshape(-1, space.n_columns))
+        if int((~margins.record(sv)).sum()) == space.n_columns - 1:
+            v = vh[-1].conj()
+            seeds.append(margins.record(np.linalg.norm(space.rows @ v, axis=1)))
+    return out, seeds
+
+
+def group_lower_bounds(space: SlotSpace, budget: Budget, margins: Margins) -> np.ndarray:
+    """``m_g`` of :func:`group_extremes`."""
+    return group_extremes(space, budget, margins)[0]
 
 
 def _most_misses(size: int, best: float) -> int:
@@ -176,7 +190,10 @@ def pareto_search(space: SlotSpace, budget: Budget, margins: Margins) -> SearchR
     """
     from ._blind_batch import real_space, walk  # local: _blind_batch is heavier and imports _blind too
 
-    front = Front(space, group_lower_bounds(space, budget, margins))
+    lower, seeds = group_extremes(space, budget, margins)
+    front = Front(space, lower)
+    if seeds:
+        front.offer(np.array(seeds))
     real = real_space(space)
     nodes = walk(real, budget, margins, front)
     keys = sorted(space.orbit_key(m) for m in front.masks)
