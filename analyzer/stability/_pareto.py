@@ -46,7 +46,7 @@ import numpy as np
 from .._budget import Budget
 from ._blind import Margins, Objective, SearchResult, SlotSpace, search
 
-#: Most points of the box ``[m, N0]^G`` searched for ``w_max``; beyond it the window bound is not used.
+#: Most points of the box ``[m, N0]^G`` searched for ``w_max``; beyond it the total-miss bound is not used.
 _BOX_POINTS = 1 << 20
 
 
