@@ -21,10 +21,8 @@ list of every orbit:
   of the front;
 * **one-group bounds**: ``z_g(D) >= m_g``, ``m_g`` the fewest misses of any
   blind set of group ``g`` alone (a subset of a blind set is blind), from
-  the one-group branch and bound of :func:`kfio.stability._blind.search`;
-* **total misses**: a vector the front does not dominate misses at most
-  ``w_max`` slots in all, the largest total over the undominated vectors of
-  the box ``m <= z <= N0``.
+  the one-group branch and bound of :func:`kfio.stability._blind.search`
+  (that largest set, closed over every group, also seeds the front).
 
 Every vector of the final front is attained by a maximal blind set found in
 the walk, and every maximal blind set in gap-canonical rotation either was
@@ -39,15 +37,11 @@ found).  The test oracles are the enumeration of every orbit
 from __future__ import annotations
 
 import functools
-import itertools
 
 import numpy as np
 
 from .._budget import Budget
 from ._blind import Margins, Objective, SearchResult, SlotSpace, search
-
-#: Most points of the box ``[m, N0]^G`` searched for ``w_max``; beyond it the total-miss bound is not used.
-_BOX_POINTS = 1 << 20
 
 
 class Front:
@@ -66,7 +60,6 @@ class Front:
         self.lower = lower
         self.vectors = np.zeros((0, space.n_groups), dtype=int)
         self.masks: list[np.ndarray] = []
-        self._w: int | None = None
 
     def misses(self, masks: np.ndarray) -> np.ndarray:
         """``z`` per row of ``masks``: per group, the phases not held."""
@@ -85,11 +78,10 @@ class Front:
 
         Flats below a flat with core ``c`` agree with it on the slots
         ``<= c``, so the slots up to ``c`` it misses are missed by all of
-        them: a lower bound on their ``z``, and on their total misses.
+        them: a lower bound on their ``z``.
         """
         decided = np.arange(self.space.size)[None, :] <= cores[:, None]
-        z = self.misses(masks | ~decided)
-        return ~self.dead(z) & (z.sum(axis=1) <= self.max_total())
+        return ~self.dead(self.misses(masks | ~decided))
 
     def offer(self, masks: np.ndarray) -> None:
         """Add the maximal blind sets (rows) whose miss vectors are not dominated or equalled."""
@@ -103,21 +95,6 @@ class Front:
             keep = ~(self.vectors >= zi[None, :]).all(axis=1)
             self.vectors = np.concatenate([self.vectors[keep], zi[None, :]])
             self.masks = [m for m, k in zip(self.masks, keep) if k] + [masks[i].copy()]
-            self._w = None
-
-    def max_total(self) -> int:
-        """``w_max``: the most slots in all that a vector the front does not dominate may miss."""
-        if self._w is not None:
-            return self._w
-        N0, G = self.space.n_phases, self.space.n_groups
-        sizes = [N0 + 1 - int(m) for m in self.lower]
-        if int(np.prod(sizes)) > _BOX_POINTS:
-            self._w = N0 * G
-            return self._w
-        grid = np.array(list(itertools.product(*(range(int(m), N0 + 1) for m in self.lower))), dtype=int)
-        alive = ~self.dead(grid)
-        self._w = int(grid[alive].sum(axis=1).max()) if alive.any() else -1
-        return self._w
 
 
 def group_space(space: SlotSpace, g: int) -> SlotSpace:

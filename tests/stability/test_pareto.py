@@ -161,10 +161,6 @@ def test_front_keeps_only_undominated_vectors() -> None:
     minimal = sorted({a for a in z if not any(b != a and all(x <= y for x, y in zip(b, a)) for b in z)})
     assert sorted(map(tuple, front.vectors.tolist())) == minimal
     assert vectors(space, front.masks) == minimal
-    # w_max: the largest total of a vector in [0, 4] x [1, 4] that no front vector dominates or equals.
-    box = [(a, b) for a in range(0, 5) for b in range(1, 5)]
-    alive = [v for v in box if not any(all(x >= y for x, y in zip(v, f)) for f in minimal)]
-    assert front.max_total() == max((sum(v) for v in alive), default=-1)
 
 
 def plant_case(i: int) -> tuple[list[list[int]], list[list[list[int]]], list[float]]:
