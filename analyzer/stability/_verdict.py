@@ -17,13 +17,15 @@ from typing import Any, Mapping, Optional, Sequence
 
 import mpmath
 import sympy
+from flint import fmpq_mat
 
 from .._budget import Budget
 from .._json import json_float
 from .._reporting import Report, ShortRepr, stamp
 from ..errors import BudgetExceeded
 from ..model._request import require_assumption_1
-from ..model._types import MarkovChannel, PerSensorChannel, Request, System, packets_of, to_domain
+from ..model._types import MarkovChannel, PerSensorChannel, Request, System, packets_of
+from ..structure._adjugate import to_fmpq_mat
 from ..structure._display import SHORT_TEXT_CHARS, algebraic_degree, short_text
 from ..structure._fmo import FmoBlock, fmo_blocks
 from ._critical_parameter import CriticalParameter, critical_parameter
@@ -184,16 +186,25 @@ def _channels_of(request: Request) -> list[MarkovChannel]:
 
 
 def _controllable(system: System) -> bool | None:
-    """Whether ``(A, Q^{1/2})`` is controllable: ``rank [Q, AQ, ..., A^{n-1} Q] = n`` over ``Q``."""
+    """Whether ``(A, Q^{1/2})`` is controllable: ``rank [Q, AQ, ..., A^{n-1} Q] = n`` over ``Q``.
+
+    Exact, in FLINT's ``fmpq_mat`` (the Krylov columns are added one ``A Q``
+    product at a time, and the rank stops growing once it stops growing).
+    """
     if system.Q is None:
         return None
-    A, Q = to_domain(system.A), to_domain(system.Q)
-    blocks, M = [Q], Q
-    for _ in range(system.n - 1):
+    A, M = to_fmpq_mat(system.A), to_fmpq_mat(system.Q)
+    n, K, rank = system.n, M, M.rank()
+    for _ in range(n - 1):
+        if rank == n:
+            break
         M = A * M
-        blocks.append(M)
-    K = blocks[0].hstack(*blocks[1:]) if len(blocks) > 1 else blocks[0]
-    return bool(K.rank() == system.n)
+        K2 = fmpq_mat(n, K.ncols() + n, [x for i in range(n) for x in (*K.table()[i], *M.table()[i])])
+        new_rank = K2.rank()
+        if new_rank == rank:  # the Krylov space stopped growing: it never grows again
+            break
+        K, rank = K2, new_rank
+    return rank == n
 
 
 def _modulus_text(block: FmoBlock) -> str | None:
