@@ -347,6 +347,11 @@ class WorkerPool:
             raise PoolBusy("the worker pool is not running")
         if self._idle.empty() and self._waiting >= self.max_waiting:
             raise PoolBusy(f"{self._waiting} requests are already waiting for a worker")
+        while self._waiting == 0 and not self._idle.empty():  # a free worker, nobody before us: no timer, no task
+            worker = self._idle.get_nowait()
+            if worker.process.is_alive():
+                return worker
+            self._replace_soon(worker)  # died while idle (e.g. OOM killer)
         self._waiting += 1
         try:
             while True:
@@ -448,6 +453,8 @@ async def _readable(conn: Connection, timeout: float) -> None:
         await asyncio.wait_for(fut, timeout)
     finally:
         loop.remove_reader(fd)
+        if not os.get_blocking(fd):  # some event loops (uvloop) leave the fd non-blocking: recv() needs it blocking
+            os.set_blocking(fd, True)
 
 
 def _log_task_error(task: asyncio.Task[None]) -> None:
