@@ -52,6 +52,15 @@ def stamp() -> dict[str, Any]:
     return {"kfio_version": __version__}
 
 
+class _Refused(Exception):
+    """A value the rules do not cover; each container on the way up adds its key to ``where``."""
+
+    def __init__(self, what: str) -> None:
+        super().__init__(what)
+        self.what = what
+        self.where: list[str] = []
+
+
 def encode(value: Any, path: str = "$") -> Any:
     """``value`` as a JSON tree (module docstring), or :class:`TypeError` naming what cannot be encoded.
 
@@ -72,25 +81,44 @@ def encode(value: Any, path: str = "$") -> Any:
     ...
     TypeError: kfio JSON: cannot encode a Fraction at $.p[0] (a view must turn it into text or a float)
     """
-    if value is None or isinstance(value, (str, int)):  # bool is an int
-        return value
+    try:
+        return _encode(value)
+    except _Refused as e:  # the key path is only built for the error, never on the way down
+        where = path + "".join(reversed(e.where))
+        raise TypeError(f"kfio JSON: {e.what.format(where=where)}") from None
+
+
+def _encode(value: Any) -> Any:
     if isinstance(value, float):  # numpy.float64 too: a plain float comes out
         return float(value) if math.isfinite(value) else None
+    if value is None or isinstance(value, (str, int)):  # bool is an int
+        return value
     if isinstance(value, dict):
         out = {}
         for k, v in value.items():
             if not isinstance(k, str):
-                raise TypeError(f"kfio JSON: a key of type {type(k).__name__} at {path} (keys must be str)")
-            out[k] = encode(v, f"{path}.{k}")
+                raise _Refused(f"a key of type {type(k).__name__} at {{where}} (keys must be str)")
+            try:
+                out[k] = _encode(v)
+            except _Refused as e:
+                e.where.append(f".{k}")
+                raise
         return out
     if isinstance(value, (list, tuple)):
-        return [encode(v, f"{path}[{i}]") for i, v in enumerate(value)]
+        items = []
+        for i, v in enumerate(value):
+            try:
+                items.append(_encode(v))
+            except _Refused as e:
+                e.where.append(f"[{i}]")
+                raise
+        return items
     if isinstance(value, complex):
         return [json_float(value.real), json_float(value.imag)]
     np = sys.modules.get("numpy")
     if np is not None:
         if isinstance(value, np.ndarray):
-            return encode(value.tolist(), path)
+            return _array(np, value)
         if isinstance(value, np.bool_):
             return bool(value)
         if isinstance(value, np.integer):
@@ -101,14 +129,27 @@ def encode(value: Any, path: str = "$") -> Any:
             return [json_float(value.real), json_float(value.imag)]
     view = view_of(type(value))
     if view is None:
-        raise TypeError(
-            f"kfio JSON: cannot encode a {type(value).__qualname__} at {path} "
-            "(a view must turn it into text or a float)"
+        raise _Refused(
+            f"cannot encode a {type(value).__qualname__} at {{where}} (a view must turn it into text or a float)"
         )
     fields = view(value)
     if getattr(value, "json_stamped", False):
         fields = {**stamp(), **fields}
-    return encode(fields, path)
+    return _encode(fields)
+
+
+def _array(np: Any, a: Any) -> Any:
+    """A NumPy array as nested lists: whole-array for real and integer dtypes, else entry by entry."""
+    if a.dtype.kind == "f":
+        finite = np.isfinite(a)
+        if finite.all():
+            return a.tolist()
+        entries = a.astype(object)
+        entries[~finite] = None
+        return entries.tolist()
+    if a.dtype.kind in "biu":
+        return a.tolist()
+    return _encode(a.tolist())
 
 
 __all__ = ["encode", "json_float", "stamp"]
