@@ -23,6 +23,7 @@ VIEWS: dict[str, str] = {
     "stability._ge_region.Crossing": "_stability:crossing",
     "stability._ge_region.GeMap": "_stability:ge_map",
     "stability._critical_parameter.CriticalParameter": "_stability:critical_parameter",
+    "stability._critical_parameter._Constraint": "_stability:constraint",
     "stability._regions.SensorThresholds": "_regions:sensor_thresholds",
     "stability._regions.RegionGrid": "_regions:region_grid",
     "stability._regions_curve.BoundaryCurve": "_regions:boundary_curve",
@@ -37,6 +38,7 @@ VIEWS: dict[str, str] = {
     "mare._report.RegionMap": "_bounds:region_map",
     "mare._filtered.FilteredBounds": "_bounds:filtered_bounds",
     "mare._targets.TraceTarget": "_bounds:trace_target",
+    "mare._certificate.StabilityCertificate": "_bounds:certificate",
     # kfio simulate
     "simulation._simulate.SimulationReport": "_simulation:simulation_report",
     "simulation._finite_horizon.FiniteHorizonReport": "_simulation:finite_horizon_report",

@@ -10,7 +10,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from ..stability._critical_parameter import CriticalParameter
+    from ..stability._critical_parameter import CriticalParameter, _Constraint
     from ..stability._ge_region import Crossing, GeMap, GeRegion, LineResult
     from ..stability._tail import BlockTail, TailReport
     from ..stability._verdict import BlockReport, StabilityReport
@@ -124,7 +124,8 @@ def line_result(line: LineResult) -> dict[str, Any]:
 
 def crossing(c: Crossing) -> dict[str, Any]:
     """A change of the exact label along a line, with the pattern that decides it."""
-    return _crossing(c.value, c.value_exact, c.left, c.right, c.pattern)
+    # a Gilbert-Elliott pattern describes itself: the map lists the same description per piece
+    return _crossing(c.value, c.value_exact, c.left, c.right, None if c.pattern is None else c.pattern.describe())
 
 
 def ge_map(m: GeMap) -> dict[str, Any]:
@@ -156,13 +157,23 @@ def critical_parameter(c: CriticalParameter) -> dict[str, Any]:
     }
 
 
+def constraint(c: _Constraint) -> dict[str, Any]:
+    """The block and maximal blind set whose rate decides a crossing of a critical parameter."""
+    return {
+        "block": c.block,
+        "eigenvalues": c.eigenvalues,
+        "period": c.period,
+        "blind_set": sorted([list(s) for s in c.blind_set]),
+    }
+
+
 def _crossing(value: Any, exact: str | None, left: str, right: str, deciding: Any) -> dict[str, Any]:
     return {
         "value": value,
         "value_exact": exact,
         "below": left,
         "above": right,
-        **({"deciding": deciding.describe()} if deciding is not None else {}),
+        **({"deciding": deciding} if deciding is not None else {}),
     }
 
 
@@ -173,6 +184,7 @@ def _intervals(intervals: Any) -> list[dict[str, Any]]:
 __all__ = [
     "block_report",
     "block_tail",
+    "constraint",
     "critical_parameter",
     "crossing",
     "ge_map",

@@ -143,21 +143,13 @@ def _boundary_poly(beta: Fraction, N: int, F: frozenset, channels: Sequence[Mark
 
 
 @dataclass(frozen=True)
-class _Constraint:
+class _Constraint(ReportPart):
     block: int
     eigenvalues: tuple[str, ...]
     beta: Any
     beta_float: float
     period: int
     blind_set: frozenset
-
-    def describe(self) -> dict[str, Any]:
-        return {
-            "block": self.block,
-            "eigenvalues": list(self.eigenvalues),
-            "period": self.period,
-            "blind_set": sorted([list(s) for s in self.blind_set]),
-        }
 
 
 def _constraints(
