@@ -37,6 +37,7 @@ from typing import Any, Callable
 import numpy as np
 
 from .._budget import Budget
+from .._reporting import ReportPart
 from ..errors import InvalidInput
 from ..model._exact import parse_number
 from ..model._types import Request
@@ -93,7 +94,7 @@ def parse_outage_target(request: Request) -> OutageTargetSpec | None:
 
 
 @dataclass(frozen=True)
-class OutageTarget:
+class OutageTarget(ReportPart):
     """The smallest ``lambda`` with estimated ``P(trace P_T > M) <= epsilon``; see the module docstring.
 
     Attributes
@@ -119,23 +120,6 @@ class OutageTarget:
     insufficient: float | None
     sufficient: float | None
     probes: tuple[tuple[float, float, float, float], ...]
-
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "label": "estimated",
-            "threshold": self.threshold,
-            "epsilon": self.epsilon,
-            "covariance": "predictor P(T|T-1)",
-            "method": "bisection over lambda on the stationary outage estimate with common random numbers "
-            "(same seed, arrival iff U < lambda), so the estimate and its Wilson 95% interval decrease with lambda",
-            "steps": self.steps,
-            "trajectories": self.trajectories,
-            "seed": self.seed,
-            "tolerance": self.tolerance,
-            "smallest_arrival_probability_estimate": self.estimate,
-            "bracket": {"confidently_insufficient": self.insufficient, "confidently_sufficient": self.sufficient},
-            "probes": [{"arrival_probability": lam, "outage": p, "ci95": [lo, hi]} for lam, p, lo, hi in self.probes],
-        }
 
     def summary_lines(self) -> list[str]:
         def f(x: float | None) -> str:

@@ -44,7 +44,7 @@ import numpy as np
 
 from .._budget import Budget
 from .._json import json_float
-from .._reporting import Report, stamp
+from .._reporting import Report
 from ..model._types import Request
 from ._channel import JointChannel
 from ._filtered import filtered_covariance
@@ -65,7 +65,6 @@ from ._setup import (
     SimSystem,
     SimulateOptions,
     SimulationLimits,
-    matrix_or_none,
     parse_options,
     sim_system,
 )
@@ -197,53 +196,6 @@ class SimulationReport(Report):
             ("mean_diverged_at", self.mean_diverged_at),
         ]
 
-    def to_dict(self) -> dict[str, Any]:
-        low, high = self.ci95
-        o = self.options
-        return {
-            **stamp(),
-            "steps": o.steps,
-            "trajectories": o.trajectories,
-            "seed": o.seed,
-            "initial_channel": o.initial_channel,
-            "P0": "Q" if o.P0_is_default else matrix_or_none(o.P0),
-            "mean_trace": _series(self.stats.mean),
-            "ci95_low": _series(low),
-            "ci95_high": _series(high),
-            "percentiles": {str(q): _series(self.percentile(q)) for q in PERCENTILES},
-            "diverged": self.mean_diverged_at is not None,
-            "mean_diverged_at": self.mean_diverged_at,
-            "percentile_diverged_at": {str(q): _first(~np.isfinite(self.percentile(q))) for q in PERCENTILES},
-            "diverged_trajectories": int(self.stats.diverged[-1]),
-            "final_mean_covariance": matrix_or_none(self.final_mean_covariance),
-            "checks": {
-                "arrival_rate": {
-                    name or "packet": {"observed": float(a), "stationary": float(s)}
-                    for name, a, s in zip(self.packet_names, self.arrival_rate, self.stationary_arrival_rate)
-                },
-                "exact_agreement": self.exact_agreement(),
-            },
-            "exact": None if self.exact is None else self.exact.to_dict(),
-            "stationary": None if self.stationary is None else self.stationary.to_dict(),
-            "covariance": "predictor P(t|t-1): mean_trace, ci95_*, percentiles and final_mean_covariance",
-            "filtered": self._filtered_dict(),
-            "outage_target": None if self.outage_target is None else self.outage_target.to_dict(),
-        }
-
-    def _filtered_dict(self) -> dict[str, Any] | None:
-        f = self.filtered_stats
-        if f is None:
-            return None
-        half = Z95 * f.sem
-        return {
-            "covariance": "filtered P(t|t) = P - P C_S'(C_S P C_S' + R_SS)^-1 C_S P, from the same arrivals",
-            "mean_trace": _series(f.mean),
-            "ci95_low": _series(np.maximum(f.mean - half, 0.0)),
-            "ci95_high": _series(f.mean + half),
-            "percentiles": {str(q): _series(f.percentiles[i]) for i, q in enumerate(PERCENTILES)},
-            "final_mean_covariance": matrix_or_none(self.final_mean_filtered_covariance),
-        }
-
     def summary(self) -> str:
         o = self.options
         low, high = self.ci95
@@ -289,10 +241,6 @@ class SimulationReport(Report):
 def _first(flags: np.ndarray) -> int | None:
     idx = np.flatnonzero(flags)
     return int(idx[0]) if idx.size else None
-
-
-def _series(x: np.ndarray) -> list[float | None]:
-    return [json_float(v) for v in x]
 
 
 def _fmt(x: float) -> str:

@@ -39,6 +39,7 @@ import mpmath
 import sympy
 from sympy import CRootOf, Poly
 
+from .._reporting import ReportPart
 from ..model._types import MarkovChannel
 from ..structure._fmo import FmoBlock
 from ._decide import _rho_poly, bernoulli_factor, compare_rate_bernoulli, compare_rate_markov, spectral_radius
@@ -55,7 +56,7 @@ _STATE = {-1: "finite", 0: "boundary", 1: "infinite"}
 
 
 @dataclass(frozen=True)
-class BlockTail:
+class BlockTail(ReportPart):
     """The tail exponent of one FMO block with ``|alpha| > 1``.
 
     Attributes
@@ -84,21 +85,9 @@ class BlockTail:
     basis: str
     reference: str
 
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "eigenvalues": list(self.eigenvalues),
-            "kappa": self.kappa,
-            "kappa_exact": self.kappa_exact,
-            "sigma_exact": self.sigma_exact,
-            "moments": dict(self.moments),
-            "exact": self.exact,
-            "basis": self.basis,
-            "reference": self.reference,
-        }
-
 
 @dataclass(frozen=True)
-class TailReport:
+class TailReport(ReportPart):
     """``kappa = min_k kappa_k`` and the moments it implies.
 
     Attributes
@@ -125,18 +114,6 @@ class TailReport:
     blocks: tuple[BlockTail, ...]
     basis: str
     notes: tuple[str, ...] = ()
-
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "kappa": self.kappa,
-            "kappa_exact": self.kappa_exact,
-            "moments": dict(self.moments),
-            "statement": self.statement,
-            "rule": "P(trace P > M) ~ M^(-kappa); the moment of order r is finite iff kappa > r",
-            "basis": self.basis,
-            "blocks": [b.to_dict() for b in self.blocks],
-            "notes": list(self.notes),
-        }
 
     def summary_lines(self) -> list[str]:
         """Lines for the terminal summary."""

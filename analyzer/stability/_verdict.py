@@ -21,7 +21,7 @@ from flint import fmpq_mat
 
 from .._budget import Budget
 from .._json import json_float
-from .._reporting import Report, ShortRepr, stamp
+from .._reporting import Report, ShortRepr
 from ..errors import BudgetExceeded
 from ..model._request import require_assumption_1
 from ..model._types import MarkovChannel, PerSensorChannel, Request, System, packets_of
@@ -65,25 +65,6 @@ class BlockReport(ShortRepr):
     bernoulli_blind_fraction: tuple[Fraction, ...] | None = field(default=None, repr=False)
     modulus_sq_expr: Any = field(default=None, repr=False)
 
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "eigenvalues": list(self.eigenvalues),
-            "eigenvalues_numeric": [[json_float(z.real), json_float(z.imag)] for z in self.eigenvalues_numeric],
-            "modulus": json_float(self.modulus),
-            "modulus_exact": self.modulus_exact,
-            "jordan_sizes": list(self.jordan_sizes),
-            "period": self.period,
-            "degenerate": self.degenerate,
-            "sigma": json_float(self.sigma),
-            "sigma_exact": self.sigma_exact,
-            "rate": json_float(self.rate),
-            "verdict": self.verdict,
-            "certified": self.certified,
-            "blind_set": self.blind_set,
-            "basis": self.basis,
-            "notes": list(self.notes),
-        }
-
 
 @dataclass(frozen=True, repr=False)
 class StabilityReport(Report):
@@ -111,25 +92,6 @@ class StabilityReport(Report):
         if value is None:
             return text
         return self.display.get(text) or short_text(text, value)
-
-    def to_dict(self) -> dict[str, Any]:
-        """The JSON report (stable field names; see README)."""
-        return {
-            **stamp(),
-            "verdict": self.verdict,
-            "theorem": "Rohr, Marelli and Fu 2014, Theorem 1",
-            "blocks": [b.to_dict() for b in self.blocks],
-            "critical_arrival_probability": json_float(self.critical_arrival_probability),
-            "critical_arrival_probability_exact": self.critical_arrival_probability_exact,
-            "channel": self.channel,
-            "system": self.system,
-            "assumptions": list(self.assumptions),
-            "warnings": list(self.warnings),
-            "regions": self.regions,
-            "tail": self.tail.to_dict() if self.tail is not None else None,
-            "gilbert_elliott_region": self.gilbert_elliott.to_dict() if self.gilbert_elliott is not None else None,
-            "critical_parameter": self.critical_parameter.to_dict() if self.critical_parameter is not None else None,
-        }
 
     def summary(self) -> str:
         """Readable multi-line summary for the terminal."""
