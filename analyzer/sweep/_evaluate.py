@@ -17,9 +17,9 @@ import time
 from typing import Any, Sequence
 
 from .._budget import Budget
+from .._reuse import LRU, reused_fmo_blocks, structure_cache
 from ..errors import AnalyzerError, AssumptionViolation, BudgetExceeded, InvalidInput, NumericalFailure
 from ..model import load_json, parse_request
-from .._reuse import LRU, reused_fmo_blocks, structure_cache
 from ._rows import error_row, row_from_report
 from ._spec import SweepSpec, parse_sweep, point_at, request_text
 
