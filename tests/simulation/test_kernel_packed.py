@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 
 from kfio import load_request
-from kfio.simulation._kernel import PackedRiccatiStep, RiccatiStep
+from kfio.simulation._kernel import RiccatiStep
+from kfio.simulation._packed import PackedRiccatiStep
 from kfio.simulation._setup import parse_options, sim_system
 from kfio.simulation._simulate import run_monte_carlo
 
