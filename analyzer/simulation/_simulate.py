@@ -309,8 +309,13 @@ def run_monte_carlo(
     opts: SimulateOptions,
     budget: Budget | None = None,
     update: PackedRiccatiStep | RiccatiStep | GroupedRiccatiStep | None = None,
+    filtered: bool = True,
 ) -> MonteCarloRun:
     """Propagate ``opts.trajectories`` covariances for ``opts.steps`` steps.
+
+    With ``filtered`` (the default) the statistics of the filtered ``P(t|t)`` of the
+    same arrivals are recorded too (``filtered_stats`` and the ``final_*filtered*``
+    fields; ``None`` without); the predictor's output is the same either way.
 
     ``update`` is the batched Riccati step; default the structure-of-arrays
     :class:`kfio.simulation._packed.PackedRiccatiStep` (the benchmark and the
@@ -347,7 +352,8 @@ def run_monte_carlo(
             g, mask = draw()
             arrivals += g.sum(axis=0)
             ftr, tr, ratio, ok = run.step(mask)  # P(t+1|t), and trace P(t|t) of the same arrivals
-            fmean[t], fstd[t], fpct[:, t] = _record(ftr, alive, ranks)
+            if filtered:
+                fmean[t], fstd[t], fpct[:, t] = _record(ftr, alive, ranks)
             hist = chan.advance(hist, g)
             ok &= ratio <= PRECISION_RATIO
             if not ok[alive].all():
@@ -355,19 +361,23 @@ def run_monte_carlo(
                 run.freeze(~alive)  # keeps NaN and overflow out of later arithmetic
             diverged[t + 1] = M - int(alive.sum())
             mean[t + 1], std[t + 1], pct[:, t + 1] = _record(tr, alive, ranks)
-        # the arrivals at T, drawn after every draw the predictor used: same seed, same predictor output
-        P, PfT = run.finish(draw()[1])
-        fmean[T], fstd[T], fpct[:, T] = _record(traces(PfT), alive, ranks)
-    final = P.mean(axis=0) if alive.all() else None
+        P = run.predictors()
+        if filtered:
+            # the arrivals at T, drawn after every draw the predictor used: same seed, same predictor output
+            PfT = run.filtered(draw()[1])
+            fmean[T], fstd[T], fpct[:, T] = _record(traces(PfT), alive, ranks)
     stats = TraceStatistics(mean=mean, std=std, percentiles=pct, diverged=diverged, trajectories=M)
-    fstats = TraceStatistics(mean=fmean, std=fstd, percentiles=fpct, diverged=diverged, trajectories=M)
-    final_traces = np.where(alive, traces(P), np.inf)
-    return MonteCarloRun(
+    out = MonteCarloRun(
         stats=stats,
-        final_mean_covariance=final,
+        final_mean_covariance=P.mean(axis=0) if alive.all() else None,
         arrival_rate=arrivals / (M * T),
-        final_traces=final_traces,
-        filtered_stats=fstats,
+        final_traces=np.where(alive, traces(P), np.inf),
+    )
+    if not filtered:
+        return out
+    return dataclasses.replace(
+        out,
+        filtered_stats=TraceStatistics(mean=fmean, std=fstd, percentiles=fpct, diverged=diverged, trajectories=M),
         final_mean_filtered_covariance=PfT.mean(axis=0) if alive.all() else None,
         final_filtered_traces=np.where(alive, traces(PfT), np.inf),
     )
@@ -387,9 +397,13 @@ class _PackedRun:
     def freeze(self, dead: np.ndarray) -> None:
         self.h[:, dead] = 0.0
 
-    def finish(self, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The predictors ``P(T|T-1)`` and the filtered ``P(T|T)`` for the arrivals ``mask`` at ``T``."""
-        return self.kernel.unpack(self.h), self.kernel.unpack(self.kernel.update_packed(self.h, mask))
+    def predictors(self) -> np.ndarray:
+        """The batch ``(M, n, n)`` now."""
+        return self.kernel.unpack(self.h)
+
+    def filtered(self, mask: np.ndarray) -> np.ndarray:
+        """The filtered covariances of the batch now, for the arrivals ``mask``."""
+        return self.kernel.unpack(self.kernel.update_packed(self.h, mask))
 
 
 class _MatrixRun:
@@ -407,8 +421,11 @@ class _MatrixRun:
     def freeze(self, dead: np.ndarray) -> None:
         self.P[dead] = 0.0
 
-    def finish(self, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        return self.P, self.kernel.update(self.P, mask)[0]
+    def predictors(self) -> np.ndarray:
+        return self.P
+
+    def filtered(self, mask: np.ndarray) -> np.ndarray:
+        return self.kernel.update(self.P, mask)[0]
 
 
 def simulate(
