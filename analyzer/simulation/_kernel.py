@@ -22,6 +22,10 @@ are zeroed in ``C P`` and their block of ``S`` is replaced by the identity,
 which makes them contribute exactly nothing.  :class:`GroupedRiccatiStep` is
 the alternative (gather the trajectories of each arrival pattern, update with
 ``C_S``, scatter); ``bench/bench_simulate.py`` measures both.
+
+These batched-matrix kernels are the references: the simulation's default is
+:class:`kfio.simulation._packed.PackedRiccatiStep` (the same operations on the
+unique entries of ``P``, in cache-sized blocks), tested against them to 1e-12.
 """
 
 from __future__ import annotations
