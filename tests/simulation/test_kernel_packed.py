@@ -29,7 +29,9 @@ def random_case(rng, n, p, M):
     return A, C, Q, R, np.einsum("mij,mkj->mik", X, X)
 
 
-@pytest.mark.parametrize("n,p,rows", [(1, 1, 1), (3, 1, 1), (3, 2, 2), (4, 3, 3), (6, 2, 1), (9, 4, 4)])
+@pytest.mark.parametrize(
+    "n,p,rows", [(1, 1, 1), (3, 1, 1), (3, 2, 2), (4, 3, 3), (6, 2, 1), (9, 4, 4), (6, 5, 5), (7, 6, 1), (20, 1, 1)]
+)
 def test_packed_step_agrees_with_the_matrix_step(n, p, rows) -> None:
     rng = np.random.default_rng(10 * n + p)
     A, C, Q, R, P = random_case(rng, n, p, 500)
