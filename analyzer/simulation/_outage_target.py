@@ -149,13 +149,13 @@ def outage_target(
     sim: SimSystem,
     opts: SimulateOptions,
     spec: OutageTargetSpec,
-    run: Callable[[SimSystem, SimulateOptions, Budget | None], Any],
+    run: Callable[..., Any],
     budget: Budget | None = None,
 ) -> OutageTarget:
     """Bisect ``lambda`` for ``P(trace P_T > M) <= epsilon`` (estimated); see the module docstring.
 
     ``run`` is :func:`kfio.simulation._simulate.run_monte_carlo` (passed in to
-    avoid an import cycle); every probe uses ``opts.seed``.
+    avoid an import cycle); every probe uses ``opts.seed`` and records the predictor only.
     """
     (pk,) = sim.packets
     cache: dict[float, tuple[float, float, float]] = {}
@@ -164,7 +164,7 @@ def outage_target(
         if lam not in cache:
             ch = dataclasses.replace(pk.channel, table=(Fraction(lam),))
             s = dataclasses.replace(sim, packets=(dataclasses.replace(pk, channel=ch),))
-            x = run(s, opts, budget).final_traces
+            x = run(s, opts, budget, filtered=False).final_traces
             k, n = int(np.sum(~(x <= spec.threshold))), x.size
             cache[lam] = (k / n, *wilson(k, n))
         return cache[lam]
