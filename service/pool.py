@@ -32,13 +32,10 @@ from dataclasses import dataclass
 from multiprocessing.connection import Connection
 from typing import Any, Callable
 
+from .threads import one_thread_per_process
 from .watchdog import limit_memory
 
 log = logging.getLogger("kfio.service")
-
-#: Thread pools of numerical libraries in workers: one thread each, so that
-#: ``workers`` processes use ``workers`` cores (set before the forkserver starts).
-_THREAD_ENV = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMEXPR_NUM_THREADS")
 
 
 class PoolError(RuntimeError):
@@ -234,8 +231,7 @@ class WorkerPool:
         up; if starting fails they are refused with :class:`PoolBusy` at once.
         """
         self._idle = asyncio.Queue()
-        for var in _THREAD_ENV:
-            os.environ.setdefault(var, "1")
+        one_thread_per_process()  # workers processes use workers cores (set before the forkserver starts)
         try:
             workers = await asyncio.gather(*(self._new_worker() for _ in range(self.size)))
             for worker in workers:
