@@ -1,8 +1,14 @@
-"""What every report shares: the version stamp, the JSON text and a short repr.
+"""What every report shares: ``to_dict()``, the version stamp, the JSON text and a short repr.
 
-The JSON of each report is built by its ``to_dict``, which starts with
-``**stamp()``: ``kfio_version`` comes first in every one, and :func:`json_text` is the one way that
-JSON becomes text (the CLI's ``--json``, the HTTP body and ``to_json()``).
+The JSON of every report is built in one place, :mod:`kfio._json`: a *view*
+per report class lists its fields as raw values, and one encoder
+(:func:`kfio._json.encode`) applies the mechanical rules (finite floats or
+``null``, NumPy to lists and numbers, tuples to lists, nested reports to
+their views; anything else is a :class:`TypeError`).  :meth:`ReportPart.to_dict`
+is that encoder, so no report class builds its own dict.  A :class:`Report`
+(one per command) starts its JSON with ``kfio_version``, also when nested in
+another, and :func:`json_text` is the one way that JSON becomes text (the
+CLI's ``--json``, the HTTP body and ``to_json()``).
 """
 
 from __future__ import annotations
@@ -10,12 +16,8 @@ from __future__ import annotations
 import json
 from typing import Any, ClassVar
 
+from ._json import encode, stamp
 from ._version import __version__
-
-
-def stamp() -> dict[str, Any]:
-    """The fields every report's JSON starts with: ``{"kfio_version": ...}``."""
-    return {"kfio_version": __version__}
 
 
 def json_text(report: dict[str, Any]) -> str:
@@ -23,7 +25,19 @@ def json_text(report: dict[str, Any]) -> str:
     return json.dumps(report, indent=2, allow_nan=False)
 
 
-class ShortRepr:
+class ReportPart:
+    """A report or a piece of one: ``to_dict()`` is its JSON, built by its view in :mod:`kfio._json`."""
+
+    #: Whether the JSON starts with ``kfio_version`` (every :class:`Report`).
+    json_stamped: ClassVar[bool] = False
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON object of this report (its view in :mod:`kfio._json`, encoded)."""
+        out: dict[str, Any] = encode(self)
+        return out
+
+
+class ShortRepr(ReportPart):
     """A ``repr`` of a few telling attributes instead of every field."""
 
     _repr_fields: ClassVar[tuple[str, ...]] = ()
@@ -37,10 +51,9 @@ class ShortRepr:
 
 
 class Report(ShortRepr):
-    """A top-level report: ``to_dict()`` (the ``--json`` object) and :meth:`to_json` (its text)."""
+    """A top-level report: ``to_dict()`` (the ``--json`` object, ``kfio_version`` first) and :meth:`to_json`."""
 
-    def to_dict(self) -> dict[str, Any]:  # pragma: no cover - every report defines it
-        raise NotImplementedError
+    json_stamped: ClassVar[bool] = True
 
     @property
     def kfio_version(self) -> str:
@@ -58,3 +71,6 @@ def _short(value: Any) -> str:
     if isinstance(value, tuple) and value and not isinstance(value[0], ShortRepr):
         return "(" + ", ".join(_short(v) for v in value) + ("," if len(value) == 1 else "") + ")"
     return repr(value)
+
+
+__all__ = ["Report", "ReportPart", "ShortRepr", "json_text", "stamp"]

@@ -8,6 +8,11 @@
 3. Masking versus grouping by arrival pattern for a two-packet channel.
 4. The exact enumeration of E[P_t] over 2^20 arrival sequences.
 
+Times are CPU seconds (``time.process_time``; the machine is shared), one BLAS thread
+(``OPENBLAS_NUM_THREADS=1`` unless set).  Row 1 is also run with the previous code (main at
+``PREVIOUS_COMMIT``, before the blocked kernel) in a child interpreter in the same run
+(``bench/_reference.py``).
+
 Prints a Markdown table (pasted into docs/simulation.md).
 """
 
@@ -21,9 +26,14 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+import numpy as np  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from _reference import run_reference  # noqa: E402
 
 from kfio import load_request  # noqa: E402
 from kfio.simulation._finite_horizon import expected_covariance  # noqa: E402
@@ -45,23 +55,44 @@ TWO_PACKETS = {
     "sensors": [{"name": "s1", "rows": [0]}, {"name": "s2", "rows": [1]}],
 }
 BIG = SimulationLimits(max_trajectory_steps=10**8, max_batch_floats=10**8)
+#: main before the blocked kernel.
+PREVIOUS_COMMIT = "7299885"
+PREVIOUS = """
+import json, time
+from kfio import load_request
+from kfio.simulation._setup import SimulationLimits
+from kfio.simulation._simulate import simulate
+req = load_request(BODY)
+big = SimulationLimits(max_trajectory_steps=10**8, max_batch_floats=10**8)
+best = float("inf")
+for _ in range(REPEATS):
+    t0 = time.process_time()
+    simulate(req, limits=big)
+    best = min(best, time.process_time() - t0)
+print(json.dumps({"cpu": best}))
+"""
+
+
+def body(system: dict, channel: dict, steps: int, trajectories: int, seed: int = 0) -> str:
+    return json.dumps(
+        {
+            "system": system,
+            "channel": channel,
+            "options": {"simulate": {"steps": steps, "trajectories": trajectories, "seed": seed}},
+        }
+    )
 
 
 def request(system: dict, channel: dict, steps: int, trajectories: int, seed: int = 0):
-    body = {
-        "system": system,
-        "channel": channel,
-        "options": {"simulate": {"steps": steps, "trajectories": trajectories, "seed": seed}},
-    }
-    return load_request(json.dumps(body))
+    return load_request(body(system, channel, steps, trajectories, seed))
 
 
 def timed(fn, repeats: int) -> tuple[float, object]:
     best, out = float("inf"), None
     for _ in range(repeats):
-        t0 = time.perf_counter()
+        t0 = time.process_time()
         out = fn()
-        best = min(best, time.perf_counter() - t0)
+        best = min(best, time.process_time() - t0)
     return best, out
 
 
@@ -96,6 +127,10 @@ def main() -> None:
     req = request(SEED004, {"model": "bernoulli", "arrival_probability": 0.6}, T, M)
     t_vec, rep = timed(lambda: simulate(req, limits=BIG), args.repeats)
     rows.append((f"vectorized `simulate`, n = 3, {M} x {T}", f"{t_vec:.2f} s", f"{t_vec / (M * T) * 1e9:.0f} ns"))
+    target = body(SEED004, {"model": "bernoulli", "arrival_probability": 0.6}, T, M)
+    prev = run_reference(f"BODY = {target!r}\nREPEATS = {args.repeats}\n" + PREVIOUS, commit=PREVIOUS_COMMIT)["cpu"]
+    rows.append((f"the same, main at {PREVIOUS_COMMIT} (same run)", f"{prev:.2f} s", f"{prev / (M * T) * 1e9:.0f} ns"))
+    rows.append(("ratio previous / now", f"{prev / t_vec:.1f}x", ""))
 
     sim, opts = sim_system(req), parse_options(req, BIG)
     k = args.loop_trajectories
@@ -122,14 +157,15 @@ def main() -> None:
     sim2, opts2 = sim_system(two), parse_options(two, BIG)
     masked = RiccatiStep.build(sim2.A, sim2.Q, sim2.C, sim2.R)
     grouped = GroupedRiccatiStep(sim2.A, sim2.Q, sim2.C, sim2.R)
+    t_packed, _ = timed(lambda: run_monte_carlo(sim2, opts2), args.repeats)
     t_mask, _ = timed(lambda: run_monte_carlo(sim2, opts2, update=masked), args.repeats)
     t_group, _ = timed(lambda: run_monte_carlo(sim2, opts2, update=grouped), args.repeats)
-    rows.append(
-        (f"two packets, n = 2, {M} x 50, masking (default)", f"{t_mask:.2f} s", f"{t_mask / (M * 50) * 1e9:.0f} ns")
-    )
-    rows.append(
-        (f"two packets, n = 2, {M} x 50, grouping by pattern", f"{t_group:.2f} s", f"{t_group / (M * 50) * 1e9:.0f} ns")
-    )
+    for what, t in (
+        ("packed kernel, masking (default)", t_packed),
+        ("matrix kernel, masking", t_mask),
+        ("matrix kernel, grouping by pattern", t_group),
+    ):
+        rows.append((f"two packets, n = 2, {M} x 50, {what}", f"{t:.2f} s", f"{t / (M * 50) * 1e9:.0f} ns"))
 
     ex = request(SEED004, {"model": "gilbert_elliott", "failure_rate": 0.3, "recovery_rate": 0.4}, 200, 100)
     t_ex, _ = timed(lambda: expected_covariance(ex, 20), 1)
@@ -143,9 +179,10 @@ def main() -> None:
 
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     print(
-        f"machine: {platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}, NumPy {np.__version__}, load average {load:.1f}"
+        f"machine: {platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}, NumPy {np.__version__}, "
+        f"OPENBLAS_NUM_THREADS={os.environ['OPENBLAS_NUM_THREADS']}, load average {load:.1f}"
     )
-    print(f"best of {args.repeats} for the vectorized runs; the Python loop ran once\n")
+    print(f"CPU time; best of {args.repeats} for the vectorized runs; the Python loop ran once\n")
     print("| what | time | per trajectory-step |")
     print("|---|---|---|")
     for r in rows:

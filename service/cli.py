@@ -18,6 +18,7 @@ from typing import Sequence
 
 from .._version import __version__
 from . import commands, exitcodes
+from .threads import one_thread_per_process
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -61,6 +62,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def entrypoint() -> None:  # console script
+    one_thread_per_process()  # before anything imports NumPy (kfio.service.threads says why)
     code, args = run()
     if args is not None and getattr(args, "quick_exit", False):
         # A one-shot command has printed its answer and started no process or thread:

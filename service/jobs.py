@@ -65,9 +65,14 @@ def parse(body: bytes, settings: Settings) -> Request:
 
 
 def analyze_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[str, Any]) -> JobOutput:
-    """``kfio analyze``: the exact verdict (Rohr, Marelli and Fu (2014), Theorem 1)."""
+    """``kfio analyze``: the exact verdict (Rohr, Marelli and Fu (2014), Theorem 1).
+
+    The FMO blocks of a plant are kept by the worker (:mod:`kfio._reuse`): the next request
+    on the same ``A`` and ``C`` with another channel, ``Q`` or ``R`` skips the eigenstructure.
+    """
     request = parse(body, settings)
-    return report_json(resolve("kfio", "analyze")(request, budget=budget))
+    fmo = resolve("kfio._reuse", "reused_fmo_blocks")(request.system, budget)
+    return report_json(resolve("kfio.stability._verdict", "analyze")(request, budget, fmo=fmo))
 
 
 def bounds_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[str, Any]) -> JobOutput:

@@ -32,13 +32,10 @@ from dataclasses import dataclass
 from multiprocessing.connection import Connection
 from typing import Any, Callable
 
+from .threads import one_thread_per_process
 from .watchdog import limit_memory
 
 log = logging.getLogger("kfio.service")
-
-#: Thread pools of numerical libraries in workers: one thread each, so that
-#: ``workers`` processes use ``workers`` cores (set before the forkserver starts).
-_THREAD_ENV = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMEXPR_NUM_THREADS")
 
 
 class PoolError(RuntimeError):
@@ -234,8 +231,7 @@ class WorkerPool:
         up; if starting fails they are refused with :class:`PoolBusy` at once.
         """
         self._idle = asyncio.Queue()
-        for var in _THREAD_ENV:
-            os.environ.setdefault(var, "1")
+        one_thread_per_process()  # workers processes use workers cores (set before the forkserver starts)
         try:
             workers = await asyncio.gather(*(self._new_worker() for _ in range(self.size)))
             for worker in workers:
@@ -347,6 +343,11 @@ class WorkerPool:
             raise PoolBusy("the worker pool is not running")
         if self._idle.empty() and self._waiting >= self.max_waiting:
             raise PoolBusy(f"{self._waiting} requests are already waiting for a worker")
+        while self._waiting == 0 and not self._idle.empty():  # a free worker, nobody before us: no timer, no task
+            worker = self._idle.get_nowait()
+            if worker.process.is_alive():
+                return worker
+            self._replace_soon(worker)  # died while idle (e.g. OOM killer)
         self._waiting += 1
         try:
             while True:
@@ -448,6 +449,8 @@ async def _readable(conn: Connection, timeout: float) -> None:
         await asyncio.wait_for(fut, timeout)
     finally:
         loop.remove_reader(fd)
+        if not os.get_blocking(fd):  # some event loops (uvloop) leave the fd non-blocking: recv() needs it blocking
+            os.set_blocking(fd, True)
 
 
 def _log_task_error(task: asyncio.Task[None]) -> None:

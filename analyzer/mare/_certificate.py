@@ -33,7 +33,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from .._json import json_float
+from .._reporting import ReportPart
 from ..model._types import Matrix
 from ._riccati import ArrivalModel, closed_loop_operator
 from ._vech import unvech, vech
@@ -51,7 +51,7 @@ class ExactPlant:
 
 
 @dataclass(frozen=True)
-class StabilityCertificate:
+class StabilityCertificate(ReportPart):
     """A re-checked proof that the LMI is feasible at ``lambdas``.
 
     Attributes
@@ -80,23 +80,6 @@ class StabilityCertificate:
     X: np.ndarray
     K: tuple[np.ndarray, ...]
     route: str = "LMI"
-
-    def describe(self) -> dict[str, Any]:
-        checked = (
-            "X > 0 and X - L_K(X) > 0 decided exactly over the rationals"
-            if self.method == "exact_rational"
-            else "X > 0 and X - L_K(X) > 0 by NumPy eigenvalues above an explicit rounding allowance"
-        )
-        return {
-            "method": self.method,
-            "checked": checked
-            + " (Sinopoli et al. 2004, Theorem 5(b); Liu and Goldsmith 2004, Theorem 5(b) for several packets)",
-            "gains_from": self.route,
-            "at": [str(x) for x in self.lambdas],
-            "margin": json_float(self.margin),
-            "closed_loop_spectral_radius_at_most": json_float(1.0 - self.margin),
-            "solver_margin": json_float(self.solver_margin),
-        }
 
 
 def lyapunov_certificate(model: ArrivalModel, K: Sequence[np.ndarray]) -> np.ndarray | None:

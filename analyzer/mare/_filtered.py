@@ -40,11 +40,10 @@ arrival leaves), but it is a bound.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
-from .._json import json_float as num
+from .._reporting import ReportPart
 from ._riccati import ArrivalModel
 
 
@@ -70,34 +69,11 @@ def filtered_mean(model: ArrivalModel, P: np.ndarray) -> np.ndarray:
 
 
 @dataclass(frozen=True)
-class FilteredBounds:
+class FilteredBounds(ReportPart):
     """``pi(empty) S_bar <= liminf E[P(t|t)]`` and ``limsup E[P(t|t)] <= sum_S pi(S) F_S(V_bar)``."""
 
     lower: np.ndarray | None
     upper: np.ndarray | None
-
-    def to_dict(self) -> dict[str, Any]:
-        def mat(M: np.ndarray | None) -> list[list[float | None]] | None:
-            return None if M is None else [[num(x) for x in row] for row in M]
-
-        return {
-            "covariance": "filtered P(t|t) = P - P C_S'(C_S P C_S' + R_SS)^-1 C_S P (S_bar and V_bar bound the "
-            "predictor P(t|t-1))",
-            "lower": {
-                "matrix": mat(self.lower),
-                "trace": None if self.lower is None else num(float(np.trace(self.lower))),
-                "formula": "pi(nothing arrives) * S_bar",
-                "why": "F_S(P) >= 0, so E[P(t|t)] >= pi(empty) E[P(t|t-1)] (Sinopoli et al. 2004, Theorem 3 for S_bar)",
-            },
-            "upper": {
-                "matrix": mat(self.upper),
-                "trace": None if self.upper is None else num(float(np.trace(self.upper))),
-                "formula": "sum_S pi(S) (V_bar - V_bar C_S'(C_S V_bar C_S' + R_SS)^-1 C_S V_bar)",
-                "why": "the measurement update F_S is monotone and concave in P and the arrivals at t are "
-                "independent of P(t|t-1): Jensen gives E[F_S(P_t)] <= F_S(E P_t) <= F_S(V_bar) "
-                "(Sinopoli et al. 2004, Theorem 4 and Lemma 1)",
-            },
-        }
 
 
 def filtered_bounds(model: ArrivalModel, s_bar: np.ndarray | None, v_bar: np.ndarray | None) -> FilteredBounds:

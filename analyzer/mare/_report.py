@@ -1,8 +1,9 @@
-"""Frozen result objects of ``kfio bounds`` and the one place their JSON is built.
+"""Frozen result objects of ``kfio bounds``.
 
-The JSON is stable: every key is always present, floats are finite (a value
-that does not exist is ``null`` next to a ``reason``), matrices are nested
-lists, exact rationals are strings such as ``"9/25"``.
+Their JSON is built by the views of :mod:`kfio._json._bounds` (``to_dict()``):
+every key is always present, floats are finite (a value that does not exist is
+``null`` next to a ``reason``), matrices are nested lists, exact rationals are
+strings such as ``"9/25"``.
 """
 
 from __future__ import annotations
@@ -13,9 +14,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from .._json import json_float as num  # the one JSON-safe float of kfio
-from .._reporting import Report, stamp
-from ..model._exact import fraction_text
+from .._json import json_float as num
+from .._reporting import Report, ReportPart
 from ..model._types import Packet
 from ._certificate import StabilityCertificate
 from ._filtered import FilteredBounds
@@ -27,20 +27,13 @@ from ._search import UpperBound
 if TYPE_CHECKING:  # the exact grid is computed by kfio.stability, which imports no bounds
     from ..stability._regions import RegionGrid
 
-#: Relative agreement required between the V_bar iteration and the SDP.
-SDP_AGREEMENT = 1e-6
-
-
-def mat(M: np.ndarray | None) -> list[list[float | None]] | None:
-    return None if M is None else [[num(x) for x in row] for row in np.atleast_2d(M)]
-
 
 def _trace(M: np.ndarray | None) -> float | None:
     return None if M is None else num(float(np.trace(M)))
 
 
 @dataclass(frozen=True)
-class CriticalInterval:
+class CriticalInterval(ReportPart):
     """``lower <= lambda_c <= upper`` for one packet, the other packets held at their probabilities.
 
     ``lower = max(0, 1 - 1/(rho(A)^2 prod_{r != s}(1 - lambda_r)))`` (Sinopoli et al. (2004)
@@ -54,34 +47,9 @@ class CriticalInterval:
     upper: UpperBound
     tolerance: float
 
-    def to_dict(self) -> dict[str, Any]:
-        up = self.upper
-        value = None if up.value is None else float(up.value)
-        return {
-            "lower": {
-                "value": num(self.lower),
-                "formula": "max(0, 1 - 1/(rho(A)^2 prod_{other sensors r} (1 - lambda_r)))",
-                "certificate": {
-                    "method": "closed_form",
-                    "checked": "rho(A) from numpy.linalg.eigvals; below this value the Lyapunov lower bound "
-                    "S_bar diverges (Sinopoli et al. 2004, Theorem 3; Liu and Goldsmith 2004, Theorem 3)",
-                },
-            },
-            "upper": {
-                "value": value,
-                "exact": None if up.value is None else fraction_text(up.value),
-                "reason": up.reason,
-                "not_certified_at": None if up.lower_end is None else float(up.lower_end),
-                "tolerance": self.tolerance,
-                "lmi_solves": up.steps,
-                "certificate": None if up.certificate is None else up.certificate.describe(),
-            },
-            "gap": None if value is None else num(value - self.lower),
-        }
-
 
 @dataclass(frozen=True)
-class CovarianceBounds:
+class CovarianceBounds(ReportPart):
     """``S_bar <= lim E[P_t] <= V_bar`` at the operating point (Sinopoli et al. (2004) Theorem 4; Liu and Goldsmith (2004) Theorem 4)."""
 
     s_bar: np.ndarray | None
@@ -106,54 +74,9 @@ class CovarianceBounds:
         V = self.v_bar.matrix
         return float(np.linalg.eigvalsh(V - self.s_bar)[0] / np.linalg.norm(V, 2))
 
-    def to_dict(self) -> dict[str, Any]:
-        it, d = self.v_bar, self.sdp_difference
-        order = self.ordering_margin
-        return {
-            "S_bar": {
-                "exists": self.s_bar is not None,
-                "matrix": mat(self.s_bar),
-                "trace": _trace(self.s_bar),
-                "reason": None
-                if self.s_bar is not None
-                else "(1 - lambda) rho(A)^2 >= 1 (for several sensors: "
-                "prod_s (1 - lambda_s) rho(A)^2 >= 1): the Lyapunov equation has no solution and E[P_t] diverges",
-                "method": "scipy.linalg.solve_discrete_lyapunov",
-                "residual": num(self.s_bar_residual),
-            },
-            "V_bar": {
-                "exists": it.matrix is not None,
-                "matrix": mat(it.matrix),
-                "trace": _trace(it.matrix),
-                "reason": it.reason,
-                "iteration": {
-                    "method": "monotone iteration from 0 (Sinopoli et al. 2004, Theorem 6(a)), finished by monotone policy "
-                    "iteration from above; the two bracket V_bar",
-                    "iterations": it.iterations,
-                    "policy_iteration_steps": it.newton_steps,
-                    "residual": num(it.residual),
-                    "bracket_gap": num(it.bracket_gap),
-                },
-                "sdp": {
-                    "status": None if self.sdp is None else self.sdp.status,
-                    "matrix": None if self.sdp is None else mat(self.sdp.matrix),
-                    "trace": None if self.sdp is None else _trace(self.sdp.matrix),
-                    "reason": self.sdp_reason,
-                    "relative_difference": num(d),
-                    "agrees": None if d is None else bool(d <= SDP_AGREEMENT),
-                },
-            },
-            "ordering": {
-                "S_bar_le_V_bar": None if order is None else bool(order >= -1e-9),
-                "min_eigenvalue_of_difference_relative": num(order),
-            },
-            "covariance": "predictor P(t|t-1): S_bar <= lim E[P(t|t-1)] <= V_bar",
-            "filtered": None if self.filtered is None else self.filtered.to_dict(),
-        }
-
 
 @dataclass(frozen=True)
-class PHatBounds:
+class PHatBounds(ReportPart):
     """Rohr, Marelli and Fu (2010)'s ``P_hat_N`` for ``N = 1, 2, 4, ...`` up to the horizon (and the horizon itself)."""
 
     horizon: int
@@ -172,38 +95,9 @@ class PHatBounds:
                     ok = (ok is not False) and bool(np.linalg.eigvalsh(M - Mc)[0] >= -tol)
         return ok
 
-    def to_dict(self) -> dict[str, Any]:
-        t1 = next((_trace(e.matrix) for e in self.entries if e.N == 1), None)
-        out = []
-        filtered = self.filtered or (None,) * len(self.entries)
-        for e, f in zip(self.entries, filtered):
-            t = _trace(e.matrix)
-            out.append(
-                {
-                    "N": e.N,
-                    "exists": e.matrix is not None,
-                    "trace": t,
-                    "improvement_over_P_hat_1_percent": None if t is None or t1 is None else num(100 * (1 - t / t1)),
-                    "matrix": mat(e.matrix),
-                    "iterations": e.iterations,
-                    "started_from_N": e.start,
-                    "last_step": num(e.last_step),
-                    "reason": e.reason,
-                    "filtered_trace": _trace(f),
-                }
-            )
-        return {
-            "horizon": self.horizon,
-            "method": "fixed point of g_N (Rohr, Marelli and Fu 2010, eqs. 11, 15, 22), g_N evaluated level by level on batches",
-            "entries": out,
-            "covariance": "predictor P(t|t-1); filtered_trace is the trace of sum_S pi(S) F_S(P_hat_N), an upper "
-            "bound of lim sup E[P(t|t)] by the concavity argument of the filtered V_bar",
-            "monotone_subsequences_hold": self.subsequences_monotone(),
-        }
-
 
 @dataclass(frozen=True)
-class RegionMap:
+class RegionMap(ReportPart):
     """Liu and Goldsmith (2004), Figs. 4-5: the ``(lambda_1, lambda_2)`` square labelled by the bounds."""
 
     axes: tuple[str, str]
@@ -212,23 +106,6 @@ class RegionMap:
     certified_cells: int
     lmi_solves: int
     exact: RegionGrid | None = None  # kfio.stability._regions.exact_region_grid(...), an extension
-
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "axes": list(self.axes),
-            "values": [float(v) for v in self.values],
-            "labels": [list(row) for row in self.labels],
-            "indexing": "labels[i][j] is the cell lambda_1 = values[i], lambda_2 = values[j]",
-            "legend": {
-                "stable": "the LMI (Liu and Goldsmith 2004, eq. 20) is feasible, by a re-checked certificate at this cell or at a "
-                "cell below it in both coordinates (feasibility is monotone, Liu and Goldsmith 2004, Lemma 3)",
-                "unstable": "prod_s (1 - lambda_s) rho(A)^2 >= 1: the lower bound diverges",
-                "undecided": "neither bound decides",
-            },
-            "certified_cells": self.certified_cells,
-            "lmi_solves": self.lmi_solves,
-            "exact": None if self.exact is None else self.exact.to_dict(),
-        }
 
 
 @dataclass(frozen=True, repr=False)
@@ -262,48 +139,8 @@ class BoundsReport(Report):
             ("trace_V_bar", _trace(self.covariance.v_bar.matrix)),
         ]
 
-    def to_dict(self) -> dict[str, Any]:
-        one = self.one_packet
-        packets = [
-            {
-                "name": p.name,
-                "rows": list(p.rows),
-                "arrival_probability": float(lam),
-                "arrival_probability_exact": fraction_text(lam),
-            }
-            for p, lam in zip(self.packets, self.arrival)
-        ]
-        sensors = None
-        if not one:
-            sensors = [{"name": p.name, "critical_interval": c.to_dict()} for p, c in zip(self.packets, self.critical)]
-        return {
-            **stamp(),
-            "command": "bounds",
-            "packets": packets,
-            "spectral_radius_A": num(self.rho),
-            "hypotheses": self.hypotheses,
-            "operating_point": {
-                "verdict_by_bounds": self.verdict,
-                "reason": self.verdict_reason,
-                "certificate": None if self.verdict_certificate is None else self.verdict_certificate.describe(),
-            },
-            "critical_probability": self.critical[0].to_dict() if one else None,
-            "sensors": sensors,
-            "variance_threshold": {
-                "value": num(self.variance_threshold),
-                "formula": "max(0, 1 - 1/rho(A)^4)",
-                "meaning": "finite asymptotic variance of P_t needs lambda above this (Rohr, Marelli and Fu 2010, Theorem 4)",
-            }
-            if one
-            else None,
-            "covariance": self.covariance.to_dict(),
-            "p_hat": None if self.p_hat is None else self.p_hat.to_dict(),
-            "region": None if self.region is None else self.region.to_dict(),
-            "trace_target": None if self.trace_target is None else self.trace_target.to_dict(),
-            "notes": self._notes(),
-        }
-
-    def _notes(self) -> list[str]:
+    def notes(self) -> list[str]:
+        """Caveats of the report: per-sensor reading of the intervals, failed hypotheses of Sinopoli et al. (2004)."""
         notes = []
         if not self.one_packet:
             notes.append(
@@ -375,5 +212,5 @@ class BoundsReport(Report):
                 lines.append(f"    {float(v):5.3f} " + "".join(sym[x] for x in row))
         if self.trace_target is not None:
             lines.append("  " + self.trace_target.summary_line())
-        lines.extend(f"  note: {n}" for n in self._notes())
+        lines.extend(f"  note: {n}" for n in self.notes())
         return "\n".join(lines)

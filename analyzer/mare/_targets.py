@@ -21,11 +21,11 @@ not (or ``V_bar`` does not exist there).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
 from .._budget import Budget
+from .._reporting import ReportPart
 from ..errors import InvalidInput
 from ..model._exact import parse_number
 from ..model._types import Request
@@ -52,7 +52,7 @@ def parse_trace_target(request: Request) -> float | None:
 
 
 @dataclass(frozen=True)
-class TraceTarget:
+class TraceTarget(ReportPart):
     """The smallest ``lambda`` with certified ``trace(V_bar) <= target``.
 
     Attributes
@@ -78,17 +78,6 @@ class TraceTarget:
     trace_at_sufficient: float | None
     probes: int
     reachable: bool
-
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "target": self.target,
-            "smallest_arrival_probability": self.sufficient,
-            "bracket": [self.insufficient, self.sufficient],
-            "trace_V_bar_at_it": self.trace_at_sufficient,
-            "reachable": self.reachable,
-            "probes": self.probes,
-            "method": "bisection on lambda; trace(V_bar) decreases in lambda (Sinopoli et al. 2004, Theorem 6)",
-        }
 
     def summary_line(self) -> str:
         if self.sufficient is None:

@@ -9,9 +9,12 @@ set ``S`` of packets that arrived at ``t``, the measurement update is
 
     P(t|t) = P - P C_S' (C_S P C_S' + R_{SS})^{-1} C_S P = (P^{-1} + C_S' R_{SS}^{-1} C_S)^{-1},
 
-and ``P(t|t) = P`` when nothing arrived.  The simulation applies it outside
-the Riccati kernel to the predictor batch and the same arrival draws, so the
-predictor output (and the random stream) is unchanged.
+and ``P(t|t) = P`` when nothing arrived.  The exact enumeration
+(:mod:`kfio.simulation._finite_horizon`) applies this function; the Monte
+Carlo simulation gets the same update in square-root form, ``P - V'V``, from
+the Riccati kernel's own pass (:meth:`kfio.simulation._kernel.RiccatiStep.update`,
+:class:`kfio.simulation._packed.PackedRiccatiStep`), with the same arrival
+draws, so the predictor output (and the random stream) is unchanged.
 """
 
 from __future__ import annotations

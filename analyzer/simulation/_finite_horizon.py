@@ -41,8 +41,7 @@ from typing import Any
 import numpy as np
 
 from .._budget import Budget
-from .._json import json_float
-from .._reporting import Report, stamp
+from .._reporting import Report
 from ..errors import InvalidInput, LimitExceeded
 from ..model._exact import value_text
 from ..model._types import Request
@@ -55,7 +54,6 @@ from ._setup import (
     SimSystem,
     SimulationLimits,
     check_exact_steps,
-    matrix_or_none,
     parse_options,
     sim_system,
 )
@@ -132,28 +130,6 @@ class FiniteHorizonReport(Report):
             ("final_mean_trace", float(self.mean_trace[-1])),
             ("diverged_at", self.diverged_at),
         ]
-
-    def to_dict(self) -> dict[str, Any]:
-        growth = self.growth_per_step()
-        last_ok = self.mean_covariance[-1]
-        ftr = self.filtered_mean_trace
-        return {
-            **stamp(),
-            "steps": self.steps,
-            "sequences": self.sequences,
-            "initial_channel": self.initial_channel,
-            "covariance": "predictor P(t|t-1): mean_trace, final_mean_covariance",
-            "mean_trace": [json_float(x) for x in self.mean_trace],
-            "final_mean_covariance": matrix_or_none(last_ok),
-            "filtered_mean_trace": None if ftr is None else [json_float(x) for x in ftr],
-            "final_filtered_mean_covariance": None
-            if self.filtered_mean_covariance is None
-            else matrix_or_none(self.filtered_mean_covariance[-1]),
-            "diverged": self.diverged_at is not None,
-            "diverged_at": self.diverged_at,
-            "imprecise_probability": json_float(self.imprecise_probability[-1]),
-            "growth_per_step": None if growth is None else json_float(growth),
-        }
 
     def summary(self) -> str:
         lines = [

@@ -22,6 +22,10 @@ are zeroed in ``C P`` and their block of ``S`` is replaced by the identity,
 which makes them contribute exactly nothing.  :class:`GroupedRiccatiStep` is
 the alternative (gather the trajectories of each arrival pattern, update with
 ``C_S``, scatter); ``bench/bench_simulate.py`` measures both.
+
+These batched-matrix kernels are the references: the simulation's default is
+:class:`kfio.simulation._packed.PackedRiccatiStep` (the same operations on the
+unique entries of ``P``, in cache-sized blocks), tested against them to 1e-12.
 """
 
 from __future__ import annotations
@@ -163,9 +167,19 @@ class RiccatiStep:
             The new batch, and ``max_i (C P C' + R)_ii / R_ii`` over the rows
             that arrived (0 where none did): see :data:`PRECISION_RATIO`.
         """
+        post, ratio = self.update(P, rowmask)
+        return self.open_loop(post), ratio
+
+    def update(self, P: np.ndarray, rowmask: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """The measurement update ``P - V'V`` (the filtered ``P(t|t)``) and the innovation ratios.
+
+        ``V = L^{-1} C_S P`` with ``L L' = C_S P C_S' + R_SS``: the measurement update of
+        Sinopoli et al. (2004) for the rows that arrived, in square-root form, so that ``Phi_S(P) = A (P - V'V) A' + Q`` (:meth:`apply`).  Same
+        parameters as :meth:`apply`; lost rows contribute nothing, so ``P(t|t) = P`` where nothing arrived.
+        """
         p = self.C.shape[0]
         if p == 0:
-            return self.open_loop(P), np.zeros(len(P))
+            return P.copy(), np.zeros(len(P))
         CP = np.einsum("pi,mij->mpj", self.C, P)
         S = np.einsum("mpj,qj->mpq", CP, self.C)
         S += self.R
@@ -180,7 +194,7 @@ class RiccatiStep:
         V = _whiten_safe(S, CP, lambda rows: self._noise_floor(rows, rowmask))
         if rowmask is not None:
             V *= rowmask[:, :, None]
-        return self.open_loop(P - np.matmul(np.swapaxes(V, -1, -2), V)), ratio.max(axis=1)
+        return P - np.matmul(np.swapaxes(V, -1, -2), V), ratio.max(axis=1)
 
     def _noise_floor(self, rows: np.ndarray, rowmask: np.ndarray | None) -> np.ndarray:
         """The matrix ``S`` dominates for the given batch rows: ``R``, masked like ``S``."""
@@ -205,6 +219,18 @@ class GroupedRiccatiStep:
     R: np.ndarray
 
     def apply(self, P: np.ndarray, rowmask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`RiccatiStep.apply` (``rowmask`` is required)."""
+        return self._by_pattern(P, rowmask, "apply")
+
+    def update(self, P: np.ndarray, rowmask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`RiccatiStep.update` (``rowmask`` is required)."""
+        return self._by_pattern(P, rowmask, "update")
+
+    def open_loop(self, P: np.ndarray) -> np.ndarray:
+        """:meth:`RiccatiStep.open_loop`."""
+        return RiccatiStep.build(self.A, self.Q, self.C, self.R).open_loop(P)
+
+    def _by_pattern(self, P: np.ndarray, rowmask: np.ndarray, how: str) -> tuple[np.ndarray, np.ndarray]:
         out, ratio = np.empty_like(P), np.zeros(len(P))
         patterns, inverse = np.unique(rowmask.astype(bool), axis=0, return_inverse=True)
         inverse = inverse.reshape(-1)
@@ -212,7 +238,7 @@ class GroupedRiccatiStep:
             idx = np.flatnonzero(inverse == k)
             rows = np.flatnonzero(pat)
             step = RiccatiStep.build(self.A, self.Q, self.C[rows], self.R[np.ix_(rows, rows)])
-            out[idx], ratio[idx] = step.apply(P[idx])
+            out[idx], ratio[idx] = getattr(step, how)(P[idx])
         return out, ratio
 
 
@@ -255,136 +281,3 @@ def _congruence(A: np.ndarray) -> np.ndarray:
     T += W[:, ju * n + iu]
     T[:, iu == ju] *= 0.5
     return np.ascontiguousarray(T)
-
-
-@dataclass(frozen=True, eq=False)
-class PackedRiccatiStep:
-    """:class:`RiccatiStep`'s map on a *structure of arrays*: the ``n(n+1)/2`` unique entries of each ``P``.
-
-    The batch is held as ``h`` of shape ``(N, M)`` (``N = n(n+1)/2``, one
-    contiguous row per entry), so that every linear part is one flat GEMM
-    over all trajectories:
-
-    * ``C P`` (``p n`` rows) and ``vech(C P C')`` from ``h`` by fixed
-      ``(p n) x N`` and ``(p(p+1)/2) x N`` matrices;
-    * the open loop ``vech(A P A') = T vech(P)`` with ``T`` the congruence
-      matrix (:func:`kfio.mare._vech.congruence_matrix`);
-
-    and the Cholesky whitening (unrolled over ``p``) and ``vech(V'V)`` are
-    whole-row products.  Symmetry is structural.  The safeguards are the
-    same: the innovation ratio, rows of lost packets decoupled by the mask,
-    and rows whose ``S`` lost definiteness recomputed by :class:`RiccatiStep`
-    (with its lift).  Agrees with :class:`RiccatiStep` to rounding.
-    """
-
-    base: RiccatiStep
-    iu: np.ndarray
-    ju: np.ndarray
-    G: np.ndarray  # (p n, N): vec(C P) by rows k of C
-    H: np.ndarray  # (p(p+1)/2, N): vech(C P C')
-    T: np.ndarray  # (N, N): vech(A P A')
-    q: np.ndarray  # (N, 1)
-    r: np.ndarray  # (p(p+1)/2, 1)
-
-    @classmethod
-    def build(cls, A: np.ndarray, Q: np.ndarray, C: np.ndarray, R: np.ndarray) -> PackedRiccatiStep:
-        n, p = A.shape[0], C.shape[0]
-        iu, ju = np.triu_indices(n)
-        idx = _vech_index(n)
-        G = np.zeros((p * n, len(iu)))
-        for k in range(p):
-            for j in range(n):
-                np.add.at(G[k * n + j], idx[:, j], C[k])  # (C P)_kj = sum_i C_ki P_ij
-        ku, lu = np.triu_indices(p)
-        H = np.zeros((len(ku), len(iu)))
-        for a, (k, j) in enumerate(zip(ku.tolist(), lu.tolist())):
-            np.add.at(H[a], idx.ravel(), np.outer(C[k], C[j]).ravel())  # sum_ab C_ka P_ab C_jb
-        return cls(
-            base=RiccatiStep.build(A, Q, C, R),
-            iu=iu,
-            ju=ju,
-            G=G,
-            H=H,
-            T=_congruence(np.asarray(A, float)),
-            q=np.asarray(Q, float)[iu, ju][:, None],
-            r=np.asarray(R, float)[ku, lu][:, None] if p else np.zeros((0, 1)),
-        )
-
-    def __call__(self, P: np.ndarray, rowmask: np.ndarray | None = None) -> np.ndarray:
-        return self.apply(P, rowmask)[0]
-
-    def pack(self, P: np.ndarray) -> np.ndarray:
-        """``(N, M)`` unique entries of a batch ``(M, n, n)``."""
-        return np.ascontiguousarray(P[:, self.iu, self.ju].T)
-
-    def unpack(self, h: np.ndarray) -> np.ndarray:
-        """The batch ``(M, n, n)`` of the packed ``h`` (exactly symmetric)."""
-        n = self.base.A.shape[0]
-        full = np.empty((h.shape[1], n, n))
-        full[:, self.iu, self.ju] = h.T
-        full[:, self.ju, self.iu] = h.T
-        return full
-
-    def traces(self, h: np.ndarray) -> np.ndarray:
-        """``trace(P_m)`` from the packed batch."""
-        return h[self.iu == self.ju].sum(axis=0)
-
-    def apply(self, P: np.ndarray, rowmask: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-        """Same contract as :meth:`RiccatiStep.apply` (packs, steps, unpacks)."""
-        h, ratio = self.apply_packed(self.pack(P), rowmask)
-        return self.unpack(h), ratio
-
-    def apply_packed(self, h: np.ndarray, rowmask: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-        """:meth:`apply` on the packed batch ``h`` (``(N, M)``); returns the new packed batch and the ratios."""
-        M, n = h.shape[1], self.base.A.shape[0]
-        p = self.base.C.shape[0]
-        ratio = np.zeros(M)
-        bad = None
-        if p:
-            h0 = h
-            h = h.copy()
-            CP = (self.G @ h).reshape(p, n, M)
-            S = self.H @ h + self.r  # vech(C P C' + R), rows (k, l) with k <= l
-            pos = {(int(k), int(j)): a for a, (k, j) in enumerate(zip(*np.triu_indices(p)))}
-            diagR = np.diag(self.base.R)
-            mask = None if rowmask is None else np.asarray(rowmask, float).T  # (p or 1, M)
-            ratio_rows = np.stack([S[pos[k, k]] / diagR[k] for k in range(p)])
-            if mask is not None:
-                ratio_rows *= mask
-            ratio = ratio_rows.max(axis=0)
-            if mask is not None and mask.shape[0] > 1:
-                for (k, j), a in pos.items():
-                    S[a] *= mask[k] * mask[j]
-                    if k == j:
-                        S[a] += 1.0 - mask[k]
-            # Cholesky S = L L' and V = L^-1 C P, row by row of L, over the whole batch at once
-            L: dict[tuple[int, int], np.ndarray] = {}
-            V = np.empty((p, n, M))
-            for j in range(p):
-                d = S[pos[j, j]].copy()
-                for k in range(j):
-                    d -= L[j, k] * L[j, k]
-                L[j, j] = np.sqrt(d)
-                for i in range(j + 1, p):
-                    s = S[pos[j, i]].copy()
-                    for k in range(j):
-                        s -= L[i, k] * L[j, k]
-                    L[i, j] = s / L[j, j]
-                v = CP[j].copy()
-                for k in range(j):
-                    v -= L[j, k] * V[k]
-                V[j] = v / L[j, j]
-            if mask is not None:
-                V *= mask[:, None, :] if mask.shape[0] > 1 else mask[None, :, :]
-            good = np.isfinite(V.sum(axis=(0, 1)))
-            if not good.all():
-                bad = np.flatnonzero(~good)
-            for k in range(p):
-                h -= V[k][self.iu] * V[k][self.ju]
-        out = self.T @ h
-        out += self.q
-        if bad is not None:  # lost definiteness (or non-finite input): the reference path with its lift
-            rows = None if rowmask is None else rowmask[bad]
-            full, ratio[bad] = self.base.apply(self.unpack(h0[:, bad]), rows)
-            out[:, bad] = self.pack(full)
-        return out, ratio

@@ -37,6 +37,7 @@ from typing import Any, Callable
 import numpy as np
 
 from .._budget import Budget
+from .._reporting import ReportPart
 from ..errors import InvalidInput
 from ..model._exact import parse_number
 from ..model._types import Request
@@ -93,7 +94,7 @@ def parse_outage_target(request: Request) -> OutageTargetSpec | None:
 
 
 @dataclass(frozen=True)
-class OutageTarget:
+class OutageTarget(ReportPart):
     """The smallest ``lambda`` with estimated ``P(trace P_T > M) <= epsilon``; see the module docstring.
 
     Attributes
@@ -119,23 +120,6 @@ class OutageTarget:
     insufficient: float | None
     sufficient: float | None
     probes: tuple[tuple[float, float, float, float], ...]
-
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "label": "estimated",
-            "threshold": self.threshold,
-            "epsilon": self.epsilon,
-            "covariance": "predictor P(T|T-1)",
-            "method": "bisection over lambda on the stationary outage estimate with common random numbers "
-            "(same seed, arrival iff U < lambda), so the estimate and its Wilson 95% interval decrease with lambda",
-            "steps": self.steps,
-            "trajectories": self.trajectories,
-            "seed": self.seed,
-            "tolerance": self.tolerance,
-            "smallest_arrival_probability_estimate": self.estimate,
-            "bracket": {"confidently_insufficient": self.insufficient, "confidently_sufficient": self.sufficient},
-            "probes": [{"arrival_probability": lam, "outage": p, "ci95": [lo, hi]} for lam, p, lo, hi in self.probes],
-        }
 
     def summary_lines(self) -> list[str]:
         def f(x: float | None) -> str:
@@ -165,13 +149,13 @@ def outage_target(
     sim: SimSystem,
     opts: SimulateOptions,
     spec: OutageTargetSpec,
-    run: Callable[[SimSystem, SimulateOptions, Budget | None], Any],
+    run: Callable[..., Any],
     budget: Budget | None = None,
 ) -> OutageTarget:
     """Bisect ``lambda`` for ``P(trace P_T > M) <= epsilon`` (estimated); see the module docstring.
 
     ``run`` is :func:`kfio.simulation._simulate.run_monte_carlo` (passed in to
-    avoid an import cycle); every probe uses ``opts.seed``.
+    avoid an import cycle); every probe uses ``opts.seed`` and records the predictor only.
     """
     (pk,) = sim.packets
     cache: dict[float, tuple[float, float, float]] = {}
@@ -180,7 +164,7 @@ def outage_target(
         if lam not in cache:
             ch = dataclasses.replace(pk.channel, table=(Fraction(lam),))
             s = dataclasses.replace(sim, packets=(dataclasses.replace(pk, channel=ch),))
-            x = run(s, opts, budget).final_traces
+            x = run(s, opts, budget, filtered=False).final_traces
             k, n = int(np.sum(~(x <= spec.threshold))), x.size
             cache[lam] = (k / n, *wilson(k, n))
         return cache[lam]

@@ -4,8 +4,9 @@ Rohr, Marelli and Fu (2014), eqs. (2)-(5): ``P_{t+1} = Phi_{g_t}(P_t)`` where ``
 (random) arrival of the packets sent at ``t``; with several packets
 ``Phi_S`` uses the rows of the packets in ``S`` (docs/theory.md).  We draw
 ``M`` independent arrival processes from the request's channel and propagate
-``M`` covariances at once, as one ``(M, n, n)`` array
-(:func:`kfio.simulation._kernel.riccati_update`).  At every ``t = 0..T`` we
+``M`` covariances at once, as the ``(n(n+1)/2, M)`` unique entries
+(:class:`kfio.simulation._packed.PackedRiccatiStep`, which also gives the
+filtered ``trace P(t|t)`` of the same arrivals in the same pass).  At every ``t = 0..T`` we
 record statistics of ``trace(P_t)`` over the trajectories: the mean with a
 95% confidence band (normal approximation, ``mean +- 1.96 s / sqrt(M)``) and
 the 50th, 90th and 99th percentiles.
@@ -44,28 +45,20 @@ import numpy as np
 
 from .._budget import Budget
 from .._json import json_float
-from .._reporting import Report, stamp
+from .._reporting import Report
 from ..model._types import Request
 from ._channel import JointChannel
-from ._filtered import filtered_covariance
 from ._finite_horizon import FiniteHorizonReport, expected_covariance
-from ._kernel import (
-    DIVERGENCE_TRACE,
-    PRECISION_RATIO,
-    GroupedRiccatiStep,
-    PackedRiccatiStep,
-    RiccatiStep,
-    healthy,
-    traces,
-)
+from ._kernel import DIVERGENCE_TRACE, PRECISION_RATIO, GroupedRiccatiStep, RiccatiStep, healthy, traces
+from ._order import order_indices, order_statistics
 from ._outage_target import outage_target, parse_outage_target
+from ._packed import PackedRiccatiStep
 from ._setup import (
     DEFAULT_SIMULATION_LIMITS,
     PERCENTILES,
     SimSystem,
     SimulateOptions,
     SimulationLimits,
-    matrix_or_none,
     parse_options,
     sim_system,
 )
@@ -197,53 +190,6 @@ class SimulationReport(Report):
             ("mean_diverged_at", self.mean_diverged_at),
         ]
 
-    def to_dict(self) -> dict[str, Any]:
-        low, high = self.ci95
-        o = self.options
-        return {
-            **stamp(),
-            "steps": o.steps,
-            "trajectories": o.trajectories,
-            "seed": o.seed,
-            "initial_channel": o.initial_channel,
-            "P0": "Q" if o.P0_is_default else matrix_or_none(o.P0),
-            "mean_trace": _series(self.stats.mean),
-            "ci95_low": _series(low),
-            "ci95_high": _series(high),
-            "percentiles": {str(q): _series(self.percentile(q)) for q in PERCENTILES},
-            "diverged": self.mean_diverged_at is not None,
-            "mean_diverged_at": self.mean_diverged_at,
-            "percentile_diverged_at": {str(q): _first(~np.isfinite(self.percentile(q))) for q in PERCENTILES},
-            "diverged_trajectories": int(self.stats.diverged[-1]),
-            "final_mean_covariance": matrix_or_none(self.final_mean_covariance),
-            "checks": {
-                "arrival_rate": {
-                    name or "packet": {"observed": float(a), "stationary": float(s)}
-                    for name, a, s in zip(self.packet_names, self.arrival_rate, self.stationary_arrival_rate)
-                },
-                "exact_agreement": self.exact_agreement(),
-            },
-            "exact": None if self.exact is None else self.exact.to_dict(),
-            "stationary": None if self.stationary is None else self.stationary.to_dict(),
-            "covariance": "predictor P(t|t-1): mean_trace, ci95_*, percentiles and final_mean_covariance",
-            "filtered": self._filtered_dict(),
-            "outage_target": None if self.outage_target is None else self.outage_target.to_dict(),
-        }
-
-    def _filtered_dict(self) -> dict[str, Any] | None:
-        f = self.filtered_stats
-        if f is None:
-            return None
-        half = Z95 * f.sem
-        return {
-            "covariance": "filtered P(t|t) = P - P C_S'(C_S P C_S' + R_SS)^-1 C_S P, from the same arrivals",
-            "mean_trace": _series(f.mean),
-            "ci95_low": _series(np.maximum(f.mean - half, 0.0)),
-            "ci95_high": _series(f.mean + half),
-            "percentiles": {str(q): _series(f.percentiles[i]) for i, q in enumerate(PERCENTILES)},
-            "final_mean_covariance": matrix_or_none(self.final_mean_filtered_covariance),
-        }
-
     def summary(self) -> str:
         o = self.options
         low, high = self.ci95
@@ -291,10 +237,6 @@ def _first(flags: np.ndarray) -> int | None:
     return int(idx[0]) if idx.size else None
 
 
-def _series(x: np.ndarray) -> list[float | None]:
-    return [json_float(v) for v in x]
-
-
 def _fmt(x: float) -> str:
     return f"{x:.5g}" if math.isfinite(x) else "diverged"
 
@@ -303,13 +245,11 @@ def _display_times(steps: int, rows: int = 10) -> list[int]:
     return sorted({round(k * steps / rows) for k in range(rows + 1)})
 
 
-def _record(tr: np.ndarray, alive: np.ndarray) -> tuple[float, float, np.ndarray]:
-    """Mean, standard deviation and percentiles of the traces (diverged = +inf)."""
+def _record(tr: np.ndarray, alive: np.ndarray, ranks: tuple[int, ...]) -> tuple[float, float, np.ndarray]:
+    """Mean, standard deviation and percentiles (order statistics ``ranks``) of the traces (diverged = +inf)."""
     tr = np.where(alive, tr, np.inf)
-    qs = np.quantile(tr, np.array(PERCENTILES) / 100.0, method="inverted_cdf")
-    if not alive.all():
-        return math.nan, math.nan, qs
-    return float(tr.mean()), float(tr.std(ddof=1)), qs
+    mean, std = (float(tr.mean()), float(tr.std(ddof=1))) if alive.all() else (math.nan, math.nan)
+    return mean, std, order_statistics(tr, ranks, overwrite=True)  # after the sums: it reorders tr
 
 
 def run_monte_carlo(
@@ -317,11 +257,16 @@ def run_monte_carlo(
     opts: SimulateOptions,
     budget: Budget | None = None,
     update: PackedRiccatiStep | RiccatiStep | GroupedRiccatiStep | None = None,
+    filtered: bool = True,
 ) -> MonteCarloRun:
     """Propagate ``opts.trajectories`` covariances for ``opts.steps`` steps.
 
+    With ``filtered`` (the default) the statistics of the filtered ``P(t|t)`` of the
+    same arrivals are recorded too (``filtered_stats`` and the ``final_*filtered*``
+    fields; ``None`` without); the predictor's output is the same either way.
+
     ``update`` is the batched Riccati step; default the structure-of-arrays
-    :class:`kfio.simulation._kernel.PackedRiccatiStep` (the benchmark and the
+    :class:`kfio.simulation._packed.PackedRiccatiStep` (the benchmark and the
     agreement tests also pass :class:`kfio.simulation._kernel.RiccatiStep`
     and :class:`kfio.simulation._kernel.GroupedRiccatiStep`).  The random
     stream does not depend on the kernel, so seeded runs agree across
@@ -332,9 +277,10 @@ def run_monte_carlo(
     chan = JointChannel.from_packets(sim.packets)
     M, T = opts.trajectories, opts.steps
     hist = chan.sample_initial(opts.initial_channel, M, rng)
-    P = np.broadcast_to(opts.P0, (M, sim.n, sim.n)).copy()
-    h = step.pack(P) if isinstance(step, PackedRiccatiStep) else np.empty((0, M))
+    P0 = np.broadcast_to(opts.P0, (M, sim.n, sim.n)).copy()
+    run: _PackedRun | _MatrixRun = _PackedRun(step, P0) if isinstance(step, PackedRiccatiStep) else _MatrixRun(step, P0)
     alive = np.ones(M, dtype=bool)
+    ranks = order_indices(M, np.array(PERCENTILES) / 100.0)
     mean, std = np.empty(T + 1), np.empty(T + 1)
     pct = np.empty((len(PERCENTILES), T + 1))
     diverged = np.zeros(T + 1, dtype=np.int64)
@@ -342,65 +288,92 @@ def run_monte_carlo(
     fmean, fstd = np.empty(T + 1), np.empty(T + 1)
     fpct = np.empty((len(PERCENTILES), T + 1))
 
-    def filtered(P: np.ndarray, g: np.ndarray) -> np.ndarray:
-        return filtered_covariance(P, sim.C, sim.R, sim.row_mask(g))
+    def draw() -> tuple[np.ndarray, np.ndarray]:
+        g = rng.random((M, chan.m)) < chan.arrival_probability(hist)
+        return g, (g.astype(float) if chan.m == 1 else sim.row_mask(g))
 
     with np.errstate(all="ignore"):
-        mean[0], std[0], pct[:, 0] = _record(traces(P), alive)
+        mean[0], std[0], pct[:, 0] = _record(traces(P0), alive, ranks)
         for t in range(T):
             if budget is not None:
                 budget.tick("Monte Carlo simulation", M)
-            g = rng.random((M, chan.m)) < chan.arrival_probability(hist)
+            g, mask = draw()
             arrivals += g.sum(axis=0)
-            mask = g.astype(float) if chan.m == 1 else sim.row_mask(g)
-            if isinstance(step, PackedRiccatiStep):
-                # the filtered P(t|t) needs the full predictor P(t|t-1) of this step
-                fmean[t], fstd[t], fpct[:, t] = _record(traces(filtered(step.unpack(h), g)), alive)
-                h, ratio = step.apply_packed(h, mask)
-                tr = step.traces(h)
-                ok = _healthy_packed(h, tr)
-            else:
-                fmean[t], fstd[t], fpct[:, t] = _record(traces(filtered(P, g)), alive)
-                P, ratio = step.apply(P, mask)
-                tr = traces(P)
-                ok = healthy(P, tr)
+            ftr, tr, ratio, ok = run.step(mask)  # P(t+1|t), and trace P(t|t) of the same arrivals
+            if filtered:
+                fmean[t], fstd[t], fpct[:, t] = _record(ftr, alive, ranks)
             hist = chan.advance(hist, g)
             ok &= ratio <= PRECISION_RATIO
             if not ok[alive].all():
                 alive &= ok
-                if isinstance(step, PackedRiccatiStep):  # frozen: keeps NaN and overflow out of later arithmetic
-                    h[:, ~alive] = 0.0
-                else:
-                    P[~alive] = 0.0
+                run.freeze(~alive)  # keeps NaN and overflow out of later arithmetic
             diverged[t + 1] = M - int(alive.sum())
-            mean[t + 1], std[t + 1], pct[:, t + 1] = _record(tr, alive)
-        if isinstance(step, PackedRiccatiStep):
-            P = step.unpack(h)
-        # the arrivals at T, drawn after every draw the predictor used: same seed, same predictor output
-        g = rng.random((M, chan.m)) < chan.arrival_probability(hist)
-        PfT = filtered(P, g)
-        fmean[T], fstd[T], fpct[:, T] = _record(traces(PfT), alive)
-    final = P.mean(axis=0) if alive.all() else None
+            mean[t + 1], std[t + 1], pct[:, t + 1] = _record(tr, alive, ranks)
+        P = run.predictors()
+        if filtered:
+            # the arrivals at T, drawn after every draw the predictor used: same seed, same predictor output
+            PfT = run.filtered(draw()[1])
+            fmean[T], fstd[T], fpct[:, T] = _record(traces(PfT), alive, ranks)
     stats = TraceStatistics(mean=mean, std=std, percentiles=pct, diverged=diverged, trajectories=M)
-    fstats = TraceStatistics(mean=fmean, std=fstd, percentiles=fpct, diverged=diverged, trajectories=M)
-    final_traces = np.where(alive, traces(P), np.inf)
-    return MonteCarloRun(
+    out = MonteCarloRun(
         stats=stats,
-        final_mean_covariance=final,
+        final_mean_covariance=P.mean(axis=0) if alive.all() else None,
         arrival_rate=arrivals / (M * T),
-        final_traces=final_traces,
-        filtered_stats=fstats,
+        final_traces=np.where(alive, traces(P), np.inf),
+    )
+    if not filtered:
+        return out
+    return dataclasses.replace(
+        out,
+        filtered_stats=TraceStatistics(mean=fmean, std=fstd, percentiles=fpct, diverged=diverged, trajectories=M),
         final_mean_filtered_covariance=PfT.mean(axis=0) if alive.all() else None,
         final_filtered_traces=np.where(alive, traces(PfT), np.inf),
     )
 
 
-def _healthy_packed(h: np.ndarray, tr: np.ndarray) -> np.ndarray:
-    """:func:`kfio.simulation._kernel.healthy` on the packed batch ``(N, M)``."""
-    ok = tr <= DIVERGENCE_TRACE  # False for NaN
-    if not np.isfinite(h.sum()):
-        ok &= np.isfinite(h).all(axis=0)
-    return ok
+class _PackedRun:
+    """The packed batch of :func:`run_monte_carlo`, stepped in place by :meth:`PackedRiccatiStep.advance`."""
+
+    def __init__(self, step: PackedRiccatiStep, P0: np.ndarray) -> None:
+        self.kernel, self.h, self.work = step, step.pack(P0), step.workspace(len(P0))
+
+    def step(self, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """``trace P(t|t)``, ``trace P(t+1|t)``, innovation ratios and health flags (finite, trace bounded)."""
+        out = self.kernel.advance(self.h, mask, self.work)
+        return out.filtered_trace, out.trace, out.ratio, (out.trace <= DIVERGENCE_TRACE) & out.finite
+
+    def freeze(self, dead: np.ndarray) -> None:
+        self.h[:, dead] = 0.0
+
+    def predictors(self) -> np.ndarray:
+        """The batch ``(M, n, n)`` now."""
+        return self.kernel.unpack(self.h)
+
+    def filtered(self, mask: np.ndarray) -> np.ndarray:
+        """The filtered covariances of the batch now, for the arrivals ``mask``."""
+        return self.kernel.unpack(self.kernel.update_packed(self.h, mask))
+
+
+class _MatrixRun:
+    """The batch ``(M, n, n)`` of :func:`run_monte_carlo` for the matrix kernels (the references)."""
+
+    def __init__(self, step: RiccatiStep | GroupedRiccatiStep, P0: np.ndarray) -> None:
+        self.kernel, self.P = step, P0
+
+    def step(self, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        post, ratio = self.kernel.update(self.P, mask)
+        self.P = self.kernel.open_loop(post)
+        tr = traces(self.P)
+        return traces(post), tr, ratio, healthy(self.P, tr)
+
+    def freeze(self, dead: np.ndarray) -> None:
+        self.P[dead] = 0.0
+
+    def predictors(self) -> np.ndarray:
+        return self.P
+
+    def filtered(self, mask: np.ndarray) -> np.ndarray:
+        return self.kernel.update(self.P, mask)[0]
 
 
 def simulate(

@@ -39,7 +39,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from .._json import json_float
+from .._reporting import ReportPart
 from ..errors import InvalidInput, LimitExceeded
 from ..model._exact import parse_number
 from ..model._types import Request
@@ -105,7 +105,7 @@ def hill(samples: np.ndarray, k: int | None = None) -> tuple[float | None, int]:
 
 
 @dataclass(frozen=True)
-class StationaryReport:
+class StationaryReport(ReportPart):
     """Distribution of ``trace(P_T)`` over the trajectories at the last step.
 
     Attributes
@@ -147,30 +147,6 @@ class StationaryReport:
     @property
     def mean_unreliable(self) -> bool:
         return self.kappa is not None and self.kappa <= 2
-
-    def to_dict(self) -> dict[str, Any]:
-        fin = json_float  # JSON has no infinities: a value beyond float64 is null
-
-        return {
-            "step": self.step,
-            "samples": self.samples,
-            "method": "one sample of P_T per trajectory (Kar, Sinopoli and Moura 2012: P_t converges in distribution)",
-            "covariance": "predictor P(T|T-1) (quantiles, outage, tail exponent)",
-            "quantiles": [{"q": q, "trace": fin(v), "ci95": [fin(lo), fin(hi)]} for q, v, lo, hi in self.quantiles],
-            "filtered_quantiles": [
-                {"q": q, "trace": fin(v), "ci95": [fin(lo), fin(hi)]} for q, v, lo, hi in self.filtered_quantiles
-            ],
-            "outage": [{"threshold": m, "probability": p, "ci95": [lo, hi]} for m, p, lo, hi in self.outage],
-            "tail_exponent_hill": fin(self.hill),
-            "tail_exponent_hill_ci95": list(self.hill_interval) if self.hill_interval else None,
-            "hill_k": self.hill_k,
-            "tail_exponent_exact": fin(self.kappa),
-            "tail_exponent_exact_text": self.kappa_exact,
-            "exact_mean_growth_per_step": fin(self.growth_rate),
-            "verdict": self.verdict,
-            "mean_unreliable": self.mean_unreliable,
-            "warnings": list(self.warnings),
-        }
 
     def summary_lines(self) -> list[str]:
         lines = [w for w in (f"warning: {w}" for w in self.warnings)]

@@ -33,6 +33,7 @@ import sympy
 from sympy.polys.matrices import DomainMatrix
 
 from .._budget import Budget
+from .._reporting import ReportPart
 from ..errors import InvalidInput
 from ..model._types import MarkovChannel, PerSensorChannel, Request
 from ..structure._fmo import FmoBlock
@@ -142,21 +143,13 @@ def _boundary_poly(beta: Fraction, N: int, F: frozenset, channels: Sequence[Mark
 
 
 @dataclass(frozen=True)
-class _Constraint:
+class _Constraint(ReportPart):
     block: int
     eigenvalues: tuple[str, ...]
     beta: Any
     beta_float: float
     period: int
     blind_set: frozenset
-
-    def describe(self) -> dict[str, Any]:
-        return {
-            "block": self.block,
-            "eigenvalues": list(self.eigenvalues),
-            "period": self.period,
-            "blind_set": sorted([list(s) for s in self.blind_set]),
-        }
 
 
 def _constraints(
@@ -189,7 +182,7 @@ def _constraints(
 
 
 @dataclass(frozen=True)
-class CriticalParameter:
+class CriticalParameter(ReportPart):
     """The verdict along one channel parameter ``x`` in ``(0, 1)``, the others fixed.
 
     Attributes
@@ -212,28 +205,6 @@ class CriticalParameter:
     crossings: tuple[Change[_Constraint], ...]
     exact: bool
     basis: str
-
-    def to_dict(self) -> dict[str, Any]:
-        crit = self.crossings[0] if len(self.crossings) == 1 else None
-        return {
-            "pointer": self.pointer,
-            "value": str(self.value),
-            "critical": crit.value if crit else None,
-            "critical_exact": crit.exact_text if crit else None,
-            "crossings": [
-                {
-                    "value": c.value,
-                    "value_exact": c.exact_text,
-                    "below": c.left,
-                    "above": c.right,
-                    **({"deciding": c.tag.describe()} if c.tag is not None else {}),
-                }
-                for c in self.crossings
-            ],
-            "intervals": [{"lower": a, "upper": b, "label": lab} for a, b, lab in self.intervals],
-            "exact": self.exact,
-            "basis": self.basis,
-        }
 
     def summary_lines(self) -> list[str]:
         if not self.crossings:

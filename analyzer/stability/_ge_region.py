@@ -40,6 +40,7 @@ import numpy as np
 import sympy
 
 from .._budget import Budget
+from .._reporting import ReportPart
 from ..model._types import MarkovChannel
 from ..structure._fmo import FmoBlock
 from ._blind import Margins, SlotSpace, search
@@ -47,7 +48,6 @@ from ._line import Candidate, add_candidates, roots_in_unit, scan
 from ._sigma import SigmaResult
 
 P_SYM, Q_SYM = sympy.symbols("p q")
-REFERENCE = "Rohr, Marelli and Fu (2014), Theorem 1, on the Gilbert-Elliott family; Wu, Shi, Anderson, Johansson (2018)"
 LABELS = ("stable", "boundary", "unstable")
 _SIGN = {-1: "stable", 0: "boundary", 1: "unstable"}
 
@@ -252,7 +252,7 @@ def ge_structure(items: Sequence[tuple[FmoBlock, SigmaResult | None]], budget: B
 
 
 @dataclass(frozen=True)
-class Crossing:
+class Crossing(ReportPart):
     """A point where the exact label changes along a line."""
 
     value: float
@@ -261,18 +261,9 @@ class Crossing:
     right: str
     pattern: GePattern | None
 
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "value": self.value,
-            "value_exact": self.value_exact,
-            "below": self.left,
-            "above": self.right,
-            **({"deciding": self.pattern.describe()} if self.pattern is not None else {}),
-        }
-
 
 @dataclass(frozen=True)
-class LineResult:
+class LineResult(ReportPart):
     """The verdict along ``p = p0`` (variable ``q``) or ``q = q0`` (variable ``p``), exactly.
 
     Attributes
@@ -304,19 +295,6 @@ class LineResult:
         if self.crossings:
             return "threshold" if len(self.crossings) == 1 else "several"
         return f"{self.intervals[0][2]} for every {self.variable.replace('_', ' ')}"
-
-    def to_dict(self) -> dict[str, Any]:
-        crit = self.critical
-        return {
-            "variable": self.variable,
-            "fixed": self.fixed,
-            "status": self.status(),
-            "critical": crit.value if crit else None,
-            "critical_exact": crit.value_exact if crit else None,
-            "crossings": [c.to_dict() for c in self.crossings],
-            "intervals": [{"lower": a, "upper": b, "label": lab} for a, b, lab in self.intervals],
-            "exact": self.exact,
-        }
 
 
 def _numeric_roots(structure: GeStructure, pt: GePattern, var: str, fixed: Fraction) -> list[mpmath.mpf]:
@@ -390,7 +368,7 @@ def _frac_text(x: Fraction) -> str:
 
 
 @dataclass(frozen=True)
-class GeMap:
+class GeMap(ReportPart):
     """Exact labels on a ``K x K`` grid of cell centres and the boundary curve, piece by piece.
 
     Attributes
@@ -411,18 +389,6 @@ class GeMap:
     pieces: tuple[dict[str, Any], ...]
     curve: tuple[tuple[float, float, int], ...]
     exact: bool
-
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "grid": len(self.rates),
-            "rates": list(self.rates),
-            "labels": [list(row) for row in self.labels],
-            "label_axes": "labels[i][j]: failure_rate p = rates[i], recovery_rate q = rates[j]",
-            "exact_labels": self.exact,
-            "pieces": list(self.pieces),
-            "curve": [list(pt) for pt in self.curve],
-            "curve_columns": ["recovery_rate", "failure_rate", "piece"],
-        }
 
 
 def _curve_points(structure: GeStructure, samples: int) -> list[tuple[float, float, int]]:
@@ -480,7 +446,7 @@ def ge_map(structure: GeStructure, grid: int, samples: int | None = None) -> GeM
 
 
 @dataclass(frozen=True)
-class GeRegion:
+class GeRegion(ReportPart):
     """What ``analyze`` reports for one Gilbert-Elliott packet.
 
     Attributes
@@ -500,16 +466,6 @@ class GeRegion:
     patterns: tuple[GePattern, ...]
     map: GeMap | None = None
     basis: str = "theorem"
-
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "basis": self.basis,
-            "reference": REFERENCE,
-            "critical_recovery_rate": self.recovery.to_dict(),
-            "critical_failure_rate": self.failure.to_dict(),
-            "patterns": [pt.describe() for pt in self.patterns],
-            "map": self.map.to_dict() if self.map is not None else None,
-        }
 
     def summary_lines(self) -> list[str]:
         out = []

@@ -45,9 +45,10 @@ import mpmath
 import sympy
 
 from .._budget import Budget
-from .._json import json_float
+from .._json import encode
+from .._reporting import ReportPart
 from ..errors import InvalidInput
-from ..model._exact import fraction_text, value_text
+from ..model._exact import value_text
 from ..model._request import require_assumption_1
 from ..model._types import PerSensorChannel, Request, packets_of
 from ..structure._fmo import FmoBlock
@@ -68,12 +69,6 @@ from ._regions_constraints import (
 from ._regions_curve import DEFAULT_SAMPLES, BoundaryCurve, boundary_curve
 from ._sensor_gain import sensor_gains
 from ._sigma import SigmaResult
-
-BASIS = "extension"
-STATEMENT = (
-    "the FMO construction of Rohr, Marelli and Fu 2014 applied to separately lost Bernoulli packets "
-    "(docs/theory.md, 'Per-sensor exact regions'); a kfio extension, not a theorem of the papers"
-)
 
 
 def bernoulli_packets(request: Request) -> tuple[tuple[str, ...], tuple[Fraction, ...]]:
@@ -126,23 +121,9 @@ class SensorThreshold:
     certified: bool
     reason: str
 
-    def to_dict(self, names: Sequence[str]) -> dict[str, Any]:
-        b = self.binding
-        return {
-            "sensor": self.sensor,
-            "arrival_probability": float(self.arrival_probability),
-            "arrival_probability_exact": fraction_text(self.arrival_probability),
-            "status": self.status,
-            "critical_arrival_probability": self.critical,
-            "critical_arrival_probability_exact": self.critical_exact,
-            "binding": None if b is None else {"block": b[0], "eigenvalues": list(b[1]), **b[2].to_dict(names)},
-            "certified": self.certified,
-            "reason": self.reason,
-        }
-
 
 @dataclass(frozen=True)
-class SensorThresholds:
+class SensorThresholds(ReportPart):
     """Per-sensor exact thresholds and the verdict at the request's operating point (extension)."""
 
     sensors: tuple[str, ...]
@@ -154,20 +135,6 @@ class SensorThresholds:
     thresholds: tuple[SensorThreshold, ...]
     certified: bool
     consistent_with_analyze: bool | None = None
-
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "basis": BASIS,
-            "statement": STATEMENT,
-            "verdict": self.verdict,
-            "certified": self.certified,
-            "consistent_with_analyze": self.consistent_with_analyze,
-            "blocks": [
-                {**b.to_dict(self.sensors), "verdict": v, "rate": json_float(r)}
-                for b, v, r in zip(self.blocks, self.block_verdicts, self.block_rates)
-            ],
-            "sensors": [t.to_dict(self.sensors) for t in self.thresholds],
-        }
 
 
 def _log_value(block: BlockConstraints, rest: Fraction, z: int) -> Any:
@@ -343,7 +310,7 @@ def sensor_thresholds(
 
 
 @dataclass(frozen=True)
-class RegionGrid:
+class RegionGrid(ReportPart):
     """The ``(lambda_1, lambda_2)`` square labelled exactly (extension), with the boundary curve.
 
     ``labels[i][j]`` is the cell ``lambda_1 = values[i]``, ``lambda_2 =
@@ -356,28 +323,6 @@ class RegionGrid:
     labels: tuple[tuple[str, ...], ...]
     certified: bool
     curve: BoundaryCurve
-
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "basis": BASIS,
-            "statement": STATEMENT,
-            "axes": list(self.axes),
-            "values": [float(v) for v in self.values],
-            "values_exact": [fraction_text(v) for v in self.values],
-            "labels": [list(r) for r in self.labels],
-            "indexing": "labels[i][j] is the cell lambda_1 = values[i], lambda_2 = values[j]",
-            "legend": {
-                "stable": "every FMO block has rate < 1 (exact comparison)",
-                "unstable": "some FMO block has rate > 1",
-                "boundary": "the largest block rate is exactly 1: the theorem's gap",
-            },
-            "edge_cells": (
-                "cells with lambda = 0 or 1 lie outside Assumption 1 of Rohr, Marelli and Fu 2014; they are labelled by the same "
-                "formula (0^0 = 1: a sensor that always arrives removes every pattern that misses it)"
-            ),
-            "certified": self.certified,
-            "boundary": self.curve.to_dict(),
-        }
 
 
 def _two_sensors(request: Request) -> tuple[str, str]:
@@ -520,12 +465,9 @@ def region_report(
     if any(c.order != 0 for _, c in request.channel.channels):
         return None
     th = sensor_thresholds(request, report, budget, fmo=fmo, sigma=sigma)
-    out = th.to_dict()
-    out["boundary"] = (
-        boundary_curve(th.blocks, (th.sensors[0], th.sensors[1])).to_dict() if len(th.sensors) == 2 else None
-    )
-    out["sensor_improvement"] = sensor_gains(th.blocks, th.sensors, th.arrival)
-    return out
+    curve = boundary_curve(th.blocks, (th.sensors[0], th.sensors[1])) if len(th.sensors) == 2 else None
+    gains = sensor_gains(th.blocks, th.sensors, th.arrival)
+    return {**th.to_dict(), "boundary": encode(curve), "sensor_improvement": gains.to_dict()}
 
 
 __all__ = [

@@ -45,7 +45,6 @@ import mpmath
 import sympy
 
 from .._budget import Budget
-from .._json import json_float
 from ..errors import InvalidInput, NumericalFailure
 from ..model._types import MarkovChannel, System
 from ..structure._algebraic import AlgebraicReal
@@ -80,12 +79,6 @@ class BlindPattern:
 
     slots: tuple[tuple[int, int], ...]
     misses: tuple[int, ...]
-
-    def to_dict(self, names: Sequence[str]) -> dict[str, Any]:
-        return {
-            "blind_set": [list(s) for s in self.slots],
-            "misses": {name: z for name, z in zip(names, self.misses)},
-        }
 
 
 @dataclass(frozen=True)
@@ -134,18 +127,6 @@ class BlockConstraints:
         if self.beta_mp is not None:
             return self.beta_mp
         return self.beta.approx(DIGITS) if self.beta is not None else mpmath.mpf(self.beta_float)
-
-    def to_dict(self, names: Sequence[str]) -> dict[str, Any]:
-        return {
-            "eigenvalues": list(self.eigenvalues),
-            "modulus_squared": json_float(self.beta_float),
-            "modulus_squared_exact": self.beta_text if self.beta is not None else None,
-            "period": self.period,
-            "half_spaces": "sum_s misses_s * (-log(1 - lambda_s)) > period * log(modulus_squared), one per pattern",
-            "patterns": [p.to_dict(names) for p in self.patterns],
-            "certified": self.certified,
-            "notes": list(self.notes),
-        }
 
 
 def _misses(slots: frozenset, period: int, sensors: int) -> tuple[int, ...]:

@@ -45,6 +45,7 @@ from typing import Any, Sequence
 import mpmath
 import sympy
 
+from .._reporting import ReportPart
 from ._regions_constraints import DIGITS, SEPARATION, BlindPattern, BlockConstraints
 
 LAMBDA_1 = sympy.Symbol("lambda_1")
@@ -75,22 +76,9 @@ class BoundaryPiece:
     def vertical(self) -> bool:
         return self.slope is None
 
-    def to_dict(self, names: Sequence[str]) -> dict[str, Any]:
-        z1, z2 = self.pattern.misses
-        return {
-            "block": self.block,
-            "eigenvalues": list(self.eigenvalues),
-            "period": self.period,
-            "modulus_squared_exact": self.beta_text,
-            "blind_set": [list(s) for s in self.pattern.slots],
-            "misses": {names[0]: z1, names[1]: z2},
-            "log_form": f"{z1} u_1 + {z2} u_2 = {self.period} log({self.beta_text}),  u_s = -log(1 - lambda_s)",
-            "formula": self.formula,
-        }
-
 
 @dataclass(frozen=True)
-class Segment:
+class Segment(ReportPart):
     """``lambda_1`` in ``(start, end)`` where one piece (or ``h = 0``) is the envelope."""
 
     start: float
@@ -99,18 +87,9 @@ class Segment:
     end_exact: str
     piece: int | None  # index into BoundaryCurve.pieces; None: h = 0 (every lambda_2 > 0 is stable)
 
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "lambda_1_from": self.start,
-            "lambda_1_to": self.end,
-            "lambda_1_from_exact": self.start_exact,
-            "lambda_1_to_exact": self.end_exact,
-            "piece": self.piece,
-        }
-
 
 @dataclass(frozen=True)
-class Envelope:
+class Envelope(ReportPart):
     """The envelope of a set of pieces: where the region starts and which piece is active where."""
 
     lambda_1_min: float | None  # None: no lambda makes it stable
@@ -118,17 +97,9 @@ class Envelope:
     segments: tuple[Segment, ...]
     vertical: bool = False  # lambda_1_min comes from a pattern that needs only sensor 1 (strict there)
 
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "lambda_1_min": self.lambda_1_min,
-            "lambda_1_min_exact": self.lambda_1_min_exact,
-            "lambda_1_min_strict": self.vertical,
-            "segments": [s.to_dict() for s in self.segments],
-        }
-
 
 @dataclass(frozen=True)
-class BoundaryCurve:
+class BoundaryCurve(ReportPart):
     """The exact boundary of the stable region of two Bernoulli sensors (extension).
 
     Attributes
@@ -157,23 +128,6 @@ class BoundaryCurve:
     def h(self, lambda_1: float) -> float | None:
         """``h(lambda_1)`` as a float (``None`` where the region is empty)."""
         return _h(self.pieces, self.envelope, lambda_1)
-
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "basis": "extension",
-            "axes": list(self.axes),
-            "meaning": (
-                "stable iff lambda_1 > lambda_1_min and lambda_2 > h(lambda_1); boundary (the theorem's gap) on the "
-                "curve; unstable below it.  h is the largest active piece, in closed form per (block, blind pattern)"
-            ),
-            "pieces": [p.to_dict(self.axes) for p in self.pieces],
-            "envelope": self.envelope.to_dict(),
-            "per_block": [{"eigenvalues": list(e), **env.to_dict()} for e, env in self.per_block],
-            "samples": {
-                "lambda_1": [x for x, _ in self.samples],
-                "lambda_2": [y for _, y in self.samples],
-            },
-        }
 
 
 def _pieces(blocks: Sequence[BlockConstraints]) -> list[BoundaryPiece]:

@@ -15,11 +15,12 @@ names the sensor whose halving lowers it most.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any, Sequence
+from typing import Sequence
 
-from .._json import json_float
-from ._regions_constraints import BlockConstraints, block_rate
+from .._reporting import ReportPart
+from ._regions_constraints import BlindPattern, BlockConstraints, block_rate
 
 
 def _worst(blocks: Sequence[BlockConstraints], lambdas: Sequence[float]) -> tuple[float, int | None]:
@@ -30,9 +31,43 @@ def _worst(blocks: Sequence[BlockConstraints], lambdas: Sequence[float]) -> tupl
     return rates[k], k
 
 
-def sensor_gains(
-    blocks: Sequence[BlockConstraints], names: Sequence[str], lambdas: Sequence[Fraction]
-) -> dict[str, Any]:
+@dataclass(frozen=True)
+class SensorGain:
+    """One sensor: the exact elasticity ``z_s(F*) / N`` and the worst rate after halving its loss probability."""
+
+    sensor: str
+    elasticity: Fraction
+    worst_rate_if_loss_halved: float  # may be inf beyond float64: null in the JSON
+
+
+@dataclass(frozen=True)
+class SensorGains(ReportPart):
+    """What :func:`sensor_gains` finds (its JSON is ``regions.sensor_improvement``).
+
+    Attributes
+    ----------
+    names:
+        The sensors, in the order of the blind patterns' miss counts.
+    worst_rate, worst_block:
+        The largest block rate at the operating point and that block's eigenvalues
+        (``None`` with no block of ``|alpha| >= 1``).
+    binding:
+        The worst block's binding pattern ``F*`` at the operating point.
+    best:
+        The sensor whose halving lowers the worst rate most, or ``None`` if none lowers it.
+    sensors:
+        One :class:`SensorGain` per sensor.
+    """
+
+    names: tuple[str, ...]
+    worst_rate: float
+    worst_block: tuple[str, ...] | None
+    binding: BlindPattern | None
+    best: str | None
+    sensors: tuple[SensorGain, ...]
+
+
+def sensor_gains(blocks: Sequence[BlockConstraints], names: Sequence[str], lambdas: Sequence[Fraction]) -> SensorGains:
     """Elasticities and halving effects of each sensor on the worst block rate.
 
     Examples
@@ -48,45 +83,36 @@ def sensor_gains(
     >>> s = System(A=((F(5, 2), F(0)), (F(0), F(3, 2))), C=((F(1), F(0)), (F(0), F(1))),
     ...            sensors=(Sensor("s1", (0,)), Sensor("s2", (1,))))
     >>> g = sensor_gains(block_constraints(s), ["s1", "s2"], [F(9, 10), F(1, 2)])
-    >>> g["best"], [x["elasticity_exact"] for x in g["sensors"]]
+    >>> g.best, [str(x.elasticity) for x in g.sensors]
     ('s2', ['0', '1'])
+    >>> g.to_dict()["sensors"][1]["elasticity_exact"]
+    '1'
     """
     lam = [float(x) for x in lambdas]
     rate, k = _worst(blocks, lam)
-    out: list[dict[str, Any]] = []
     if k is None:
-        return {"basis": "extension", "worst_rate": 0.0, "best": None, "sensors": []}
+        return SensorGains(tuple(names), 0.0, None, None, None, ())
     blk = blocks[k]
     # the binding pattern of the worst block at the operating point
     binding = max(
         blk.patterns,
         key=lambda p: sum(z * math.log(max(1e-300, 1 - x)) for z, x in zip(p.misses, lam)),
     )
-    afters: list[float] = []  # may be inf beyond float64: compared here, null in the JSON
+    out: list[SensorGain] = []
     for s, name in enumerate(names):
         improved = list(lam)
         improved[s] = 1 - (1 - lam[s]) / 2
         after, _ = _worst(blocks, improved)
-        afters.append(after)
-        e = Fraction(binding.misses[s], blk.period)
-        out.append(
-            {
-                "sensor": name,
-                "elasticity_exact": str(e),
-                "elasticity": float(e),
-                "worst_rate_if_loss_halved": json_float(after),
-            }
-        )
-    best = min(range(len(out)), key=lambda i: afters[i])
-    return {
-        "basis": "extension",
-        "worst_rate": json_float(rate),
-        "worst_block": list(blk.eigenvalues),
-        "binding_pattern": binding.to_dict(names),
-        "best": out[best]["sensor"] if afters[best] < rate else None,
-        "sensors": out,
-        "rule": "elasticity = d log(worst rate) / d log(1 - lambda_s) = z_s / N of the binding pattern",
-    }
+        out.append(SensorGain(name, Fraction(binding.misses[s], blk.period), after))
+    best = min(range(len(out)), key=lambda i: out[i].worst_rate_if_loss_halved)
+    return SensorGains(
+        names=tuple(names),
+        worst_rate=rate,
+        worst_block=blk.eigenvalues,
+        binding=binding,
+        best=out[best].sensor if out[best].worst_rate_if_loss_halved < rate else None,
+        sensors=tuple(out),
+    )
 
 
-__all__ = ["sensor_gains"]
+__all__ = ["SensorGain", "SensorGains", "sensor_gains"]

@@ -17,13 +17,15 @@ from typing import Any, Mapping, Optional, Sequence
 
 import mpmath
 import sympy
+from flint import fmpq_mat
 
 from .._budget import Budget
 from .._json import json_float
-from .._reporting import Report, ShortRepr, stamp
+from .._reporting import Report, ShortRepr
 from ..errors import BudgetExceeded
 from ..model._request import require_assumption_1
-from ..model._types import MarkovChannel, PerSensorChannel, Request, System, packets_of, to_domain
+from ..model._types import MarkovChannel, PerSensorChannel, Request, System, packets_of
+from ..structure._adjugate import to_fmpq_mat
 from ..structure._display import SHORT_TEXT_CHARS, algebraic_degree, short_text
 from ..structure._fmo import FmoBlock, fmo_blocks
 from ._critical_parameter import CriticalParameter, critical_parameter
@@ -63,25 +65,6 @@ class BlockReport(ShortRepr):
     bernoulli_blind_fraction: tuple[Fraction, ...] | None = field(default=None, repr=False)
     modulus_sq_expr: Any = field(default=None, repr=False)
 
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "eigenvalues": list(self.eigenvalues),
-            "eigenvalues_numeric": [[json_float(z.real), json_float(z.imag)] for z in self.eigenvalues_numeric],
-            "modulus": json_float(self.modulus),
-            "modulus_exact": self.modulus_exact,
-            "jordan_sizes": list(self.jordan_sizes),
-            "period": self.period,
-            "degenerate": self.degenerate,
-            "sigma": json_float(self.sigma),
-            "sigma_exact": self.sigma_exact,
-            "rate": json_float(self.rate),
-            "verdict": self.verdict,
-            "certified": self.certified,
-            "blind_set": self.blind_set,
-            "basis": self.basis,
-            "notes": list(self.notes),
-        }
-
 
 @dataclass(frozen=True, repr=False)
 class StabilityReport(Report):
@@ -109,25 +92,6 @@ class StabilityReport(Report):
         if value is None:
             return text
         return self.display.get(text) or short_text(text, value)
-
-    def to_dict(self) -> dict[str, Any]:
-        """The JSON report (stable field names; see README)."""
-        return {
-            **stamp(),
-            "verdict": self.verdict,
-            "theorem": "Rohr, Marelli and Fu 2014, Theorem 1",
-            "blocks": [b.to_dict() for b in self.blocks],
-            "critical_arrival_probability": json_float(self.critical_arrival_probability),
-            "critical_arrival_probability_exact": self.critical_arrival_probability_exact,
-            "channel": self.channel,
-            "system": self.system,
-            "assumptions": list(self.assumptions),
-            "warnings": list(self.warnings),
-            "regions": self.regions,
-            "tail": self.tail.to_dict() if self.tail is not None else None,
-            "gilbert_elliott_region": self.gilbert_elliott.to_dict() if self.gilbert_elliott is not None else None,
-            "critical_parameter": self.critical_parameter.to_dict() if self.critical_parameter is not None else None,
-        }
 
     def summary(self) -> str:
         """Readable multi-line summary for the terminal."""
@@ -184,16 +148,25 @@ def _channels_of(request: Request) -> list[MarkovChannel]:
 
 
 def _controllable(system: System) -> bool | None:
-    """Whether ``(A, Q^{1/2})`` is controllable: ``rank [Q, AQ, ..., A^{n-1} Q] = n`` over ``Q``."""
+    """Whether ``(A, Q^{1/2})`` is controllable: ``rank [Q, AQ, ..., A^{n-1} Q] = n`` over ``Q``.
+
+    Exact, in FLINT's ``fmpq_mat`` (the Krylov columns are added one ``A Q``
+    product at a time, and the rank stops growing once it stops growing).
+    """
     if system.Q is None:
         return None
-    A, Q = to_domain(system.A), to_domain(system.Q)
-    blocks, M = [Q], Q
-    for _ in range(system.n - 1):
+    A, M = to_fmpq_mat(system.A), to_fmpq_mat(system.Q)
+    n, K, rank = system.n, M, M.rank()
+    for _ in range(n - 1):
+        if rank == n:
+            break
         M = A * M
-        blocks.append(M)
-    K = blocks[0].hstack(*blocks[1:]) if len(blocks) > 1 else blocks[0]
-    return bool(K.rank() == system.n)
+        K2 = fmpq_mat(n, K.ncols() + n, [x for i in range(n) for x in (*K.table()[i], *M.table()[i])])
+        new_rank = K2.rank()
+        if new_rank == rank:  # the Krylov space stopped growing: it never grows again
+            break
+        K, rank = K2, new_rank
+    return rank == n
 
 
 def _modulus_text(block: FmoBlock) -> str | None:

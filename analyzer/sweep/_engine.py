@@ -24,7 +24,7 @@ import time
 from dataclasses import dataclass, field
 from typing import Any, Callable, Iterator
 
-from .._reporting import stamp
+from .._reporting import Report, ReportPart
 from ..errors import InvalidInput
 from ._evaluate import evaluate_chunk
 from ._rows import FIELDS, error_row
@@ -41,23 +41,16 @@ _GRACE_S = 5.0
 
 
 @dataclass(frozen=True)
-class SweepRow:
+class SweepRow(ReportPart):
     """One finished point: index, coordinates (axis name -> exact value text) and fields."""
 
     index: int
     coordinates: dict[str, Any]
     fields: dict[str, Any]
 
-    def to_dict(self) -> dict[str, Any]:
-        return {"index": self.index, **{k: _coord_text(v) for k, v in self.coordinates.items()}, **self.fields}
-
-
-def _coord_text(v: Any) -> Any:
-    return v if isinstance(v, (str, int, type(None))) else str(v)
-
 
 @dataclass
-class SweepResult:
+class SweepResult(Report):
     """All rows of a sweep, in index order, with how it ran."""
 
     spec: SweepSpec
@@ -92,22 +85,6 @@ class SweepResult:
     def records(self) -> list[dict[str, Any]]:
         cols = self.columns
         return [{c: r.to_dict().get(c) for c in cols} for r in self.rows]
-
-    def to_dict(self) -> dict[str, Any]:
-        """The sweep as JSON: how it ran, its columns and one record per point (index order)."""
-        return {
-            **stamp(),
-            "command": self.spec.command,
-            "points": len(self.rows),
-            "errors": sum(1 for r in self.rows if r.fields.get("error")),
-            "stopped": self.stopped,
-            "engine": self.engine,
-            "workers": self.workers,
-            "tasks": self.chunks,
-            "seconds": round(self.seconds, 3),
-            "columns": self.columns,
-            "rows": self.records(),
-        }
 
 
 def chunk_size_for(n_points: int, workers: int, requested: int | None = None) -> int:

@@ -14,41 +14,18 @@ Both caches are bounded (least recently used), keyed by exact values.
 from __future__ import annotations
 
 import time
-from collections import OrderedDict
-from typing import Any, Callable, Hashable, Sequence
+from typing import Any, Sequence
 
 from .._budget import Budget
+from .._reuse import LRU, reused_fmo_blocks, structure_cache
 from ..errors import AnalyzerError, AssumptionViolation, BudgetExceeded, InvalidInput, NumericalFailure
 from ..model import load_json, parse_request
 from ._rows import error_row, row_from_report
 from ._spec import SweepSpec, parse_sweep, point_at, request_text
 
-_CACHE_SIZE = 256
-
-
-class _LRU:
-    def __init__(self, size: int = _CACHE_SIZE):
-        self.size = size
-        self.data: OrderedDict[Hashable, Any] = OrderedDict()
-        self.hits = 0
-        self.misses = 0
-
-    def get(self, key: Hashable, make: Callable[[], Any]) -> Any:
-        if key in self.data:
-            self.data.move_to_end(key)
-            self.hits += 1
-            return self.data[key]
-        self.misses += 1
-        value = make()
-        self.data[key] = value
-        if len(self.data) > self.size:
-            self.data.popitem(last=False)
-        return value
-
-
-_STRUCTURE = _LRU()
-_VERDICT_ROWS = _LRU(4096)
-_SPECS = _LRU(8)
+_STRUCTURE = structure_cache()
+_VERDICT_ROWS = LRU(4096)
+_SPECS = LRU(8)
 
 
 def cache_stats() -> dict[str, int]:
@@ -64,13 +41,7 @@ def cache_stats() -> dict[str, int]:
 def clear_caches() -> None:
     """Forget every cached structure and verdict (tests, benchmarks)."""
     for c in (_STRUCTURE, _VERDICT_ROWS):
-        c.data.clear()
-        c.hits = c.misses = 0
-
-
-def _structure_key(system: Any) -> Hashable:
-    sensors = None if system.sensors is None else tuple((s.name, s.rows) for s in system.sensors)
-    return (system.A, system.C, sensors)
+        c.clear()
 
 
 def _without_noise(tree: Any) -> Any:
@@ -87,13 +58,12 @@ def evaluate_point(command: str, tree: Any, budget_s: float, *, reuse: bool = Tr
         budget = Budget(seconds=budget_s)
         if command == "analyze":
             from ..stability import analyze
-            from ..structure import fmo_blocks
 
             if not reuse:
                 return row_from_report(command, analyze(request, budget).to_dict())
 
             def run() -> dict[str, Any]:
-                fmo = _STRUCTURE.get(_structure_key(request.system), lambda: fmo_blocks(request.system, budget))
+                fmo = reused_fmo_blocks(request.system, budget)
                 return row_from_report(command, analyze(request, budget, fmo=fmo).to_dict())
 
             return dict(_VERDICT_ROWS.get(request_text(_without_noise(tree)), run))

@@ -10,8 +10,12 @@ from ..dispatch import Dispatcher, read_body, require_json
 from ..problems import Problem, ProblemError
 
 
-def get_dispatcher(request: Request) -> Dispatcher:
-    """The app's dispatcher (created by the lifespan; 503 before it runs)."""
+async def get_dispatcher(request: Request) -> Dispatcher:
+    """The app's dispatcher (created by the lifespan; 503 before it runs).
+
+    ``async`` although it awaits nothing: FastAPI runs a plain ``def`` dependency in a thread,
+    a hop that cost more than the rest of a cached answer (bench/bench_service.py).
+    """
     dispatcher = getattr(request.app.state, "dispatcher", None)
     if dispatcher is None:
         raise ProblemError(Problem(503, "not-ready", "Service not ready", "the service is starting", retry_after=1))

@@ -93,6 +93,9 @@ def _run(args: argparse.Namespace) -> int:
         host=settings.host,
         port=settings.port,
         log_level=args.log_level,
+        # The standard loop, even where uvloop is installed: uvloop's add_reader makes the worker
+        # pipes non-blocking, and a large answer (a plot) would then be read as a crashed worker.
+        loop="asyncio",
         timeout_graceful_shutdown=int(settings.shutdown_grace_s + UVICORN_MARGIN_S),
     )
     try:

@@ -202,3 +202,35 @@ def test_healthz_answers_while_every_worker_is_busy(client: TestClient) -> None:
         for t in threads:
             t.join(timeout=60)
     assert results == [504, 504]
+
+
+def test_a_large_answer_is_read_whole_when_the_loop_left_the_pipe_non_blocking() -> None:
+    # uvloop's add_reader leaves the fd non-blocking; a 1 MB answer then arrives in pieces and a
+    # non-blocking recv() raised BlockingIOError, which the pool reported as a crashed worker
+    import multiprocessing
+
+    from kfio.service.pool import _readable
+
+    reader, writer = multiprocessing.Pipe(duplex=False)
+    payload = b"x" * (1 << 20)
+
+    async def go() -> bytes:
+        os.set_blocking(reader.fileno(), False)  # what such a loop does
+
+        def send() -> None:
+            try:
+                writer.send_bytes(payload)
+            except OSError:  # the reader gave up (the test failed)
+                pass
+
+        sender = threading.Thread(target=send)
+        sender.start()
+        try:
+            await _readable(reader, 30)
+            assert os.get_blocking(reader.fileno())
+            return reader.recv_bytes()
+        finally:
+            reader.close()  # a writer still blocked on a full pipe gets EPIPE instead of waiting
+            sender.join(timeout=30)
+
+    assert asyncio.run(go()) == payload

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import json
+import os
 
 import pytest
 
@@ -137,3 +138,25 @@ def test_serve_refuses_invalid_settings(capsys: pytest.CaptureFixture[str]) -> N
 def test_problem_bodies_are_json() -> None:
     body = Problem(503, "busy", "Service busy", "wait", retry_after=1).response()
     assert body.headers["retry-after"] == "1" and json.loads(body.body)["status"] == 503
+
+
+@pytest.mark.parametrize("preset", [None, "3"])
+def test_the_cli_runs_numpy_on_one_blas_thread_unless_told_otherwise(preset: str | None) -> None:
+    # the thread variables must be set before NumPy loads its BLAS, i.e. before the command runs
+    import subprocess
+    import sys
+
+    code = (
+        "import os, sys\n"
+        "from kfio.service import cli\n"
+        "def run():\n"
+        "    print(os.environ['OPENBLAS_NUM_THREADS'], os.environ['OMP_NUM_THREADS'], 'numpy' in sys.modules)\n"
+        "    return 0, None\n"
+        "cli.run = run\n"
+        "cli.entrypoint()\n"
+    )
+    env = {k: v for k, v in os.environ.items() if not k.endswith("_NUM_THREADS")}
+    if preset is not None:
+        env["OPENBLAS_NUM_THREADS"] = preset
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True).stdout
+    assert out.split() == [preset or "1", "1", "False"]

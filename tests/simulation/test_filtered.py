@@ -95,7 +95,8 @@ def test_filtered_does_not_change_the_predictor_stream():
     # a predictor-only loop with the same generator, channel and kernel (what simulate did before P(t|t)):
     # the predictor statistics must be identical, so the filtered covariance draws nothing extra in between
     from kfio.simulation._channel import JointChannel
-    from kfio.simulation._kernel import PackedRiccatiStep, traces
+    from kfio.simulation._kernel import traces
+    from kfio.simulation._packed import PackedRiccatiStep
     from kfio.simulation._setup import parse_options, sim_system
 
     req = _request([[1.2, 0.3], [0.0, 0.9]], [[1.0, 0.0]], 0.5, steps=30, trajectories=500, seed=4)

@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 
 from kfio import load_request
-from kfio.simulation._kernel import PackedRiccatiStep, RiccatiStep
+from kfio.simulation._kernel import RiccatiStep
+from kfio.simulation._packed import PackedRiccatiStep
 from kfio.simulation._setup import parse_options, sim_system
 from kfio.simulation._simulate import run_monte_carlo
 
@@ -28,7 +29,9 @@ def random_case(rng, n, p, M):
     return A, C, Q, R, np.einsum("mij,mkj->mik", X, X)
 
 
-@pytest.mark.parametrize("n,p,rows", [(1, 1, 1), (3, 1, 1), (3, 2, 2), (4, 3, 3), (6, 2, 1), (9, 4, 4)])
+@pytest.mark.parametrize(
+    "n,p,rows", [(1, 1, 1), (3, 1, 1), (3, 2, 2), (4, 3, 3), (6, 2, 1), (9, 4, 4), (6, 5, 5), (7, 6, 1), (20, 1, 1)]
+)
 def test_packed_step_agrees_with_the_matrix_step(n, p, rows) -> None:
     rng = np.random.default_rng(10 * n + p)
     A, C, Q, R, P = random_case(rng, n, p, 500)
@@ -104,6 +107,17 @@ def test_seeded_runs_agree_across_kernels(system, channel) -> None:
     assert np.array_equal(ok, np.isfinite(a.stats.mean))
     assert np.allclose(a.stats.mean[ok], b.stats.mean[ok], rtol=1e-12, atol=0)
     assert np.allclose(a.stats.percentiles, b.stats.percentiles, rtol=1e-12, atol=0, equal_nan=True)
+    # the filtered P(t|t): trace P(t|t) from the packed step's own P - V'V, against the matrix kernel's update
+    fa, fb = a.filtered_stats, b.filtered_stats
+    assert fa is not None and fb is not None
+    assert np.array_equal(np.isfinite(fa.mean), np.isfinite(fb.mean))
+    okf = np.isfinite(fb.mean)
+    assert np.allclose(fa.mean[okf], fb.mean[okf], rtol=1e-12, atol=0)
+    assert np.allclose(fa.percentiles, fb.percentiles, rtol=1e-12, atol=0, equal_nan=True)
+    # per trajectory, 120 steps of rounding go through the update's cancellation (eps x innovation ratio):
+    # up to 1.4e-12 on the first system, as between the two kernels before this one
+    assert np.allclose(a.final_traces, b.final_traces, rtol=1e-12, atol=0)
+    assert np.allclose(a.final_filtered_traces, b.final_filtered_traces, rtol=1e-11, atol=0)
 
 
 def test_the_kernel_s_congruence_matrix_is_the_bounds_one() -> None:
@@ -112,3 +126,88 @@ def test_the_kernel_s_congruence_matrix_is_the_bounds_one() -> None:
 
     A = np.random.default_rng(3).normal(size=(5, 5))
     assert np.array_equal(_congruence(A), congruence_matrix(A))
+
+
+@pytest.mark.parametrize("n,p,rows", [(2, 1, 1), (3, 2, 2), (5, 3, 1), (12, 2, 2), (20, 1, 1)])
+def test_blocked_advance_agrees_with_the_matrix_kernel(monkeypatch, n, p, rows) -> None:
+    """Many blocks (one short), the outcome arrays and the filtered trace, against ``RiccatiStep.update``/``apply``."""
+    import kfio.simulation._packed as packed
+
+    monkeypatch.setattr(packed, "BLOCK_MIN", 64)
+    monkeypatch.setattr(packed, "BLOCK_MAX", 64)
+    monkeypatch.setattr(packed, "BLOCK_PER_ROW", 0)
+    rng = np.random.default_rng(n + 7 * p)
+    M = 64 * 3 + 17
+    A, C, Q, R, P = random_case(rng, n, p, M)
+    mask = (rng.random((M, rows)) < 0.5).astype(float)
+    step = PackedRiccatiStep.build(A, Q, C, R)
+    work = step.workspace(M)
+    assert work.B == 64
+    ref = RiccatiStep.build(A, Q, C, R)
+    for m in (None, mask):
+        post, r_ref = ref.update(P, m)
+        nxt = ref.open_loop(post)
+        h = step.pack(P)
+        out = step.advance(h, m, work)
+        got = step.unpack(h)
+        scale = np.abs(nxt).max(axis=(1, 2))[:, None, None]
+        assert np.all(np.abs(got - nxt) <= 1e-12 * scale)
+        assert np.allclose(out.ratio, r_ref, rtol=1e-12, atol=0)
+        assert np.allclose(out.trace, np.einsum("mii->m", nxt), rtol=1e-12, atol=0)
+        ftr = np.einsum("mii->m", post)
+        assert np.all(np.abs(out.filtered_trace - ftr) <= 1e-12 * np.einsum("mii->m", P))
+        assert out.finite.all()
+        fil = step.unpack(step.update_packed(step.pack(P), m))
+        assert np.all(np.abs(fil - post) <= 1e-12 * np.abs(P).max(axis=(1, 2))[:, None, None])
+
+
+def test_the_filtered_update_is_the_information_form() -> None:
+    """``P - V'V`` of the packed kernel against ``(P^-1 + C_S' R_SS^-1 C_S)^-1`` per arrival set (independent route)."""
+    rng = np.random.default_rng(12)
+    n, p, M = 4, 3, 8
+    A, C, Q, R, P = random_case(rng, n, p, M)
+    P += np.eye(n)
+    step = PackedRiccatiStep.build(A, Q, C, R)
+    for bits in np.ndindex(*(2,) * p):
+        mask = np.broadcast_to(np.array(bits, float), (M, p)).copy()
+        got = step.unpack(step.update_packed(step.pack(P), mask))
+        rows = [i for i in range(p) if bits[i]]
+        for m in range(M):
+            info = np.linalg.inv(P[m]) + C[rows].T @ np.linalg.inv(R[np.ix_(rows, rows)]) @ C[rows]
+            np.testing.assert_allclose(got[m], np.linalg.inv(info), rtol=1e-10, atol=1e-12)
+
+
+def test_advance_flags_non_finite_columns_and_sends_lost_definiteness_to_the_reference(monkeypatch) -> None:
+    import kfio.simulation._packed as packed
+
+    monkeypatch.setattr(packed, "BLOCK_MIN", 16)
+    monkeypatch.setattr(packed, "BLOCK_MAX", 16)
+    monkeypatch.setattr(packed, "BLOCK_PER_ROW", 0)
+    rng = np.random.default_rng(8)
+    A, C, Q, R, P = random_case(rng, 3, 2, 70)
+    indefinite = [3, 20, 21, 69]  # C P C' + R indefinite: the matrix kernel lifts S
+    P[indefinite] = -P[indefinite]
+    P[40, 0, 1] = P[40, 1, 0] = np.inf  # non-finite input
+    step = PackedRiccatiStep.build(A, Q, C, R)
+    h = step.pack(P)
+    with np.errstate(all="ignore"):
+        out = step.advance(h, None, step.workspace(70))
+        post, ratio = RiccatiStep.build(A, Q, C, R).update(P[indefinite])
+    assert np.flatnonzero(~out.finite).tolist() == [40]
+    want = RiccatiStep.build(A, Q, C, R).open_loop(post)
+    got = step.unpack(h)[indefinite]
+    assert np.allclose(got, want, rtol=1e-12, atol=1e-12 * np.abs(want).max())
+    assert np.allclose(out.filtered_trace[indefinite], np.einsum("mii->m", post), rtol=1e-12, atol=0)
+    assert np.allclose(out.ratio[indefinite], ratio, rtol=1e-12, atol=0)
+
+
+def test_no_measured_rows_is_the_open_loop() -> None:
+    rng = np.random.default_rng(2)
+    A, C, Q, R, P = random_case(rng, 3, 1, 40)
+    step = PackedRiccatiStep.build(A, Q, np.zeros((0, 3)), np.zeros((0, 0)))
+    h = step.pack(P)
+    out = step.advance(h)
+    want = RiccatiStep.build(A, Q, np.zeros((0, 3)), np.zeros((0, 0))).open_loop(P)
+    assert np.allclose(step.unpack(h), want, rtol=1e-12, atol=1e-12 * np.abs(want).max())
+    assert np.array_equal(out.filtered_trace, step.traces(step.pack(P)))
+    assert not out.ratio.any()

@@ -113,3 +113,26 @@ def test_exact_kappa_against_simulated_tail(A, C, p, q, ratio, tol):
     kappa = run(A, C, channel).tail.kappa
     tr = stationary_traces(A, C, p_loss_after_arrival=p, q_recover=q, steps=150, keep=50, chains=10000, seed=1)
     assert survival_slope(tr, 100.0, 100.0 * ratio) == pytest.approx(kappa, abs=tol)
+
+
+def test_log_ratio_text_is_sympys_text():
+    # the fast path prints what SymPy's evaluating log prints, character for character
+    import sympy
+
+    from kfio.stability._tail import log_ratio_text
+
+    rng = random.Random(11)
+    pairs = [(F(2), F(2)), (F(8), F(4)), (F(25, 16), F(25, 16)), (F(10**40 + 1, 3), F(9, 8)), (F(3, 2), F(100))]
+    for _ in range(200):
+        q, d = rng.randint(1, 10 ** rng.randint(1, 25)), rng.randint(1, 10 ** rng.randint(1, 25))
+        b = F(rng.randint(2, 10**6), rng.randint(1, 10**5))
+        pairs.append((F(q + d, d), b if b > 1 else 1 / b + 1))
+    for x, b in pairs:
+        for N in (1, 2, 7, 60):
+            expected = sympy.log(sympy.Rational(x.numerator, x.denominator)) / (
+                N * sympy.log(sympy.Rational(b.numerator, b.denominator))
+            )
+            assert log_ratio_text(x, b, N) == str(expected), (x, b, N)
+    for bad in ((F(1), F(2), 1), (F(2), F(1, 2), 1), (F(2), F(2), 0)):
+        with pytest.raises(ValueError):
+            log_ratio_text(*bad)

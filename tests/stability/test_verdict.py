@@ -282,3 +282,30 @@ def test_markov_rate_with_repeated_zero_eigenvalues_and_irrational_modulus():
     r = run([["-2", "-1"], ["-1/2", "3/2"]], [[1, 1]], ch)
     assert r.verdict == "unstable" and r.blocks[0].rate == pytest.approx(4.568729304408843 * 0.55)
     assert [b.verdict for b in r.blocks] == ["unstable", "unstable"]
+
+
+def test_controllability_matches_the_full_krylov_rank():
+    # the incremental FLINT rank against SymPy's rank of the whole [Q, AQ, ..., A^(n-1) Q]
+    import random
+    from fractions import Fraction as F
+
+    import sympy
+
+    from kfio.model._types import System
+    from kfio.stability._verdict import _controllable
+
+    rng = random.Random(5)
+    seen = set()
+    for _ in range(120):
+        n = rng.randint(1, 5)
+        A = [[F(rng.randint(-2, 2), rng.choice([1, 2, 3])) for _ in range(n)] for _ in range(n)]
+        k = rng.randint(1, n)  # Q = G G' of rank <= k, often not controllable
+        G = [[F(rng.choice([0, 0, 1, -1, 2])) for _ in range(k)] for _ in range(n)]
+        Q = [[sum((G[i][t] * G[j][t] for t in range(k)), F(0)) for j in range(n)] for i in range(n)]
+        system = System(A=tuple(map(tuple, A)), C=((F(1),) + (F(0),) * (n - 1),), Q=tuple(map(tuple, Q)), R=((F(1),),))
+        SA, SQ = sympy.Matrix(A), sympy.Matrix(Q)
+        K = sympy.Matrix.hstack(*[SA**j * SQ for j in range(n)])
+        expected = K.rank() == n
+        assert _controllable(system) is expected
+        seen.add(expected)
+    assert seen == {True, False}

@@ -1,0 +1,78 @@
+"""Which view builds the JSON of which report class: one table, resolved lazily.
+
+Keys are class paths inside the ``kfio`` package, values ``"module:function"``
+inside :mod:`kfio._json`.  A view module is imported the first time one of
+its classes is encoded, so ``kfio analyze`` never imports the views of
+``bounds`` or ``simulate`` (nor what they would drag in).
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import Any, Callable
+
+#: Report class (module path below ``kfio``, then qualname) -> ``"view module:function"``.
+VIEWS: dict[str, str] = {
+    # kfio analyze (Rohr, Marelli and Fu 2014, Theorem 1, and its extensions)
+    "stability._verdict.StabilityReport": "_stability:stability_report",
+    "stability._verdict.BlockReport": "_stability:block_report",
+    "stability._tail.TailReport": "_stability:tail_report",
+    "stability._tail.BlockTail": "_stability:block_tail",
+    "stability._ge_region.GeRegion": "_stability:ge_region",
+    "stability._ge_region.LineResult": "_stability:line_result",
+    "stability._ge_region.Crossing": "_stability:crossing",
+    "stability._ge_region.GeMap": "_stability:ge_map",
+    "stability._critical_parameter.CriticalParameter": "_stability:critical_parameter",
+    "stability._critical_parameter._Constraint": "_stability:constraint",
+    "stability._regions.SensorThresholds": "_regions:sensor_thresholds",
+    "stability._regions.RegionGrid": "_regions:region_grid",
+    "stability._regions_curve.BoundaryCurve": "_regions:boundary_curve",
+    "stability._regions_curve.Envelope": "_regions:envelope",
+    "stability._regions_curve.Segment": "_regions:segment",
+    "stability._sensor_gain.SensorGains": "_regions:sensor_gains",
+    # kfio bounds (Sinopoli et al. 2004; Liu and Goldsmith 2004; Rohr, Marelli and Fu 2010)
+    "mare._report.BoundsReport": "_bounds:bounds_report",
+    "mare._report.CriticalInterval": "_bounds:critical_interval",
+    "mare._report.CovarianceBounds": "_bounds:covariance_bounds",
+    "mare._report.PHatBounds": "_bounds:p_hat_bounds",
+    "mare._report.RegionMap": "_bounds:region_map",
+    "mare._filtered.FilteredBounds": "_bounds:filtered_bounds",
+    "mare._targets.TraceTarget": "_bounds:trace_target",
+    "mare._certificate.StabilityCertificate": "_bounds:certificate",
+    # kfio simulate
+    "simulation._simulate.SimulationReport": "_simulation:simulation_report",
+    "simulation._finite_horizon.FiniteHorizonReport": "_simulation:finite_horizon_report",
+    "simulation._stationary.StationaryReport": "_simulation:stationary_report",
+    "simulation._outage_target.OutageTarget": "_simulation:outage_target",
+    # kfio sweep
+    "sweep._engine.SweepResult": "_sweep:sweep_result",
+    "sweep._engine.SweepRow": "_sweep:sweep_row",
+}
+
+_ROOT = __name__.split(".")[0]  # "kfio"
+_resolved: dict[type, Callable[[Any], dict[str, Any]] | None] = {}
+
+
+def class_key(cls: type) -> str:
+    """``cls`` as a key of :data:`VIEWS`: its module path below ``kfio`` and its qualname."""
+    module = cls.__module__
+    inside = module.partition(".")[2] if module.split(".")[0] == _ROOT else module
+    return f"{inside}.{cls.__qualname__}"
+
+
+def view_of(cls: type) -> Callable[[Any], dict[str, Any]] | None:
+    """The view function of ``cls`` (importing its module on first use), or ``None`` if it has none."""
+    try:
+        return _resolved[cls]
+    except KeyError:
+        pass
+    target = VIEWS.get(class_key(cls))
+    view = None
+    if target is not None:
+        module, _, function = target.partition(":")
+        view = getattr(importlib.import_module(f"{__package__}.{module}"), function)
+    _resolved[cls] = view
+    return view
+
+
+__all__ = ["VIEWS", "class_key", "view_of"]

@@ -1,0 +1,86 @@
+"""FMO blocks computed once per process for every request on the same ``(A, C, sensors)``.
+
+The FMO blocks (Rohr, Marelli and Fu (2014), Section III) depend on ``A``,
+``C`` and the split of ``C`` into packets only, never on the channel, ``Q`` or
+``R``.  A design team that asks about one plant under many channels (a sweep,
+or a series of requests to the service) needs them once.  The cache is keyed
+by the exact values of ``A`` and ``C`` (rationals, never floats), bounded in
+entries (least recently used), and stores only finished results: a
+computation stopped by its budget leaves nothing behind.
+"""
+
+from __future__ import annotations
+
+from collections import OrderedDict
+from typing import TYPE_CHECKING, Any, Callable, Hashable, Sequence
+
+from ._budget import Budget
+
+if TYPE_CHECKING:
+    from .structure._fmo import FmoBlock
+
+#: Plants whose blocks each process keeps.
+STRUCTURE_ENTRIES = 256
+
+
+class LRU:
+    """A least-recently-used map with hit and miss counts.
+
+    Examples
+    --------
+    >>> c = LRU(1)
+    >>> c.get("a", lambda: 1), c.get("a", lambda: 2), c.get("b", lambda: 3), c.get("a", lambda: 4)
+    (1, 1, 3, 4)
+    >>> c.hits, c.misses
+    (1, 3)
+    """
+
+    def __init__(self, size: int):
+        self.size = size
+        self.data: OrderedDict[Hashable, Any] = OrderedDict()
+        self.hits = 0
+        self.misses = 0
+
+    def get(self, key: Hashable, make: Callable[[], Any]) -> Any:
+        """The value of ``key``, made by ``make()`` (and kept) when missing."""
+        if key in self.data:
+            self.data.move_to_end(key)
+            self.hits += 1
+            return self.data[key]
+        self.misses += 1
+        value = make()
+        self.data[key] = value
+        if len(self.data) > self.size:
+            self.data.popitem(last=False)
+        return value
+
+    def clear(self) -> None:
+        """Forget every entry and reset the counts."""
+        self.data.clear()
+        self.hits = self.misses = 0
+
+
+_BLOCKS = LRU(STRUCTURE_ENTRIES)
+
+
+def structure_key(system: Any) -> Hashable:
+    """What the FMO blocks depend on: exact ``A``, exact ``C`` and the sensor rows."""
+    sensors = None if system.sensors is None else tuple((s.name, s.rows) for s in system.sensors)
+    return (system.A, system.C, sensors)
+
+
+def reused_fmo_blocks(system: Any, budget: Budget | None = None) -> Sequence[FmoBlock]:
+    """:func:`kfio.structure.fmo_blocks` of ``system``, computed once per process and plant.
+
+    The blocks are frozen values, so every caller may share them
+    (:func:`kfio.stability.analyze` takes them as ``fmo=``).  This module
+    imports the exact structure code (SymPy, FLINT) only when first asked.
+    """
+    from .structure._fmo import fmo_blocks
+
+    return _BLOCKS.get(structure_key(system), lambda: fmo_blocks(system, budget))  # type: ignore[no-any-return]
+
+
+def structure_cache() -> LRU:
+    """This process's cache of FMO blocks (for statistics and tests)."""
+    return _BLOCKS
