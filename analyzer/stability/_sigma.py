@@ -554,8 +554,8 @@ def _find_worst(
     if all(ch.order == 0 for ch in channels):
         res = pareto_search(space, budget, margins)
         method = (
-            f"Pareto branch and bound over per-sensor miss counts: {len(res.maximal)} undominated vectors "
-            f"over {res.nodes} flats"
+            f"Pareto branch and bound over per-sensor miss counts: {len(res.maximal)} undominated "
+            f"vector{'' if len(res.maximal) == 1 else 's'} over {res.nodes} flats"
         )
     else:
         res = enumerate_orbits(space, budget, margins)
