@@ -105,7 +105,9 @@ class Result:
         codes = ", ".join(f"{k}: {v}" for k, v in sorted(self.statuses.items()))
         cpu = "-"
         if self.server_cpu is not None and lat:
-            cpu = f"{1000 * self.server_cpu[0] / len(lat):.2f} + {1000 * self.server_cpu[1] / len(lat):.2f}"
+            main, workers = (1000 * t / len(lat) for t in self.server_cpu)
+            # a worker killed at its deadline takes its CPU time with it: only the main process is known
+            cpu = f"{main:.2f} + {workers:.2f}" if workers >= 0 else f"{main:.2f} + (workers replaced)"
         return f"| {self.scenario} | {len(lat)} | {rps:.1f} | {pct(0.50)} | {pct(0.99)} | {cpu} | {codes} |"
 
 
