@@ -214,19 +214,20 @@ def test_a_large_answer_is_read_whole_when_the_loop_left_the_pipe_non_blocking()
     reader, writer = multiprocessing.Pipe(duplex=False)
     payload = b"x" * (1 << 20)
 
+    def send() -> None:
+        try:
+            writer.send_bytes(payload)
+        except OSError:  # the reader gave up (the test failed)
+            pass
+
     async def go() -> bytes:
         os.set_blocking(reader.fileno(), False)  # what such a loop does
-
-        def send() -> None:
-            try:
-                writer.send_bytes(payload)
-            except OSError:  # the reader gave up (the test failed)
-                pass
-
+        waiting = asyncio.ensure_future(_readable(reader, 30))
+        await asyncio.sleep(0)  # the wait has begun (nothing was written yet): it is registered with the loop
         sender = threading.Thread(target=send)
         sender.start()
         try:
-            await _readable(reader, 30)
+            await waiting
             assert os.get_blocking(reader.fileno())
             return reader.recv_bytes()
         finally:
