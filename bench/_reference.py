@@ -1,7 +1,8 @@
 """Run the previous code (a commit of this repository) in a subprocess, for same-run ratios in the benchmarks.
 
-``git archive COMMIT analyzer`` is unpacked once into a temporary folder as the package ``kfio`` and put
-first on ``PYTHONPATH`` of a child interpreter, which runs a snippet and prints one JSON line.
+``git archive COMMIT analyzer service`` is unpacked once into a temporary folder as the package ``kfio``
+(with ``service/`` as ``kfio.service``, the installed layout) and put first on ``PYTHONPATH`` of a child
+interpreter, which runs a snippet and prints one JSON line.
 """
 
 from __future__ import annotations
@@ -22,13 +23,16 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def reference_tree(commit: str = REFERENCE_COMMIT) -> Path:
-    """A folder holding ``kfio/`` (the library) as of ``commit``."""
-    dest = Path(tempfile.gettempdir()) / f"kfio-reference-{commit}"
-    if not (dest / "kfio" / "__init__.py").exists():
-        blob = subprocess.run(["git", "archive", commit, "analyzer"], cwd=ROOT, check=True, capture_output=True).stdout
+    """A folder holding ``kfio/`` (the library, and ``kfio/service``) as of ``commit``."""
+    dest = Path(tempfile.gettempdir()) / f"kfio-reference-{commit}-service"
+    if not (dest / "kfio" / "service" / "__init__.py").exists():
+        blob = subprocess.run(
+            ["git", "archive", commit, "analyzer", "service"], cwd=ROOT, check=True, capture_output=True
+        ).stdout
         with tarfile.open(fileobj=io.BytesIO(blob)) as tar:
             tar.extractall(dest / "_x", filter="data")
         (dest / "_x" / "analyzer").rename(dest / "kfio")
+        (dest / "_x" / "service").rename(dest / "kfio" / "service")
     return dest
 
 
