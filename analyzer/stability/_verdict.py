@@ -161,7 +161,8 @@ def _controllable(system: System) -> bool | None:
         if rank == n:
             break
         M = A * M
-        K2 = fmpq_mat(n, K.ncols() + n, [x for i in range(n) for x in (*K.table()[i], *M.table()[i])])
+        rows_K, rows_M = K.table(), M.table()
+        K2 = fmpq_mat(n, K.ncols() + n, [x for i in range(n) for x in (*rows_K[i], *rows_M[i])])
         new_rank = K2.rank()
         if new_rank == rank:  # the Krylov space stopped growing: it never grows again
             break
