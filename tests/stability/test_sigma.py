@@ -214,15 +214,16 @@ def maximal_blind_by_subsets(block: PhaseBlock) -> set[frozenset]:
     return {S for S in blind if not any(S < T for T in blind)}
 
 
-@pytest.mark.parametrize(
-    ("c_int", "exponents", "N0", "groups"),
-    [
-        ([[1, 1], [1, 2]], (0, 1), 2, ((0,), (1,))),
-        ([[1, 1, 1], [1, -1, 2]], (0, 1, 3), 4, ((0,), (1,))),
-        ([[1, 2, 0], [0, 1, 1], [1, 0, 1]], (0, 2, 1), 3, ((0,), (1, 2))),
-        ([[1, 1, 1, 1], [2, 1, 0, 1]], (0, 2, 3, 1), 4, ((0,), (1,))),
-    ],
-)
+#: Small several-sensor blocks: ``(C rows, phase exponents, N0, sensor row groups)``.
+SENSOR_BLOCKS = [
+    ([[1, 1], [1, 2]], (0, 1), 2, ((0,), (1,))),
+    ([[1, 1, 1], [1, -1, 2]], (0, 1, 3), 4, ((0,), (1,))),
+    ([[1, 2, 0], [0, 1, 1], [1, 0, 1]], (0, 2, 1), 3, ((0,), (1, 2))),
+    ([[1, 1, 1, 1], [2, 1, 0, 1]], (0, 2, 3, 1), 4, ((0,), (1,))),
+]
+
+
+@pytest.mark.parametrize(("c_int", "exponents", "N0", "groups"), SENSOR_BLOCKS)
 def test_enumerated_maximal_blind_sets_are_all_orbits(c_int, exponents, N0, groups) -> None:
     # A Markov channel: sigma depends on where the misses fall, so every orbit is enumerated.
     block = block_of(c_int, exponents, N0, groups)
@@ -239,13 +240,7 @@ def miss_vector(S, N0: int, groups: int) -> tuple[int, ...]:
 
 @pytest.mark.parametrize(
     ("c_int", "exponents", "N0", "groups"),
-    [
-        ([[1, 1], [1, 2]], (0, 1), 2, ((0,), (1,))),
-        ([[1, 1, 1], [1, -1, 2]], (0, 1, 3), 4, ((0,), (1,))),
-        ([[1, 2, 0], [0, 1, 1], [1, 0, 1]], (0, 2, 1), 3, ((0,), (1, 2))),
-        ([[1, 1, 1, 1], [2, 1, 0, 1]], (0, 2, 3, 1), 4, ((0,), (1,))),
-        ([[1, 1, 1], [1, -1, 2], [2, 0, 1]], (0, 1, 3), 4, ((0,), (1,), (2,))),
-    ],
+    [*SENSOR_BLOCKS, ([[1, 1, 1], [1, -1, 2], [2, 0, 1]], (0, 1, 3), 4, ((0,), (1,), (2,)))],
 )
 def test_bernoulli_sensors_keep_one_set_per_undominated_miss_vector(c_int, exponents, N0, groups) -> None:
     # Bernoulli sensors: only componentwise-minimal miss vectors can matter (Corollary 2).
