@@ -27,6 +27,12 @@ Prints a Markdown table: requests per second, p50/p99 latency, the
 server's CPU per request (its main process, and its worker processes: read
 from ``/proc`` for the started server), and the status codes seen.
 
+With ``--reference COMMIT`` the same scenarios then run, pinned the same way, against the
+server of an earlier commit of this repository (``git archive``, on ``PYTHONPATH`` of a child
+interpreter, as :mod:`_reference` does), and a last table gives the ratios of the same run.
+Default: ``73d6773``, the code the speed issue measured (18-22 uncached requests per second
+then); ``--reference none`` skips it.
+
 The load generator is a small HTTP/1.1 keep-alive client on asyncio streams,
 one connection per client, bodies built before they are timed: it costs
 about 0.3 ms of CPU per request.  An ``httpx.AsyncClient`` cost 4-7 ms per
@@ -54,10 +60,16 @@ from pathlib import Path
 from typing import Callable
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from _reference import ROOT, reference_tree  # noqa: E402
 
 from kfio.service.api.schemas import REQUEST_EXAMPLES  # noqa: E402
 
 from support.live_server import SLOW_PATH, LiveServer, slow_request  # noqa: E402
+
+#: The code issue 15 measured (main when the second wave of issues was filed).
+SERVICE_REFERENCE = "73d6773"
 
 #: One-packet seed systems (per-sensor systems are left out: simulate/bounds treat them alike).
 SEEDS = [REQUEST_EXAMPLES[k]["value"] for k in ("seed004-scalar", "seed004-3x3", "seed002-2x2")]
@@ -83,6 +95,12 @@ def simulate_body(i: int) -> bytes:
     body["channel"]["arrival_probability"] = 0.7
     body["options"] = {"simulate": {"steps": 200, "trajectories": 2000, "seed": next(_unique)}}
     return json.dumps(body).encode()
+
+
+TABLE_HEAD = (
+    "| scenario | requests | req/s | p50 ms | p99 ms | server CPU ms/request (main + workers) | status codes |\n"
+    "|---|---:|---:|---:|---:|---:|---|"
+)
 
 
 @dataclass
@@ -250,6 +268,51 @@ async def run(
     return results
 
 
+def reference_server(commit: str, workers: int) -> LiveServer:
+    """A :class:`LiveServer` running ``kfio serve`` of ``commit`` (with this interpreter and its packages).
+
+    Commits since the layout change hold the package ``kfio`` (:func:`_reference.reference_tree`);
+    earlier ones the top-level ``analyzer`` and ``service``, which are unpacked as they were and run
+    from their own folder, so that nothing of this checkout is imported.
+    """
+    import io
+    import subprocess
+    import tarfile
+    import tempfile
+
+    pyproject = subprocess.run(
+        ["git", "show", f"{commit}:pyproject.toml"], cwd=ROOT, check=True, capture_output=True, text=True
+    ).stdout
+    if "package-dir" in pyproject:
+        tree, module = reference_tree(commit), "kfio.service.cli"
+    else:
+        tree, module = Path(tempfile.gettempdir()) / f"kfio-reference-{commit}-flat", "service.cli"
+        if not (tree / "service" / "__init__.py").exists():
+            blob = subprocess.run(
+                ["git", "archive", commit, "analyzer", "service"], cwd=ROOT, check=True, capture_output=True
+            ).stdout
+            with tarfile.open(fileobj=io.BytesIO(blob)) as tar:
+                tar.extractall(tree, filter="data")
+    # one BLAS thread per worker, as the current service sets for its own workers
+    env = {"PYTHONPATH": str(tree), "OPENBLAS_NUM_THREADS": "1"}
+    return LiveServer(command=[sys.executable, "-m", module, "serve"], env=env, workers=workers, cwd=tree)
+
+
+def ratio_rows(now: list[Result], before: list[Result]) -> list[str]:
+    """Markdown rows: requests per second and p50 of each scenario, now against the reference."""
+    rows = []
+    for a, b in zip(now, before):
+        if not a.latencies or not b.latencies or not a.elapsed or not b.elapsed:
+            continue
+        rps_a, rps_b = len(a.latencies) / a.elapsed, len(b.latencies) / b.elapsed
+        p50_a, p50_b = (1000 * sorted(r.latencies)[len(r.latencies) // 2] for r in (a, b))
+        rows.append(
+            f"| {a.scenario} | {rps_a:.1f} | {rps_b:.1f} | {rps_a / rps_b:.1f}x | {p50_a:.1f} | {p50_b:.1f} | "
+            f"{p50_b / p50_a:.1f}x |"
+        )
+    return rows
+
+
 def _cpu_split(server: str | None, client: str | None) -> tuple[set[int], set[int]]:
     """Disjoint CPU sets for the server and the load generator (with one CPU, both share it)."""
     cpus = sorted(os.sched_getaffinity(0))
@@ -277,29 +340,40 @@ def main(argv: list[str] | None = None) -> int:
         help="CPUs for the started server and its workers, e.g. 0 (default: all but the last when there are 2+)",
     )
     p.add_argument("--client-cpus", default=None, help="CPUs for this load generator, e.g. 1 (default: the last)")
+    p.add_argument(
+        "--reference",
+        default=SERVICE_REFERENCE,
+        help=f"commit whose server runs the same scenarios after this one (default {SERVICE_REFERENCE}; 'none': skip)",
+    )
     args = p.parse_args(argv)
     server_cpus, client_cpus = _cpu_split(args.server_cpus, args.client_cpus)
 
-    client_cpu = [0.0]
+    client_cpu: list[float] = []  # per run of the scenarios: this server's, then the reference's
 
     def go(url: str, pid: int | None) -> list[Result]:
         t0 = time.process_time()
         try:
             return asyncio.run(run(url, args.scenarios, args.clients, args.duration, args.slow, pid))
         finally:
-            client_cpu[0] = time.process_time() - t0
+            client_cpu.append(time.process_time() - t0)
 
+    def started(server: LiveServer) -> list[Result]:
+        # The server, its forkserver and every worker inherit the affinity of the process that starts them:
+        # pin ourselves to the server's CPUs, start it, then move the load generator to its own CPUs.
+        os.sched_setaffinity(0, server_cpus)
+        with server:
+            os.sched_setaffinity(0, client_cpus)
+            return go(server.url, server.proc.pid if server.proc is not None else None)
+
+    reference: list[Result] = []
     if args.url:
         os.sched_setaffinity(0, client_cpus)
         results = go(args.url, None)
         workers = "?"
     else:
-        # The server, its forkserver and every worker inherit the affinity of the process that starts them:
-        # pin ourselves to the server's CPUs, start it, then move the load generator to its own CPUs.
-        os.sched_setaffinity(0, server_cpus)
-        with LiveServer(workers=args.workers) as server:
-            os.sched_setaffinity(0, client_cpus)
-            results = go(server.url, server.proc.pid if server.proc is not None else None)
+        results = started(LiveServer(workers=args.workers))
+        if args.reference.lower() != "none":
+            reference = started(reference_server(args.reference, args.workers))
         workers = str(args.workers)
     print(
         f"kfio service on 127.0.0.1, {workers} workers, {os.cpu_count()} cores, Python {platform.python_version()}; "
@@ -310,10 +384,21 @@ def main(argv: list[str] | None = None) -> int:
     print(
         f"load generator: {1000 * client_cpu[0] / max(1, sum(len(r.latencies) for r in results)):.2f} ms CPU per request\n"
     )
-    print("| scenario | requests | req/s | p50 ms | p99 ms | server CPU ms/request (main + workers) | status codes |")
-    print("|---|---:|---:|---:|---:|---:|---|")
+    print(TABLE_HEAD)
     for r in results:
         print(r.row())
+    if reference:
+        print(f"\nthe server of {args.reference}, same scenarios, same pinning:\n")
+        print(TABLE_HEAD)
+        for r in reference:
+            print(r.row())
+        print(f"\nsame run, now against {args.reference}:\n")
+        print(
+            f"| scenario | req/s now | req/s {args.reference} | ratio | p50 ms now | p50 ms {args.reference} | ratio |"
+        )
+        print("|---|---:|---:|---:|---:|---:|---:|")
+        for row in ratio_rows(results, reference):
+            print(row)
     return 0
 
 
