@@ -1,21 +1,19 @@
 """The work behind every endpoint, as plain functions (one code path, two shells).
 
 Each job takes the raw request bytes, parses them with
-:func:`analyzer.load_request` (numbers stay exact) and calls the same
+:func:`kfio.load_request` (numbers stay exact) and calls the same
 :mod:`kfio` function the CLI calls.  The HTTP service runs jobs in worker
 processes through :func:`run_job`; the CLI may call :data:`JOBS` directly.
 
-Analyzer functions are looked up when a job runs (after the request is
-validated), not at import, so the service starts while a part of
-:mod:`kfio` is still being written; such a job answers "501 not
-implemented" instead of failing.
+Analyzer modules are imported when a job first runs, not when this module
+is imported (the workers' forkserver preloads them, see :data:`PRELOAD`).
 
 Examples
 --------
 >>> body = b'{"system": {"A": [[2]], "C": [[1]]}, "channel": {"model": "bernoulli", "arrival_probability": 0.5}}'
->>> status, *_ = run_job("no-such-job", body, Settings(), {}, 1.0)
->>> status
-'problem'
+>>> status, content, media_type = run_job("analyze", body, Settings(), {}, 30.0)
+>>> status, media_type, json.loads(content)["verdict"]
+('ok', 'application/json', 'unstable')
 """
 
 from __future__ import annotations
@@ -26,15 +24,14 @@ from typing import Any, Callable, Mapping
 
 from kfio import Budget, Request, load_request
 
-from .loader import resolve
-from .problems import Unavailable, problem_from_exception
+from .problems import problem_from_exception
 from .progress import budget_for
 from .settings import Settings
 
 log = logging.getLogger("kfio.service")
 
 #: Modules the workers' forkserver imports once, so that every worker, a
-#: replacement too, starts with them loaded (a missing one is skipped).
+#: replacement too, starts with them loaded.
 PRELOAD = (
     "kfio.service.jobs",
     "kfio.service.plots",
@@ -70,21 +67,25 @@ def analyze_job(body: bytes, settings: Settings, budget: Budget, params: Mapping
     The FMO blocks of a plant are kept by the worker (:mod:`kfio._reuse`): the next request
     on the same ``A`` and ``C`` with another channel, ``Q`` or ``R`` skips the eigenstructure.
     """
+    from kfio._reuse import reused_fmo_blocks
+    from kfio.stability._verdict import analyze
+
     request = parse(body, settings)
-    fmo = resolve("kfio._reuse", "reused_fmo_blocks")(request.system, budget)
-    return report_json(resolve("kfio.stability._verdict", "analyze")(request, budget, fmo=fmo))
+    return report_json(analyze(request, budget, fmo=reused_fmo_blocks(request.system, budget)))
 
 
 def bounds_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[str, Any]) -> JobOutput:
     """``kfio bounds``: bounds on the critical probability and on ``E[P]``."""
-    request = parse(body, settings)
-    return report_json(resolve("kfio.mare._compute", "compute_bounds")(request, budget=budget))
+    from kfio.mare._compute import compute_bounds
+
+    return report_json(compute_bounds(parse(body, settings), budget=budget))
 
 
 def simulate_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[str, Any]) -> JobOutput:
     """``kfio simulate``: Monte Carlo error bands."""
-    request = parse(body, settings)
-    return report_json(resolve("kfio.simulation._simulate", "simulate")(request, budget=budget))
+    from kfio.simulation._simulate import simulate
+
+    return report_json(simulate(parse(body, settings), budget=budget))
 
 
 def _plot_job(name: str) -> JobFn:
@@ -127,9 +128,7 @@ def run_job(name: str, body: bytes, settings: Settings, params: Mapping[str, Any
         ``fields`` rebuilds a :class:`kfio.service.problems.Problem`.
     """
     try:
-        fn = JOBS.get(name)
-        if fn is None:
-            raise Unavailable(f"unknown job {name!r}")
+        fn = JOBS[name]  # an unknown name is a bug of the caller: a 500, logged
         budget, params = budget_for(budget_s, params)  # a job's progress file, if it has one
         content, media_type = fn(body, settings, budget, params)
         return ("ok", content, media_type)

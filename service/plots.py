@@ -18,8 +18,6 @@ import numpy as np
 from kfio import Budget, InvalidInput, Request
 from kfio.model._types import MarkovChannel, PerSensorChannel, to_float
 
-from .loader import resolve
-
 _SIZE = (7.0, 4.5)
 _DPI = 100
 
@@ -66,7 +64,9 @@ def simulation(request: Request, budget: Budget, params: Mapping[str, Any]) -> b
     beside it.  On a log axis the band is drawn only where its lower end is
     positive; elsewhere only its upper edge (a log axis cannot show 0).
     """
-    report = resolve("kfio.simulation._simulate", "simulate")(request, budget=budget).to_dict()
+    from kfio.simulation._simulate import simulate
+
+    report = simulate(request, budget=budget).to_dict()
     t = np.arange(report["steps"] + 1)
     stationary = report.get("stationary") or {}
     unreliable = bool(stationary.get("mean_unreliable"))
@@ -133,10 +133,13 @@ def _value(node: Any) -> float | None:
 
 
 def _critical_values(request: Request, budget: Budget) -> dict[str, float | None]:
-    """Bounds on lambda_c (:func:`kfio.mare._compute.compute_bounds`) and the exact value (:func:`analyzer.analyze`)."""
-    report = resolve("kfio.mare._compute", "compute_bounds")(request, budget=budget).to_dict()
+    """Bounds on lambda_c (:func:`kfio.mare._compute.compute_bounds`) and the exact value (:func:`kfio.analyze`)."""
+    from kfio import analyze
+    from kfio.mare._compute import compute_bounds
+
+    report = compute_bounds(request, budget=budget).to_dict()
     crit = report.get("critical_probability") or {}
-    exact = resolve("kfio", "analyze")(request, budget=budget).to_dict()
+    exact = analyze(request, budget=budget).to_dict()
     value = exact.get("critical_arrival_probability")
     return {
         "lower": _value(crit.get("lower")),
@@ -162,7 +165,8 @@ def phase_transition(request: Request, budget: Budget, params: Mapping[str, Any]
     """
     lam0 = _bernoulli_lambda(request, "phase transition")
     _require_noise(request, "phase transition")
-    bound_traces = resolve("kfio.mare._sweep", "bound_traces")
+    from kfio.mare._sweep import bound_traces
+
     crit = _critical_values(request, budget)
     A, C, Q, R = (to_float(getattr(request.system, k)) for k in ("A", "C", "Q", "R"))
     lower = crit["lower"] or 0.0
@@ -215,18 +219,21 @@ def region(request: Request, budget: Budget, params: Mapping[str, Any]) -> bytes
     """
     import dataclasses
 
+    from kfio.mare._compute import compute_bounds
+    from kfio.stability._regions import exact_region_grid
+
     if not isinstance(request.channel, PerSensorChannel) or len(request.channel.channels) != 2:
         raise InvalidInput("/channel/model", "the region plot needs two sensors with a per_sensor channel")
     points = int(params.get("points", 21))
     grid_options = {**request.options.get("bounds", {}), "grid": points}
     gridded = dataclasses.replace(request, options={**request.options, "bounds": grid_options})
-    bounds = resolve("kfio.mare._compute", "compute_bounds")(gridded, budget=budget)
+    bounds = compute_bounds(gridded, budget=budget)
     report = bounds.region.to_dict()
     values = np.array(report["values"], dtype=float)
     labels = np.array([[_LABEL_CODE.get(x, 0.0) for x in row] for row in report["labels"]])
     grid = bounds.region.exact
     if grid is None:  # outside Assumption 1: let the exact route say why
-        grid = resolve("kfio.stability._regions", "exact_region_grid")(request, points, budget=budget)
+        grid = exact_region_grid(request, points, budget=budget)
     exact = np.array([[_EXACT_CODE[x] for x in row] for row in grid.labels])
     return _draw_region(values, labels, exact, grid.curve, tuple(report["axes"]), request)
 
@@ -301,13 +308,15 @@ def ge_region(request: Request, budget: Budget, params: Mapping[str, Any]) -> by
     """
     import dataclasses
 
+    from kfio.stability._verdict import analyze
+
     ch = request.channel
     if not isinstance(ch, MarkovChannel) or ch.model != "gilbert_elliott":
         raise InvalidInput("/channel/model", "the Gilbert-Elliott region plot needs one gilbert_elliott channel")
     points = int(params.get("points", 41))
     opts = {**request.options.get("analyze", {}), "ge_grid": points}
     gridded = dataclasses.replace(request, options={**request.options, "analyze": opts})
-    report = resolve("kfio.stability._verdict", "analyze")(gridded, budget)
+    report = analyze(gridded, budget)
     region = report.gilbert_elliott
     return _draw_ge_region(region, report.verdict, request)
 

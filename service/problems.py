@@ -20,7 +20,6 @@ exception                  status  type (``urn:kfio:problem:...``)
 ``MemoryError``            422     ``memory-exceeded`` (the worker is replaced)
 ``WorkerOutOfMemory``      422     ``memory-exceeded`` (died in C code at its limit)
 ``WorkerCrashed``          503     ``worker-crashed`` (with ``Retry-After``)
-analyzer part missing      501     ``not-implemented``
 anything else              500     ``internal`` (a bug; logged, never detailed)
 =========================  ======  ===========================================
 """
@@ -126,10 +125,6 @@ class ProblemError(Exception):
         self.problem = problem
 
 
-class Unavailable(RuntimeError):
-    """A part of :mod:`kfio` a job needs does not exist (yet) in this build."""
-
-
 #: ``Retry-After`` of a refusal while the server shuts down (a restarted server takes a few seconds).
 SHUTDOWN_RETRY_AFTER_S = 5
 
@@ -183,8 +178,6 @@ def problem_from_exception(exc: BaseException) -> Problem:
         return Problem(422, "numerical-failure", "Numerical step could not be certified", str(exc))
     if isinstance(exc, AnalyzerError):
         return Problem(422, "analysis-error", "The analysis could not be completed", str(exc))
-    if isinstance(exc, (Unavailable, NotImplementedError)):
-        return Problem(501, "not-implemented", "Not available in this build", str(exc) or "not implemented yet")
     return Problem(
         500, "internal", "Internal error", "an unexpected error occurred (this is a bug; it has been logged)"
     )

@@ -77,7 +77,7 @@ def test_relative_imports_resolve() -> None:
     mods = _modules()
     graph = {n: _imports(n, p, set(mods)) for n, p in mods.items()}
     assert "kfio.mare._riccati" in graph["kfio.mare._phat"]
-    assert "kfio.service.loader" in graph["kfio.service.plots"]
+    assert "kfio.service.cache" in graph["kfio.service.dispatch"]
 
 
 def test_no_import_cycles() -> None:

@@ -27,7 +27,7 @@ router = APIRouter(prefix="/v1/plots", tags=["plots"])
 _PNG: dict[int | str, dict[str, Any]] = {
     200: {"description": "A PNG image", "content": {"image/png": {"schema": {"type": "string", "format": "binary"}}}}
 }
-_ERRORS = problem_responses(413, 415, 422, 501, 503, 504)
+_ERRORS = problem_responses(413, 415, 422, 503, 504)
 
 
 @router.post(

@@ -26,7 +26,7 @@ def report_router(path: str, job: str, schema: str, summary: str, description: s
         summary=summary,
         description=f"{description} Takes exactly the JSON of `kfio {job} FILE` and returns exactly its `--json` report.",
         response_class=Response,
-        responses={**json_response(schema, f"The {job} report"), **problem_responses(413, 415, 422, 501, 503, 504)},
+        responses={**json_response(schema, f"The {job} report"), **problem_responses(413, 415, 422, 503, 504)},
         openapi_extra=json_body(REQUEST_EXAMPLES),
     )
     return router

@@ -627,7 +627,6 @@ def problem_responses(*statuses: int) -> dict[int | str, dict[str, Any]]:
         422: "Invalid request: the problem names the field (JSON pointer) and the rule; or the "
         "computation needs more memory than one analysis process may use (memory-exceeded)",
         429: "Too many jobs are queued (the deployment's `KFIO_MAX_JOBS`); retry later",
-        501: "This part of the analyzer is not available in this build",
         503: "No worker became free in time, a worker died, or the server is shutting down; retry later",
         504: "The computation did not finish within its time budget",
     }

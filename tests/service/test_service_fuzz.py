@@ -5,8 +5,7 @@ mode (derandomized, so a failure reproduces), a 1.5 s budget per request on
 the server.  Every schemathesis check runs except ``max_response_time`` (no
 test asserts a time).  What must hold for every generated request:
 
-* never a 500; a 5xx is only 503/504 (budget, busy), or 501 while an
-  analyzer module the endpoint needs is not in this build;
+* never a 500; a 5xx is only 503/504 (budget, busy);
 * the status code, content type and headers are documented for the
   operation, and the body matches its documented schema;
 * data the schema refuses is refused (``negative_data_rejection``), a missing
@@ -22,7 +21,6 @@ Figures of a run are in docs/service.md.
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import os
 from collections import Counter
@@ -53,14 +51,6 @@ SCHEMA = schemathesis.openapi.from_dict(DOC)
 OPERATIONS = {op.label: op for op in (r.ok() for r in SCHEMA.get_all_operations())}
 EXAMPLES = {GenerationMode.POSITIVE: 10, GenerationMode.NEGATIVE: 8}
 
-#: Analyzer modules behind each endpoint (501 is acceptable only while one is missing).
-NEEDS = {
-    "POST /v1/bounds": ("kfio.mare._compute",),
-    "POST /v1/plots/phase-transition": ("kfio.mare._compute", "kfio.mare._riccati"),
-    "POST /v1/plots/region": ("kfio.mare._compute",),
-}
-
-
 #: ``(operation, mode, status)`` -> requests sent; written to ``$KFIO_FUZZ_REPORT`` (JSON) if set.
 TALLY: Counter[tuple[str, str, int]] = Counter()
 
@@ -76,14 +66,12 @@ def server() -> Iterator[LiveServer]:
             json.dump(sorted(rows, key=lambda r: (r["operation"], r["mode"], r["status"])), fh, indent=1)
 
 
-def allowed_5xx(label: str) -> set[int]:
-    missing = any(importlib.util.find_spec(m) is None for m in NEEDS.get(label, ()))
-    return {503, 504, 501} if missing else {503, 504}
+#: The only server errors allowed: busy or out of budget (1.5 s here).
+ALLOWED_5XX = {503, 504}
 
 
 def fuzz(server: LiveServer, label: str, mode: GenerationMode) -> None:
     op = OPERATIONS[label]
-    allowed = allowed_5xx(label)
 
     @settings(
         max_examples=EXAMPLES[mode],
@@ -98,7 +86,7 @@ def fuzz(server: LiveServer, label: str, mode: GenerationMode) -> None:
         response = case.call(base_url=server.url, timeout=30)
         status = response.status_code
         TALLY[(label, mode.value, status)] += 1
-        assert status < 500 or status in allowed, f"{status} for {case.body!r}: {response.text[:300]}"
+        assert status < 500 or status in ALLOWED_5XX, f"{status} for {case.body!r}: {response.text[:300]}"
         checks = [
             status_code_conformance,
             content_type_conformance,
@@ -107,7 +95,7 @@ def fuzz(server: LiveServer, label: str, mode: GenerationMode) -> None:
             missing_required_header,
             unsupported_method,
         ]
-        if status not in allowed:
+        if status not in ALLOWED_5XX:
             checks.append(not_a_server_error)
         if mode is GenerationMode.NEGATIVE:
             if status == 413:  # a generated body over the 1 MiB limit: refused, just not by schemathesis' list
@@ -118,7 +106,7 @@ def fuzz(server: LiveServer, label: str, mode: GenerationMode) -> None:
             # positive data: accepted (jobs and sweeps: queued, or 429 when the queue is full), out of budget,
             # or refused for a rule the schema cannot state
             accepted = {202, 429} if label.startswith(("POST /v1/jobs/", "POST /v1/sweeps")) else {200}
-            assert status in accepted | {422} | allowed, (
+            assert status in accepted | {422} | ALLOWED_5XX, (
                 f"{status} for valid-by-schema {case.body!r}: {response.text[:300]}"
             )
             if status == 422:
