@@ -57,7 +57,9 @@ def _require_noise(request: Request, what: str) -> None:
 def simulation(request: Request, budget: Budget, params: Mapping[str, Any]) -> bytes:
     """``trace(P_t)`` against ``t``: percentiles, the mean with its 95% band, exact ``E[P_t]`` if asked.
 
-    Draws :func:`kfio.simulation._simulate.simulate`'s report.  Where the
+    Draws :func:`kfio.simulation._simulate.simulate`'s report: the predictor
+    ``P_t = P(t|t-1)``, and beside it the mean and median of the filtered
+    ``P(t|t)`` of the same arrivals (the report's ``filtered`` section).  Where the
     exact tail exponent is ``kappa <= 2`` (Mo and Sinopoli, 2012) the mean is
     unreliable: the percentiles come first, the mean is drawn thin, and the
     exact per-step growth of ``E[P_t]`` (Theorem 1's rate) is drawn as a slope
@@ -66,7 +68,11 @@ def simulation(request: Request, budget: Budget, params: Mapping[str, Any]) -> b
     """
     from kfio.simulation._simulate import simulate
 
-    report = simulate(request, budget=budget).to_dict()
+    return _png(simulation_figure(simulate(request, budget=budget).to_dict(), request))
+
+
+def simulation_figure(report: Mapping[str, Any], request: Request) -> Any:
+    """The figure of :func:`simulation` for a simulation report (its ``to_dict()``)."""
     t = np.arange(report["steps"] + 1)
     stationary = report.get("stationary") or {}
     unreliable = bool(stationary.get("mean_unreliable"))
@@ -85,6 +91,11 @@ def simulation(request: Request, budget: Budget, params: Mapping[str, Any]) -> b
     if log_axis and (~band_ok & np.isfinite(high)).any():
         ax.plot(t, np.where(band_ok, np.nan, high), ":", color="C0", lw=1, label="band upper edge (lower end <= 0)")
     ax.plot(t, mean, lw=0.8 if unreliable else 1.5, color="grey" if unreliable else "C0", label="sample mean")
+    filtered = report.get("filtered")
+    if filtered:
+        ax.plot(t, _nan(filtered["mean_trace"]), lw=1, color="C4", label="filtered P(t|t): sample mean")
+        if "50" in filtered["percentiles"]:
+            ax.plot(t, _nan(filtered["percentiles"]["50"]), ":", lw=1, color="C4", label="filtered P(t|t): median")
     growth = stationary.get("exact_mean_growth_per_step")
     if unreliable and growth is not None and growth > 1:
         t0 = max(1, len(t) // 4)
@@ -103,7 +114,7 @@ def simulation(request: Request, budget: Budget, params: Mapping[str, Any]) -> b
         if top is not None:
             ax.set_ylim(top=top * 10)
     ax.set_xlabel("t")
-    ax.set_ylabel("trace(P_t)")
+    ax.set_ylabel("trace(P_t), P_t = P(t|t-1)")
     title = f"Simulated trace(P_t): n = {request.system.n}, {_channel_text(request)}"
     if stationary.get("verdict"):
         title += f", verdict {stationary['verdict']} (Theorem 1)"
@@ -113,7 +124,7 @@ def simulation(request: Request, budget: Budget, params: Mapping[str, Any]) -> b
     ax.set_title(title + "\n" + sub, fontsize="small")
     ax.legend(fontsize="x-small")
     ax.grid(alpha=0.3)
-    return _png(fig)
+    return fig
 
 
 def _channel_text(request: Request) -> str:
