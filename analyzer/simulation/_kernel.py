@@ -65,8 +65,14 @@ def _whiten(S: np.ndarray, B: np.ndarray) -> np.ndarray:
     if p > _SMALL_P:
         try:
             return np.linalg.solve(np.linalg.cholesky(S), B)
-        except np.linalg.LinAlgError:
-            return np.full_like(B, np.nan)
+        except np.linalg.LinAlgError:  # LAPACK refuses the whole batch: find the rows one by one
+            V = np.full_like(B, np.nan)
+            for m in range(S.shape[0]):
+                try:
+                    V[m] = np.linalg.solve(np.linalg.cholesky(S[m]), B[m])
+                except np.linalg.LinAlgError:
+                    pass
+            return V
     # Unrolled over p: a handful of whole-batch operations beat a LAPACK call per matrix.
     L = np.zeros_like(S)
     V = np.empty_like(B)

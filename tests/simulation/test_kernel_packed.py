@@ -57,6 +57,22 @@ def test_packed_step_falls_back_where_definiteness_was_lost() -> None:
     assert np.allclose(out, ref, rtol=1e-12, atol=1e-12 * np.abs(ref).max())
 
 
+@pytest.mark.parametrize("p", [2, 6])  # unrolled Cholesky (p <= 4) and LAPACK's batched one (p > 4)
+def test_the_matrix_step_lifts_only_the_rows_that_lost_definiteness(p) -> None:
+    # LAPACK refuses a whole batch when one S is indefinite; every other row must still be
+    # computed as if alone (before, p > 4 lifted the S of every trajectory in the batch)
+    rng = np.random.default_rng(74)
+    A, C, Q, R, P = random_case(rng, 3, p, 12)
+    P[7] = -P[7]
+    step = RiccatiStep.build(A, Q, C, R)
+    with np.errstate(invalid="ignore"):
+        batch, _ = step.apply(P)
+        alone = np.concatenate([step.apply(P[m : m + 1])[0] for m in range(12)])
+    assert np.isfinite(batch).all()
+    np.testing.assert_array_equal(np.delete(batch, 7, axis=0), np.delete(alone, 7, axis=0))
+    assert np.allclose(batch[7], alone[7], rtol=1e-12, atol=0)
+
+
 @pytest.mark.parametrize(
     "system,channel",
     [
