@@ -95,6 +95,10 @@ def test_nan_and_infinities_become_null_and_numpy_values_plain_json():
     assert out == {"i": 3, "b": True, "f": 0.5, "z": [1.0, -2.0]}
     assert [type(v) for v in out.values()] == [int, bool, float, list]
     assert type(encode(np.float64(0.25))) is float
+    # long double arrays too (tolist() keeps them as NumPy scalars, which json.dumps refuses)
+    wide = encode({"x": np.array([1.5, np.inf], dtype=np.longdouble)})
+    assert wide == {"x": [1.5, None]} and type(wide["x"][0]) is float
+    json.dumps(wide, allow_nan=False)
     # through a report: an infinite rate is null in the JSON, and the text stays valid JSON
     rep = analyze(make(SCALAR, bern("1/2")))
     worse = dataclasses.replace(rep, blocks=(dataclasses.replace(rep.blocks[0], rate=math.inf, sigma=math.nan),))

@@ -140,6 +140,8 @@ def _encode(value: Any) -> Any:
 
 def _array(np: Any, a: Any) -> Any:
     """A NumPy array as nested lists: whole-array for real and integer dtypes, else entry by entry."""
+    if a.dtype.kind == "f" and a.dtype.itemsize > 8:  # long double: tolist() would keep NumPy scalars
+        a = a.astype(float)  # beyond the float64 range: inf, hence null, as for any float
     if a.dtype.kind == "f":
         finite = np.isfinite(a)
         if finite.all():
