@@ -22,15 +22,20 @@ REFERENCE_COMMIT = "736f7c6"
 ROOT = Path(__file__).resolve().parents[1]
 
 
+def unpack(commit: str, dest: Path) -> None:
+    """``git archive COMMIT analyzer service`` unpacked into ``dest`` as they were in the repository."""
+    blob = subprocess.run(
+        ["git", "archive", commit, "analyzer", "service"], cwd=ROOT, check=True, capture_output=True
+    ).stdout
+    with tarfile.open(fileobj=io.BytesIO(blob)) as tar:
+        tar.extractall(dest, filter="data")
+
+
 def reference_tree(commit: str = REFERENCE_COMMIT) -> Path:
     """A folder holding ``kfio/`` (the library, and ``kfio/service``) as of ``commit``."""
     dest = Path(tempfile.gettempdir()) / f"kfio-reference-{commit}-service"
     if not (dest / "kfio" / "service" / "__init__.py").exists():
-        blob = subprocess.run(
-            ["git", "archive", commit, "analyzer", "service"], cwd=ROOT, check=True, capture_output=True
-        ).stdout
-        with tarfile.open(fileobj=io.BytesIO(blob)) as tar:
-            tar.extractall(dest / "_x", filter="data")
+        unpack(commit, dest / "_x")
         (dest / "_x" / "analyzer").rename(dest / "kfio")
         (dest / "_x" / "service").rename(dest / "kfio" / "service")
     return dest

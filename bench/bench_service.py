@@ -62,7 +62,7 @@ from typing import Callable
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from _reference import ROOT, reference_tree  # noqa: E402
+from _reference import ROOT, reference_tree, unpack  # noqa: E402
 
 from kfio.service.api.schemas import REQUEST_EXAMPLES  # noqa: E402
 
@@ -275,9 +275,7 @@ def reference_server(commit: str, workers: int) -> LiveServer:
     earlier ones the top-level ``analyzer`` and ``service``, which are unpacked as they were and run
     from their own folder, so that nothing of this checkout is imported.
     """
-    import io
     import subprocess
-    import tarfile
     import tempfile
 
     pyproject = subprocess.run(
@@ -288,11 +286,7 @@ def reference_server(commit: str, workers: int) -> LiveServer:
     else:
         tree, module = Path(tempfile.gettempdir()) / f"kfio-reference-{commit}-flat", "service.cli"
         if not (tree / "service" / "__init__.py").exists():
-            blob = subprocess.run(
-                ["git", "archive", commit, "analyzer", "service"], cwd=ROOT, check=True, capture_output=True
-            ).stdout
-            with tarfile.open(fileobj=io.BytesIO(blob)) as tar:
-                tar.extractall(tree, filter="data")
+            unpack(commit, tree)
     # one BLAS thread per worker, as the current service sets for its own workers
     env = {"PYTHONPATH": str(tree), "OPENBLAS_NUM_THREADS": "1"}
     return LiveServer(command=[sys.executable, "-m", module, "serve"], env=env, workers=workers, cwd=tree)
