@@ -47,6 +47,18 @@ class Collector(Protocol):
         """Record maximal blind sets (rows of ``masks``)."""
         ...  # pragma: no cover - protocol
 
+    def alive_hulls(self, hulls: np.ndarray) -> np.ndarray:
+        """Per subtree whose every flat lies inside a row of ``hulls``: whether it may still matter."""
+        ...  # pragma: no cover - protocol
+
+    def visit(self, masks: np.ndarray, kernels: np.ndarray) -> None:
+        """See every expanded flat (rows of ``masks``) with an orthonormal basis of its kernel."""
+        ...  # pragma: no cover - protocol
+
+
+class NodeCap(Exception):
+    """The walk expanded the most flats it was allowed (``max_nodes``); the collector holds what it found."""
+
 
 class _Found:
     """Orbit representatives of the maximal blind sets found, deduplicated by their bits first."""
@@ -59,6 +71,13 @@ class _Found:
     def alive(self, masks: np.ndarray, cores: np.ndarray) -> np.ndarray:
         """Every subtree may hold a new orbit: enumeration prunes nothing."""
         return np.ones(masks.shape[0], dtype=bool)
+
+    def alive_hulls(self, hulls: np.ndarray) -> np.ndarray:
+        """Every subtree may hold a new orbit: enumeration prunes nothing."""
+        return np.ones(hulls.shape[0], dtype=bool)
+
+    def visit(self, masks: np.ndarray, kernels: np.ndarray) -> None:
+        """Enumeration needs only the maximal sets."""
 
     def offer(self, masks: np.ndarray) -> None:
         for m, packed in zip(masks, np.packbits(masks, axis=1)):
@@ -227,6 +246,7 @@ def _expand(
     rank = (~margins.record(sv)).sum(axis=2)
     Q = masks | (rank == 0)
     blind_ext = ~Q & (rank < d)
+    found.visit(Q, K)
     found.offer(Q[~blind_ext.any(axis=1)])
     b, e = np.nonzero(blind_ext & (index[None, :] > cores[:, None]))
     # The closure only adds slots after e (or fails prefix preservation), and
@@ -234,19 +254,21 @@ def _expand(
     # Q + e in place of its closure is cut for good, before any residual.
     grown = Q[b]
     grown[np.arange(b.size), e] = True
+    # Every flat below cl(Q + e) holds Q + e, agrees with it up to e, and is
+    # blind, so each slot it adds after e is a blind extension of Q: its hull.
+    later = blind_ext[b] & (index[None, :] > e[:, None])
+    early = found.alive_hulls(grown | later)
+    b, e, grown, later = b[early], e[early], grown[early], later[early]
     early = gap_canonical_possible(space, grown, e)
-    b, e = b[early], e[early]
-    grown = grown[early]
-    early = found.alive(grown, e)
-    b, e = b[early], e[early]
+    b, e, later = b[early], e[early], later[early]
     if b.size == 0:
         return []
     closures = margins.record(_residuals(W, Q, b, e, rank)) | Q[b]
     new = closures & ~Q[b]
     ppc = ~(new & (index[None, :] < e[:, None])).any(axis=1)
-    b, e, closures = b[ppc], e[ppc], closures[ppc]
+    b, e, closures, later = b[ppc], e[ppc], closures[ppc], later[ppc]
     dims = d - rank[b, e]
-    keep = gap_canonical_possible(space, closures, e)
+    keep = gap_canonical_possible(space, closures, e) & found.alive_hulls(closures | later)
     found.offer(closures[keep & (dims == 1)])
     inner = np.flatnonzero(keep & (dims > 1))
     if inner.size == 0:
@@ -261,17 +283,21 @@ def _expand(
     return out
 
 
-def walk(space: SlotSpace, budget: Budget, margins: Margins, found: Collector) -> int:
+def walk(space: SlotSpace, budget: Budget, margins: Margins, found: Collector, max_nodes: int | None = None) -> int:
     """Batched closure extension over gap-canonical flats, offering maximal blind sets to ``found``.
 
-    ``found.alive`` may prune subtrees (a branch and bound); it is asked
-    before any residual of a new pair and again when a batch leaves the
-    stack.  Returns the number of flats expanded.
+    ``found.alive_hulls`` may prune subtrees (a branch and bound) from a
+    superset of every flat below a child (its hull), asked before any
+    residual of a new pair and again once its closure is known;
+    ``found.alive`` is asked when a batch leaves the stack.  Returns the
+    number of flats expanded.
 
     Raises
     ------
     BudgetExceeded
         When ``budget`` runs out (one tick per expanded flat).
+    NodeCap
+        When more than ``max_nodes`` flats would be expanded.
     """
     start = root(space, margins)
     stack = [(start.mask[None, :], np.array([start.core]), np.eye(space.n_columns, dtype=space.rows.dtype)[None, :, :])]
@@ -289,6 +315,8 @@ def walk(space: SlotSpace, budget: Budget, margins: Margins, found: Collector) -
                 continue
         budget.tick("sigma: closure search", masks.shape[0])
         nodes += masks.shape[0]
+        if max_nodes is not None and nodes > max_nodes:
+            raise NodeCap(f"more than {max_nodes} flats")
         stack.extend(_expand(space, masks, cores, K, margins, found))
     return nodes
 

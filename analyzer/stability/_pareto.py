@@ -83,6 +83,16 @@ class Front:
         decided = np.arange(self.space.size)[None, :] <= cores[:, None]
         return ~self.dead(self.misses(masks | ~decided))
 
+    def alive_hulls(self, hulls: np.ndarray) -> np.ndarray:
+        """Whether a subtree whose flats all lie inside a row of ``hulls`` may beat the front.
+
+        Every set inside a hull misses at least the slots the hull misses.
+        """
+        return ~self.dead(self.misses(hulls))
+
+    def visit(self, masks: np.ndarray, kernels: np.ndarray) -> None:
+        """The front needs only maximal sets."""
+
     def offer(self, masks: np.ndarray) -> None:
         """Add the maximal blind sets (rows) whose miss vectors are not dominated or equalled."""
         if masks.shape[0] == 0:
