@@ -43,6 +43,10 @@ import numpy as np
 from .._budget import Budget
 from ._blind import Margins, Objective, SearchResult, SlotSpace, search
 
+#: Flats the walk over both groups may expand before a two-group front is
+#: completed from the big flats of one group (:mod:`kfio.stability._pareto_proof`).
+PROBE_FLATS: int | None = 2000
+
 
 class Front:
     """Undominated miss vectors found so far, one representative mask each.
@@ -160,7 +164,11 @@ def pareto_search(space: SlotSpace, budget: Budget, margins: Margins) -> SearchR
 
     The batched closure walk of :func:`kfio.stability._blind_batch.walk`
     (gap-canonical rotations, real rows where the plant is real) with
-    :class:`Front` deciding which subtrees to keep.
+    :class:`Front` deciding which subtrees to keep.  With two groups the
+    walk stops after :data:`PROBE_FLATS` flats and
+    :func:`kfio.stability._pareto_proof.prove_front` completes its front
+    from the big flats of one group at a time (the walk over both groups
+    grows like ``C(S, L - 1) / N0`` with dense sensor rows).
 
     Returns
     -------
@@ -175,14 +183,19 @@ def pareto_search(space: SlotSpace, budget: Budget, margins: Margins) -> SearchR
         When ``budget`` runs out (one tick per expanded flat, also in the
         one-group searches for ``m_g``).
     """
-    from ._blind_batch import real_space, walk  # local: _blind_batch is heavier and imports _blind too
+    from ._blind_batch import NodeCap, real_space, walk  # local: _blind_batch is heavier and imports _blind too
+    from ._pareto_proof import prove_front
 
     lower, seeds = group_extremes(space, budget, margins)
     front = Front(space, lower)
     if seeds:
         front.offer(np.array(seeds))
     real = real_space(space)
-    nodes = walk(real, budget, margins, front)
+    cap = PROBE_FLATS if space.n_groups == 2 else None
+    try:
+        nodes = walk(real, budget, margins, front, max_nodes=cap)
+    except NodeCap:
+        nodes = (cap or 0) + prove_front(real, front, budget, margins)
     keys = sorted(space.orbit_key(m) for m in front.masks)
     reps = tuple(np.isin(np.arange(space.size), key) for key in keys)
     return SearchResult(maximal=reps, nodes=nodes, planes=0, window=real.window(margins))

@@ -1,0 +1,331 @@
+"""Completing the two-sensor Pareto front from the big flats of one sensor.
+
+With two row groups (sensors) a maximal blind set ``D = Z(u)`` (the slots
+whose rows vanish at a kernel vector ``u``) has the blind counts
+``(x, y)``: phases of group 0 and of group 1 in ``D``.  Its part
+``F = D cap (group 0)`` is a flat of group 0 alone (the zero set of ``u``
+in that group), and ``u`` lies in the kernel ``K(F)``.  Hence, for a front
+of blind-count vectors and ``B(x)``, the largest ``y'`` of a front vector
+with ``x' >= x``, some set beats the front iff for some flat ``F`` of
+group 0 a vector of ``K(F)`` zeroes at least ``B(|F|) + 1`` slots of group
+1, or the same with the groups exchanged.  Only flats beyond a threshold
+need the check: a vector ``(x, y)`` beyond the front lies above a
+*minimal beyond point* ``(a, B(a) + 1)``; the points with ``a >= b`` are
+checked from group 0 (flats of at least ``min a`` slots), the others from
+group 1.  Flats of many slots in a block of few columns are rare, so the
+check visits a small part of what the walk over both groups visits
+(docs/structure.md gives the numbers).
+
+Flats are those of one group, one per shift orbit (gap-canonical
+rotation): a shift moves the phases of both groups together, so it maps
+pairs to pairs.  For one flat, "some ``x`` in ``K(F)`` zeroes ``m`` rows of
+``P = R K(F)``" (``R`` the other group's rows) is a largest-hyperplane
+question in ``dim K(F)`` dimensions, answered exactly by the hyperplanes
+spanned by ``dim K(F) - 1`` of the rows when there are few of them, and by
+a closure search over the rows of ``P`` otherwise.  A hit is a real blind
+set beyond the front: it joins the front and the check starts over, until
+a whole pass finds nothing.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from functools import lru_cache
+
+import numpy as np
+
+from .._budget import Budget
+from ._blind import Flat, Margins, SlotSpace, expand, root
+from ._blind_batch import walk
+from ._pareto import Front, group_space
+
+#: Most ``(k - 1)``-subsets of the other group's rows enumerated for one flat;
+#: beyond it the closure search over the projected rows answers.
+_MOST_SUBSETS = 200_000
+
+#: Rows of one batched hyperplane step.
+_SUBSET_BATCH = 4096
+
+
+class _BigFlats:
+    """Collector of every flat of one group with at least ``T`` slots, with its kernel."""
+
+    def __init__(self, space: SlotSpace, T: int) -> None:
+        self.space = space
+        self.T = T
+        self.masks: list[np.ndarray] = []
+        self.kernels: list[np.ndarray] = []
+        self.leaves: list[np.ndarray] = []
+
+    def alive(self, masks: np.ndarray, cores: np.ndarray) -> np.ndarray:
+        """Flats below a flat with core ``c`` add only slots after ``c``."""
+        later = np.arange(self.space.size)[None, :] > cores[:, None]
+        return (masks | later).sum(axis=1) >= self.T
+
+    def alive_hulls(self, hulls: np.ndarray) -> np.ndarray:
+        return hulls.sum(axis=1) >= self.T
+
+    def visit(self, masks: np.ndarray, kernels: np.ndarray) -> None:
+        for i in np.flatnonzero(masks.sum(axis=1) >= self.T):
+            if kernels.shape[2] > 0:
+                self.masks.append(masks[i].copy())
+                self.kernels.append(kernels[i])
+
+    def offer(self, masks: np.ndarray) -> None:
+        for m in masks[masks.sum(axis=1) >= self.T]:
+            self.leaves.append(m.copy())
+
+
+def big_flats(space: SlotSpace, T: int, budget: Budget, margins: Margins) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Every blind flat of a one-group space with at least ``T`` slots, one per shift orbit, with a kernel basis.
+
+    The batched closure walk of :func:`kfio.stability._blind_batch.walk`
+    (gap-canonical rotation), cutting every subtree whose hull holds fewer
+    than ``T`` slots.
+    """
+    found = _BigFlats(space, T)
+    walk(space, budget, margins, found)
+    out = list(zip(found.masks, found.kernels))
+    seen = {m.tobytes() for m in found.masks}
+    for m in found.leaves:
+        if m.tobytes() in seen:
+            continue
+        seen.add(m.tobytes())
+        out.append((m, _kernel(space.rows[m].reshape(-1, space.n_columns), margins)))
+    return out
+
+
+def _kernel(M: np.ndarray, margins: Margins) -> np.ndarray:
+    """Orthonormal basis (columns) of the null space of ``M``."""
+    L = M.shape[1]
+    if M.shape[0] == 0:
+        return np.eye(L, dtype=M.dtype)
+    _, sv, vh = np.linalg.svd(M)
+    rank = int((~margins.record(sv)).sum())
+    return np.asarray(vh[rank:].conj().T)
+
+
+@lru_cache(maxsize=64)
+def _subsets(n: int, r: int) -> np.ndarray:
+    return np.array(list(itertools.combinations(range(n), r)), dtype=np.intp).reshape(-1, r)
+
+
+def most_zeros_vector(P: np.ndarray, m: int, budget: Budget, margins: Margins) -> np.ndarray | None:
+    """A unit ``x`` at which at least ``m`` slots of ``P`` (``N x p x k``) vanish, or ``None`` if there is none.
+
+    Slots vanishing on all of ``C^k`` count everywhere.  With one row per
+    slot, the best ``x`` is a normal of a hyperplane spanned by ``k - 1``
+    independent rows (a larger set of rows in a hyperplane can be completed
+    to one so spanned, unless every row lies in one hyperplane), so these
+    hyperplanes are counted exhaustively when there are at most
+    :data:`_MOST_SUBSETS`; otherwise (and with several rows per slot) a
+    closure search over the flats of ``P`` with at least ``m`` slots answers.
+    """
+    N, p, k = P.shape
+    zero = margins.record(np.linalg.norm(P.reshape(N, -1), axis=1))
+    need = m - int(zero.sum())
+    e0 = np.zeros(k, dtype=P.dtype)
+    e0[0] = 1
+    if need <= 0:
+        return e0
+    if k == 1:
+        return None
+    rows = P[~zero]
+    if rows.shape[0] < need:
+        return None
+    if p == 1 and math.comb(rows.shape[0], k - 1) <= _MOST_SUBSETS:
+        return _hyperplanes(rows[:, 0, :], need, budget, margins)
+    return _closure_hit(P, m, budget, margins)
+
+
+def _hyperplanes(R: np.ndarray, need: int, budget: Budget, margins: Margins) -> np.ndarray | None:
+    """A normal ``x`` of a hyperplane holding ``need`` of the (non-zero) rows of ``R``, or ``None``.
+
+    Every hyperplane spanned by ``k - 1`` independent rows is reached once
+    as an increasing sequence of rows, each outside the span of the rows
+    before it.  The walk keeps, per prefix, an orthonormal basis ``N`` of
+    the vectors its rows annihilate and shrinks it by one Householder
+    reflection per added row (``R_e N`` is reflected onto the first axis;
+    the other columns stay), so the ``C(n, k - 1)`` normals cost a few
+    elementwise operations each; one product then counts the rows on each
+    hyperplane.
+    """
+    n, k = R.shape
+    if need <= k - 1:
+        return _kernel(R[: k - 1], margins)[:, 0]
+    whole = _kernel(R, margins)
+    if whole.shape[1] > 0:
+        return whole[:, 0]
+    last = np.full(1, -1)
+    N = np.eye(k, dtype=R.dtype)[None, :, :]
+    index = np.arange(n)
+    for _ in range(k - 1):
+        budget.tick("sigma: front proof", max(1, last.size * n // 4096))
+        W = np.einsum("ek,ckd->ced", R, N)
+        size = np.linalg.norm(W, axis=2)
+        spanned = margins.record(size)
+        # Reach each hyperplane H by its greedy basis (s_1 = its first row, each next
+        # one its first row outside the span so far): then every row of H up to
+        # the last s lies in that span, so H holds at most the spanned rows plus
+        # the rows after the last s.
+        alive = spanned.sum(axis=1) + (n - 1 - last) >= need
+        later = alive[:, None] & (index[None, :] > last[:, None]) & ~spanned
+        b, e = np.nonzero(later)
+        N, last = _reflect_out(N[b], W[b, e] / size[b, e][:, None]), e
+    on = margins.record(np.abs(N[:, :, 0] @ R.T)).sum(axis=1)
+    best = np.flatnonzero(on >= need)
+    return np.asarray(N[best[0], :, 0]) if best.size else None
+
+
+def _reflect_out(N: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """Per row, an orthonormal basis of ``{N y : w . y = 0}`` (``N``: ``(C, k, d)`` orthonormal, ``w``: unit ``(C, d)``).
+
+    The Householder reflection ``H = I - 2 v v^* / |v|^2``, ``v = conj(w) + s e_1``
+    (``s`` of the modulus one and phase of ``conj(w_1)``, so nothing cancels),
+    maps ``conj(w)`` to a multiple of ``e_1``; its other columns are
+    orthonormal and annihilated by ``w``.
+    """
+    u = w.conj()
+    first = u[:, 0]
+    phase = np.where(np.abs(first) > 0, first / np.maximum(np.abs(first), 1e-300), 1.0)
+    v = u.copy()
+    v[:, 0] += phase
+    scale = 2.0 / np.einsum("cd,cd->c", v.conj(), v).real
+    d = N.shape[2]
+    H = (
+        np.eye(d, dtype=np.result_type(N, w))[None, :, 1:]
+        - scale[:, None, None] * v[:, :, None] * v[:, None, 1:].conj()
+    )
+    return np.asarray(np.einsum("ckd,cde->cke", N, H))
+
+
+def _closure_hit(P: np.ndarray, m: int, budget: Budget, margins: Margins) -> np.ndarray | None:
+    """Depth-first closure search over the flats of ``P`` (no symmetry) for one with ``m`` slots."""
+    N, p, k = P.shape
+    space = SlotSpace(n_phases=N, n_groups=1, rows=P, tol=margins.tol)
+    stack = [root(space, margins)]
+    while stack:
+        flat = stack.pop()
+        budget.tick("sigma: front proof")
+        exp = expand(space, flat, margins)
+        if exp.kernel.shape[1] == 0:
+            continue
+        if exp.mask.sum() >= m:
+            return np.asarray(exp.kernel[:, 0])
+        for c in np.flatnonzero(exp.hulls.sum(axis=1) >= m)[::-1]:
+            child = Flat(exp.masks[c], int(exp.cores[c]), exp.kernel, exp.cuts[c], int(exp.cut_ranks[c]))
+            if exp.dims[c] == 1:
+                if exp.masks[c].sum() >= m:
+                    return np.asarray(child.kernel()[:, 0])
+                continue
+            stack.append(child)
+    return None
+
+
+def maximal_zero_set(space: SlotSpace, u: np.ndarray, margins: Margins) -> np.ndarray:
+    """A maximal blind set holding ``Z(u)``: add slots one at a time, closing after each, until the kernel is a line."""
+    mask = margins.record(np.linalg.norm(space.rows @ u, axis=1))
+    while True:
+        K = _kernel(space.rows[mask].reshape(-1, space.n_columns), margins)
+        if K.shape[1] <= 1:
+            return mask
+        W = space.rows @ K
+        ranks = (~margins.record(np.linalg.svd(W, compute_uv=False))).sum(axis=1)
+        grow = np.flatnonzero(~mask & (ranks < K.shape[1]))
+        if grow.size == 0:
+            return mask  # every other slot kills the whole kernel: already maximal
+        s = int(grow[0])
+        # ker(W_s) within K: close over every slot vanishing on it.
+        K2 = K @ _kernel(W[s], margins)
+        mask = margins.record(np.linalg.norm(space.rows @ K2, axis=(1, 2)))
+
+
+def _blind_counts(front: Front, side: int) -> list[tuple[int, int]]:
+    """Front vectors as blind counts ``(group side, other group)``."""
+    n = front.space.n_phases
+    return [(n - int(z[side]), n - int(z[1 - side])) for z in front.vectors]
+
+
+def _beyond_floor(counts: list[tuple[int, int]], a: int) -> int:
+    """``B(a)``: the largest other-group count of a front vector holding ``>= a`` of this group (-1: none)."""
+    return max((y for x, y in counts if x >= a), default=-1)
+
+
+def threshold(front: Front, side: int, most: tuple[int, int]) -> int | None:
+    """Fewest slots of group ``side`` in a flat that must be checked (``None``: no check needed).
+
+    ``most``: the largest blind set of each group alone, which bounds both
+    counts.  A point ``(a, B(a) + 1)`` beyond the front is checked from
+    group 0 when ``a >= b`` and from group 1 when ``a > b`` (in that group's
+    order), so every point is checked from one side.
+    """
+    counts = _blind_counts(front, side)
+    own, other = most[side], most[1 - side]
+    best = None
+    for a in range(own + 1):
+        b = _beyond_floor(counts, a) + 1
+        if b <= other and (a > b or (a == b and side == 0)):
+            best = a if best is None else min(best, a)
+    return best
+
+
+def prove_front(space: SlotSpace, front: Front, budget: Budget, margins: Margins) -> int:
+    """Add to ``front`` until no maximal blind set of a two-group ``space`` beats it; returns the flats checked.
+
+    See the module docstring for why a pass without a hit proves the
+    front.  Flats are checked largest first, and a hit is pushed to the
+    most slots of the other group that ``K(F)`` can zero, so the front, and
+    with it the thresholds, rise early.  A flat that held no vector beyond
+    the front keeps holding none as the front grows (its threshold only
+    rises), so it is checked once.  Raises
+    :class:`~kfio.errors.BudgetExceeded` when ``budget`` runs out.
+    """
+    n = space.n_phases
+    most = (n - int(front.lower[0]), n - int(front.lower[1]))
+    groups = [group_space(space, g) for g in (0, 1)]
+    flats: dict[int, tuple[int, list[tuple[np.ndarray, np.ndarray]]]] = {}
+    passed: dict[int, set[bytes]] = {0: set(), 1: set()}
+    checked = 0
+    while True:
+        hits = 0
+        for side in (0, 1):
+            T = threshold(front, side, most)
+            if T is None:
+                continue
+            if side not in flats or flats[side][0] > T:
+                found = big_flats(groups[side], T, budget, margins)
+                found.sort(key=lambda f: -int(f[0].sum()))
+                flats[side] = (T, found)
+            other = groups[1 - side].rows
+            for mask, K in flats[side][1]:
+                T = threshold(front, side, most)
+                a = int(mask.sum())
+                if T is None or a < T:
+                    break  # largest first: every later flat is smaller
+                key = mask.tobytes()
+                m = _beyond_floor(_blind_counts(front, side), a) + 1
+                if key in passed[side] or m > most[1 - side]:
+                    continue
+                budget.tick("sigma: front proof")
+                checked += 1
+                best = _most_zeros(other @ K, m, budget, margins)
+                if best is None:
+                    passed[side].add(key)
+                    continue
+                hits += 1
+                front.offer(maximal_zero_set(space, K @ best, margins)[None, :])
+        if hits == 0:
+            return checked
+
+
+def _most_zeros(P: np.ndarray, m: int, budget: Budget, margins: Margins) -> np.ndarray | None:
+    """A unit vector zeroing the most slots of ``P`` if that is at least ``m``, else ``None``."""
+    best = None
+    while m <= P.shape[0]:
+        x = most_zeros_vector(P, m, budget, margins)
+        if x is None:
+            return best
+        best = x
+        m = int(margins.record(np.linalg.norm(P @ x, axis=1)).sum()) + 1
+    return best

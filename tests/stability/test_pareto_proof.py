@@ -1,0 +1,161 @@
+"""Completing a two-sensor front from the big flats of one sensor, against enumeration and brute force.
+
+:mod:`kfio.stability._pareto_proof` takes over from the walk over both
+groups once it has expanded ``PROBE_FLATS`` flats.  Here the probe is cut to
+nothing (or almost), so the proof builds the whole front from the one-group
+extremes, and the answer must equal:
+
+* the undominated vectors of every shift orbit (:func:`enumerate_orbits`);
+* the undominated vectors of all subsets of tiny blocks;
+* per piece: the largest set of rows on a hyperplane by all subsets, and
+  the big flats of one group by closing all subsets.
+"""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+from test_pareto import SEED, assert_maximal_blind, bench_block, random_block, subsets_front, vectors
+
+import kfio.stability._pareto as pareto
+import kfio.stability._pareto_proof as proof
+from kfio._budget import Budget
+from kfio.stability._blind import Margins, SlotSpace
+from kfio.stability._blind_batch import enumerate_orbits
+from kfio.stability._pareto import Front, group_space, pareto_search
+from kfio.stability._sigma import undominated
+
+
+def two_group_case(i: int) -> SlotSpace:
+    rng = np.random.default_rng([SEED, 7000 + i])
+    N0 = int(rng.integers(2, 13))
+    return SlotSpace.from_block(random_block(rng, N0, 2, rows=1 + (i % 5 == 4), real=i % 3 != 0))
+
+
+@pytest.mark.parametrize("probe", [0, 5])
+@pytest.mark.parametrize("i", range(60))
+def test_proof_equals_undominated_orbits(i: int, probe: int, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(pareto, "PROBE_FLATS", probe)
+    space = two_group_case(i)
+    budget = Budget(max_steps=2_000_000)
+    front = pareto_search(space, budget, Margins(space.tol))
+    every = enumerate_orbits(space, budget, Margins(space.tol))
+    assert vectors(space, front.maximal) == sorted(set(vectors(space, undominated(space, list(every.maximal)))))
+    for m in front.maximal:
+        assert_maximal_blind(space, m)
+
+
+@pytest.mark.parametrize("i", range(30))
+def test_proof_equals_all_subsets(i: int, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(pareto, "PROBE_FLATS", 0)
+    rng = np.random.default_rng([SEED, 8000 + i])
+    space = SlotSpace.from_block(random_block(rng, int(rng.integers(2, 6)), 2, rows=1, real=i % 2 == 0))
+    front = pareto_search(space, Budget(max_steps=100_000), Margins(space.tol))
+    assert vectors(space, front.maximal) == subsets_front(space)
+
+
+@pytest.mark.parametrize("factors", [(15,), (3, 5), (3, 4)])
+@pytest.mark.parametrize("probe", [0, 50])
+def test_dense_bench_blocks_equal_the_walk(
+    factors: tuple[int, ...], probe: int, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Dense rows on cyclotomic blocks: the proof (after a short walk, or none) equals the walk run to its end."""
+    space = SlotSpace.from_block(bench_block(factors, dense=True))
+    monkeypatch.setattr(pareto, "PROBE_FLATS", None)
+    walked = pareto_search(space, Budget(max_steps=10_000_000), Margins(space.tol))
+    monkeypatch.setattr(pareto, "PROBE_FLATS", probe)
+    proved = pareto_search(space, Budget(max_steps=10_000_000), Margins(space.tol))
+    assert vectors(space, proved.maximal) == vectors(space, walked.maximal)
+    for m in proved.maximal:
+        assert_maximal_blind(space, m)
+
+
+def configuration(i: int) -> np.ndarray:
+    """``N x p x k`` rows with coincidences: small integers, a planted hyperplane, parallel and zero rows."""
+    rng = np.random.default_rng([SEED, 9000 + i])
+    k, N, p = int(rng.integers(2, 6)), int(rng.integers(4, 11)), 1 + (i % 4 == 3)
+    P = rng.integers(-2, 3, size=(N, p, k)).astype(float)
+    normal = rng.integers(-2, 3, size=k).astype(float)
+    if normal.any():
+        planted = rng.random(N) < 0.5
+        P[planted] -= np.outer(P[planted].reshape(-1, k) @ normal, normal).reshape(-1, p, k) / (normal @ normal)
+    if N > 5:
+        P[1] = 3 * P[0]
+        P[2] = 0
+    if i % 2:
+        P = P @ np.linalg.qr(rng.standard_normal((k, k)))[0]  # no longer integers: round-off in every decision
+    return P
+
+
+def most_zeros_by_subsets(P: np.ndarray) -> int:
+    N, p, k = P.shape
+    return max(
+        len(sub)
+        for r in range(N + 1)
+        for sub in itertools.combinations(range(N), r)
+        if np.linalg.matrix_rank(P[list(sub)].reshape(-1, k), tol=1e-8) < k
+    )
+
+
+@pytest.mark.parametrize("route", ["hyperplanes", "closures"])
+@pytest.mark.parametrize("i", range(60))
+def test_most_zeros_vector_against_all_subsets(i: int, route: str, monkeypatch: pytest.MonkeyPatch) -> None:
+    P = configuration(i)
+    if route == "closures":
+        monkeypatch.setattr(proof, "_MOST_SUBSETS", 0)
+    best = most_zeros_by_subsets(P)
+    margins = Margins(tol=1e-9)
+    for m in range(1, P.shape[0] + 1):
+        x = proof.most_zeros_vector(P, m, Budget(max_steps=100_000), margins)
+        assert (x is not None) == (m <= best), (m, best)
+        if x is not None:
+            assert np.linalg.norm(x) == pytest.approx(1.0)
+            assert int((np.linalg.norm(P @ x, axis=1) <= 1e-9).sum()) >= m
+
+
+def flats_by_subsets(space: SlotSpace, T: int) -> set[tuple[int, ...]]:
+    """Orbit keys of the closures of all subsets with rank < L and at least ``T`` slots."""
+    S, L = space.size, space.n_columns
+    rows = space.rows.reshape(S, -1, L)
+    out = set()
+    for r in range(S + 1):
+        for sub in itertools.combinations(range(S), r):
+            M = rows[list(sub)].reshape(-1, L)
+            if M.shape[0] and np.linalg.matrix_rank(M, tol=1e-8) == L:
+                continue
+            _, sv, vh = np.linalg.svd(M if M.shape[0] else np.zeros((1, L)))
+            K = vh[int((sv > 1e-8).sum()) :].conj().T
+            closed = np.linalg.norm(rows @ K, axis=(1, 2)) <= 1e-8
+            if closed.sum() >= T:
+                out.add(space.orbit_key(closed))
+    return out
+
+
+@pytest.mark.parametrize("i", range(20))
+def test_big_flats_are_every_closure_of_enough_slots(i: int) -> None:
+    rng = np.random.default_rng([SEED, 9500 + i])
+    space = group_space(SlotSpace.from_block(random_block(rng, int(rng.integers(3, 10)), 2, rows=1, real=False)), 0)
+    T = int(rng.integers(1, 4))
+    found = proof.big_flats(space, T, Budget(max_steps=100_000), Margins(space.tol))
+    assert {space.orbit_key(m) for m, _ in found} == flats_by_subsets(space, T)
+    for m, K in found:
+        assert np.linalg.norm(space.rows[m].reshape(-1, space.n_columns) @ K) <= 1e-8
+        assert K.shape[1] == space.n_columns - np.linalg.matrix_rank(
+            space.rows[m].reshape(-1, space.n_columns), tol=1e-8
+        )
+
+
+def test_threshold_assigns_every_beyond_point_to_one_side() -> None:
+    """Front (blind counts) (0, 5), (3, 3), (5, 0), at most 5 a group: minimal beyond points (1..3, 4) and (4..5, 1)."""
+    space = SlotSpace(n_phases=6, n_groups=2, rows=np.zeros((12, 1, 2)), tol=1e-9)
+    front = Front(space, np.array([1, 1]))
+    for a, b in [(0, 5), (3, 3), (5, 0)]:
+        mask = np.zeros((6, 2), dtype=bool)
+        mask[:a, 0] = True
+        mask[:b, 1] = True
+        front.offer(mask.reshape(1, -1))
+    assert proof.threshold(front, 0, (5, 5)) == 4  # (4, 1) and (4, 4): a >= b
+    assert proof.threshold(front, 1, (5, 5)) == 4  # (4, 1) seen from group 1, i.e. (1, 4)
+    assert proof.threshold(front, 0, (3, 3)) is None  # nothing beyond the front fits in three slots a group
