@@ -39,8 +39,8 @@ _ENTRIES = 1 << 22
 class Collector(Protocol):
     """What the batched walk reports maximal blind sets to, and asks which subtrees to keep."""
 
-    def alive(self, masks: np.ndarray, cores: np.ndarray) -> np.ndarray:
-        """Per flat (rows of ``masks``, core slots ``cores``): whether its subtree may still matter."""
+    def alive(self, masks: np.ndarray, cores: np.ndarray, kernels: np.ndarray) -> np.ndarray:
+        """Per flat (rows of ``masks``, core slots ``cores``, kernel bases): whether its subtree may still matter."""
         ...  # pragma: no cover - protocol
 
     def offer(self, masks: np.ndarray) -> None:
@@ -68,7 +68,7 @@ class _Found:
         self.seen: set[bytes] = set()
         self.orbits: dict[tuple[int, ...], np.ndarray] = {}
 
-    def alive(self, masks: np.ndarray, cores: np.ndarray) -> np.ndarray:
+    def alive(self, masks: np.ndarray, cores: np.ndarray, kernels: np.ndarray) -> np.ndarray:
         """Every subtree may hold a new orbit: enumeration prunes nothing."""
         return np.ones(masks.shape[0], dtype=bool)
 
@@ -308,7 +308,7 @@ def walk(space: SlotSpace, budget: Budget, margins: Margins, found: Collector, m
         if masks.shape[0] > limit:
             stack.append((masks[limit:], cores[limit:], K[limit:]))
             masks, cores, K = masks[:limit], cores[:limit], K[:limit]
-        live = found.alive(masks, cores)
+        live = found.alive(masks, cores, K)
         if not live.all():
             masks, cores, K = masks[live], cores[live], K[live]
             if masks.shape[0] == 0:

@@ -77,7 +77,7 @@ class Front:
         b = np.maximum(bounds, self.lower[None, :])
         return (b[:, None, :] >= self.vectors[None, :, :]).all(axis=2).any(axis=1)
 
-    def alive(self, masks: np.ndarray, cores: np.ndarray) -> np.ndarray:
+    def alive(self, masks: np.ndarray, cores: np.ndarray, kernels: np.ndarray | None = None) -> np.ndarray:
         """Whether the subtree of each flat may still hold a vector the front does not dominate or equal.
 
         Flats below a flat with core ``c`` agree with it on the slots

@@ -58,10 +58,20 @@ class _BigFlats:
         self.kernels: list[np.ndarray] = []
         self.leaves: list[np.ndarray] = []
 
-    def alive(self, masks: np.ndarray, cores: np.ndarray) -> np.ndarray:
-        """Flats below a flat with core ``c`` add only slots after ``c``."""
-        later = np.arange(self.space.size)[None, :] > cores[:, None]
-        return (masks | later).sum(axis=1) >= self.T
+    def alive(self, masks: np.ndarray, cores: np.ndarray, kernels: np.ndarray) -> np.ndarray:
+        """Flats below a flat with core ``c`` add only slots after ``c``; below a plane, only one parallel class.
+
+        With a 2-dimensional kernel ``K`` every flat below is ``Q`` plus the
+        later rows that vanish at one ``u`` in ``K``, i.e. whose projections
+        ``r K`` are parallel: at most the largest class of (nearly) parallel
+        projections, counted with margin (:func:`_most_parallel`).
+        """
+        later = (np.arange(self.space.size)[None, :] > cores[:, None]) & ~masks
+        ok: np.ndarray = masks.sum(axis=1) + later.sum(axis=1) >= self.T
+        if kernels.shape[2] == 2 and self.space.rows.shape[1] == 1 and not np.iscomplexobj(self.space.rows):
+            W = np.einsum("sk,ckd->csd", self.space.rows[:, 0, :], kernels)
+            ok &= masks.sum(axis=1) + _most_parallel(W, later, self.space.tol) >= self.T
+        return ok
 
     def alive_hulls(self, hulls: np.ndarray) -> np.ndarray:
         return hulls.sum(axis=1) >= self.T
@@ -75,6 +85,33 @@ class _BigFlats:
     def offer(self, masks: np.ndarray) -> None:
         for m in masks[masks.sum(axis=1) >= self.T]:
             self.leaves.append(m.copy())
+
+
+#: Projections shorter than this many tolerances count as parallel to every other.
+_SHORT = 1e4
+
+
+def _most_parallel(W: np.ndarray, rows: np.ndarray, tol: float) -> np.ndarray:
+    """Per batch row, an upper bound on the most ``rows`` whose real 2-vectors ``W`` are parallel.
+
+    Two rows count as parallel for the closure when one leaves a residual
+    ``|W_t| |sin(angle)| <= tol`` against the other; a row with
+    ``|W_t| >= _SHORT tol`` is then within ``1 / _SHORT`` radians of the
+    class direction, so every class fits in a window of ``2 / _SHORT``
+    radians of angles (taken modulo pi); shorter rows are counted in every
+    class.
+    """
+    size = np.linalg.norm(W, axis=2)
+    short = rows & (size < _SHORT * tol)
+    counted = rows & ~short
+    angle = np.where(counted, np.arctan2(W[..., 1], W[..., 0]) % np.pi, 8.0)  # 8 > 2 pi: a row not counted
+    angle = np.sort(np.concatenate([angle, angle + np.pi], axis=1), axis=1)
+    # One searchsorted for all batch rows: row c lives in [16 c, 16 c + 16).
+    keys = (angle + 16.0 * np.arange(angle.shape[0])[:, None]).ravel()
+    ends = np.searchsorted(keys, keys + 2.0 / _SHORT, side="right").reshape(angle.shape)
+    inside = ends - np.arange(angle.size).reshape(angle.shape)
+    inside[angle >= 8.0] = 0
+    return np.asarray(inside.max(axis=1, initial=0) + short.sum(axis=1))
 
 
 def big_flats(space: SlotSpace, T: int, budget: Budget, margins: Margins) -> list[tuple[np.ndarray, np.ndarray]]:
@@ -162,14 +199,18 @@ def _hyperplanes(R: np.ndarray, need: int, budget: Budget, margins: Margins) -> 
     index = np.arange(n)
     for _ in range(k - 1):
         budget.tick("sigma: front proof", max(1, last.size * n // 4096))
-        W = np.einsum("ek,ckd->ced", R, N)
-        size = np.linalg.norm(W, axis=2)
+        W = np.matmul(R, N)
+        size = np.sqrt((W * W.conj()).real.sum(axis=2))
         spanned = margins.record(size)
         # Reach each hyperplane H by its greedy basis (s_1 = its first row, each next
         # one its first row outside the span so far): then every row of H up to
         # the last s lies in that span, so H holds at most the spanned rows plus
         # the rows after the last s.
         alive = spanned.sum(axis=1) + (n - 1 - last) >= need
+        if N.shape[2] == 2 and not np.iscomplexobj(R):
+            # The hyperplanes through a prefix with a plane of normals hold its
+            # span plus one class of parallel projections: count the largest.
+            alive &= spanned.sum(axis=1) + _most_parallel(W, ~spanned, margins.tol) >= need
         later = alive[:, None] & (index[None, :] > last[:, None]) & ~spanned
         b, e = np.nonzero(later)
         N, last = _reflect_out(N[b], W[b, e] / size[b, e][:, None]), e
@@ -197,7 +238,7 @@ def _reflect_out(N: np.ndarray, w: np.ndarray) -> np.ndarray:
         np.eye(d, dtype=np.result_type(N, w))[None, :, 1:]
         - scale[:, None, None] * v[:, :, None] * v[:, None, 1:].conj()
     )
-    return np.asarray(np.einsum("ckd,cde->cke", N, H))
+    return np.asarray(np.matmul(N, H))
 
 
 def _closure_hit(P: np.ndarray, m: int, budget: Budget, margins: Margins) -> np.ndarray | None:
@@ -276,47 +317,107 @@ def prove_front(space: SlotSpace, front: Front, budget: Budget, margins: Margins
     See the module docstring for why a pass without a hit proves the
     front.  Flats are checked largest first, and a hit is pushed to the
     most slots of the other group that ``K(F)`` can zero, so the front, and
-    with it the thresholds, rise early.  A flat that held no vector beyond
-    the front keeps holding none as the front grows (its threshold only
-    rises), so it is checked once.  Raises
+    with it the thresholds, rise early.  Thresholds only rise as the front
+    grows (a point ``(a, B(a) + 1)`` with ``a >= B(a) + 1`` stays one for a
+    larger ``B``), so a flat that held no vector beyond the front keeps
+    holding none: each is checked once.  When the rows of group 1 are those
+    of group 0 times one invertible matrix (:func:`shared_matroid`), both
+    groups have the same flats and one walk serves both.  Raises
     :class:`~kfio.errors.BudgetExceeded` when ``budget`` runs out.
     """
     n = space.n_phases
     most = (n - int(front.lower[0]), n - int(front.lower[1]))
     groups = [group_space(space, g) for g in (0, 1)]
-    flats: dict[int, tuple[int, list[tuple[np.ndarray, np.ndarray]]]] = {}
+    M = shared_matroid(groups[0], groups[1], margins)
+    walked: dict[int, tuple[int, list[tuple[np.ndarray, np.ndarray]]]] = {}
     passed: dict[int, set[bytes]] = {0: set(), 1: set()}
     checked = 0
+
+    def flats(side: int, T: int) -> list[tuple[np.ndarray, np.ndarray]]:
+        source = 0 if M is not None else side
+        if source not in walked or walked[source][0] > T:
+            want = T
+            if M is not None:
+                want = min(T, *(t for t in (threshold(front, g, most) for g in (0, 1)) if t is not None))
+            found = big_flats(groups[source], want, budget, margins)
+            found.sort(key=lambda f: -int(f[0].sum()))
+            walked[source] = (want, found)
+        out = walked[source][1]
+        if side == source:
+            return out
+        assert M is not None
+        return [(mask, _orthonormal(np.linalg.solve(M, K))) for mask, K in out if mask.sum() >= T]
+
     while True:
         hits = 0
         for side in (0, 1):
             T = threshold(front, side, most)
             if T is None:
                 continue
-            if side not in flats or flats[side][0] > T:
-                found = big_flats(groups[side], T, budget, margins)
-                found.sort(key=lambda f: -int(f[0].sum()))
-                flats[side] = (T, found)
-            other = groups[1 - side].rows
-            for mask, K in flats[side][1]:
-                T = threshold(front, side, most)
-                a = int(mask.sum())
-                if T is None or a < T:
-                    break  # largest first: every later flat is smaller
-                key = mask.tobytes()
-                m = _beyond_floor(_blind_counts(front, side), a) + 1
-                if key in passed[side] or m > most[1 - side]:
-                    continue
-                budget.tick("sigma: front proof")
-                checked += 1
-                best = _most_zeros(other @ K, m, budget, margins)
-                if best is None:
-                    passed[side].add(key)
-                    continue
-                hits += 1
-                front.offer(maximal_zero_set(space, K @ best, margins)[None, :])
+            new, n_checked = _check(
+                space, front, side, flats(side, T), groups[1 - side].rows, passed[side], most, budget, margins
+            )
+            hits += new
+            checked += n_checked
         if hits == 0:
             return checked
+
+
+def shared_matroid(a: SlotSpace, b: SlotSpace, margins: Margins) -> np.ndarray | None:
+    """An invertible ``M`` with ``rows_b = rows_a M`` for every slot (then both have the same flats), or ``None``.
+
+    In eigen-coordinates a group's rows are ``c_g diag(omega^n)``: with one
+    row per group and no zero entry, ``M = diag(c_1 / c_0)``, a column
+    scaling, which changes no rank.  Found by least squares and accepted
+    only when it reproduces every row to within the rank tolerance.
+    """
+    if a.rows.shape != b.rows.shape:
+        return None
+    A = a.rows.reshape(-1, a.n_columns)
+    B = b.rows.reshape(-1, b.n_columns)
+    if np.linalg.matrix_rank(A) < a.n_columns:
+        return None
+    M = np.linalg.lstsq(A, B, rcond=None)[0]
+    if np.abs(A @ M - B).max() > margins.tol or np.linalg.svd(M, compute_uv=False)[-1] <= margins.tol:
+        return None
+    return np.asarray(M)
+
+
+def _orthonormal(K: np.ndarray) -> np.ndarray:
+    return np.asarray(np.linalg.qr(K)[0])
+
+
+def _check(
+    space: SlotSpace,
+    front: Front,
+    side: int,
+    flats: list[tuple[np.ndarray, np.ndarray]],
+    other: np.ndarray,
+    passed: set[bytes],
+    most: tuple[int, int],
+    budget: Budget,
+    margins: Margins,
+) -> tuple[int, int]:
+    """Check ``flats`` (largest first) of group ``side`` against ``front``; returns ``(hits, flats checked)``."""
+    hits = checked = 0
+    for mask, K in flats:
+        T = threshold(front, side, most)
+        a = int(mask.sum())
+        if T is None or a < T:
+            break  # largest first: every later flat is smaller
+        key = mask.tobytes()
+        m = _beyond_floor(_blind_counts(front, side), a) + 1
+        if key in passed or m > most[1 - side]:
+            continue
+        budget.tick("sigma: front proof")
+        checked += 1
+        best = _most_zeros(other @ K, m, budget, margins)
+        if best is None:
+            passed.add(key)
+            continue
+        hits += 1
+        front.offer(maximal_zero_set(space, K @ best, margins)[None, :])
+    return hits, checked
 
 
 def _most_zeros(P: np.ndarray, m: int, budget: Budget, margins: Margins) -> np.ndarray | None:

@@ -159,3 +159,26 @@ def test_threshold_assigns_every_beyond_point_to_one_side() -> None:
     assert proof.threshold(front, 0, (5, 5)) == 4  # (4, 1) and (4, 4): a >= b
     assert proof.threshold(front, 1, (5, 5)) == 4  # (4, 1) seen from group 1, i.e. (1, 4)
     assert proof.threshold(front, 0, (3, 3)) is None  # nothing beyond the front fits in three slots a group
+
+
+def test_shared_matroid_is_the_column_scaling_between_groups() -> None:
+    """Dense rows: group 1 is group 0 times diag(c_1 / c_0); a zero entry in one group only breaks that."""
+    space = SlotSpace.from_block(bench_block((15,), dense=True))
+    a, b = group_space(space, 0), group_space(space, 1)
+    M = proof.shared_matroid(a, b, Margins(space.tol))
+    assert M is not None
+    assert np.allclose(M, np.diag(np.diag(M)), atol=1e-12), "in eigen-coordinates the map is a column scaling"
+    assert np.allclose(a.rows @ M, b.rows, atol=1e-12)
+    rows = b.rows.copy()
+    rows[:, :, 0] = 0  # group 1 blind to the first column: its flats differ from group 0's
+    assert proof.shared_matroid(a, SlotSpace(b.n_phases, 1, rows, b.tol), Margins(space.tol)) is None
+
+
+@pytest.mark.parametrize("i", range(30))
+def test_shared_flats_give_the_front_of_separate_walks(i: int, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(pareto, "PROBE_FLATS", 0)
+    space = two_group_case(i)
+    shared = pareto_search(space, Budget(max_steps=2_000_000), Margins(space.tol))
+    monkeypatch.setattr(proof, "shared_matroid", lambda a, b, margins: None)
+    separate = pareto_search(space, Budget(max_steps=2_000_000), Margins(space.tol))
+    assert vectors(space, shared.maximal) == vectors(space, separate.maximal)
