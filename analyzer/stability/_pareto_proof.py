@@ -114,22 +114,22 @@ def _most_parallel(W: np.ndarray, rows: np.ndarray, tol: float) -> np.ndarray:
     return np.asarray(inside.max(axis=1, initial=0) + short.sum(axis=1))
 
 
-def big_flats(space: SlotSpace, T: int, budget: Budget, margins: Margins) -> list[tuple[np.ndarray, np.ndarray]]:
-    """Every blind flat of a one-group space with at least ``T`` slots, one per shift orbit, with a kernel basis.
+def big_flats(space: SlotSpace, T: int, budget: Budget, margins: Margins) -> list[tuple[np.ndarray, np.ndarray | None]]:
+    """Every blind flat of a one-group space with at least ``T`` slots, one per shift orbit.
 
     The batched closure walk of :func:`kfio.stability._blind_batch.walk`
     (gap-canonical rotation), cutting every subtree whose hull holds fewer
-    than ``T`` slots.
+    than ``T`` slots.  Expanded flats come with an orthonormal kernel basis;
+    maximal ones (``None``) get theirs when they are checked, most never are.
     """
     found = _BigFlats(space, T)
     walk(space, budget, margins, found)
-    out = list(zip(found.masks, found.kernels))
+    out: list[tuple[np.ndarray, np.ndarray | None]] = list(zip(found.masks, found.kernels))
     seen = {m.tobytes() for m in found.masks}
     for m in found.leaves:
-        if m.tobytes() in seen:
-            continue
-        seen.add(m.tobytes())
-        out.append((m, _kernel(space.rows[m].reshape(-1, space.n_columns), margins)))
+        if m.tobytes() not in seen:
+            seen.add(m.tobytes())
+            out.append((m, None))
     return out
 
 
@@ -329,11 +329,11 @@ def prove_front(space: SlotSpace, front: Front, budget: Budget, margins: Margins
     most = (n - int(front.lower[0]), n - int(front.lower[1]))
     groups = [group_space(space, g) for g in (0, 1)]
     M = shared_matroid(groups[0], groups[1], margins)
-    walked: dict[int, tuple[int, list[tuple[np.ndarray, np.ndarray]]]] = {}
+    walked: dict[int, tuple[int, list[tuple[np.ndarray, np.ndarray | None]]]] = {}
     passed: dict[int, set[bytes]] = {0: set(), 1: set()}
     checked = 0
 
-    def flats(side: int, T: int) -> list[tuple[np.ndarray, np.ndarray]]:
+    def flats(side: int, T: int) -> list[tuple[np.ndarray, np.ndarray | None]]:
         source = 0 if M is not None else side
         if source not in walked or walked[source][0] > T:
             want = T
@@ -342,11 +342,9 @@ def prove_front(space: SlotSpace, front: Front, budget: Budget, margins: Margins
             found = big_flats(groups[source], want, budget, margins)
             found.sort(key=lambda f: -int(f[0].sum()))
             walked[source] = (want, found)
-        out = walked[source][1]
         if side == source:
-            return out
-        assert M is not None
-        return [(mask, _orthonormal(np.linalg.solve(M, K))) for mask, K in out if mask.sum() >= T]
+            return walked[source][1]
+        return [(mask, None) for mask, _ in walked[source][1]]  # same flats; kernels from this group's rows
 
     while True:
         hits = 0
@@ -354,9 +352,7 @@ def prove_front(space: SlotSpace, front: Front, budget: Budget, margins: Margins
             T = threshold(front, side, most)
             if T is None:
                 continue
-            new, n_checked = _check(
-                space, front, side, flats(side, T), groups[1 - side].rows, passed[side], most, budget, margins
-            )
+            new, n_checked = _check(space, front, side, flats(side, T), groups, passed[side], most, budget, margins)
             hits += new
             checked += n_checked
         if hits == 0:
@@ -383,40 +379,40 @@ def shared_matroid(a: SlotSpace, b: SlotSpace, margins: Margins) -> np.ndarray |
     return np.asarray(M)
 
 
-def _orthonormal(K: np.ndarray) -> np.ndarray:
-    return np.asarray(np.linalg.qr(K)[0])
-
-
 def _check(
     space: SlotSpace,
     front: Front,
     side: int,
-    flats: list[tuple[np.ndarray, np.ndarray]],
-    other: np.ndarray,
+    flats: list[tuple[np.ndarray, np.ndarray | None]],
+    groups: list[SlotSpace],
     passed: set[bytes],
     most: tuple[int, int],
     budget: Budget,
     margins: Margins,
 ) -> tuple[int, int]:
     """Check ``flats`` (largest first) of group ``side`` against ``front``; returns ``(hits, flats checked)``."""
+    own, other = groups[side], groups[1 - side].rows
     hits = checked = 0
+    T, counts = threshold(front, side, most), _blind_counts(front, side)
     for mask, K in flats:
-        T = threshold(front, side, most)
         a = int(mask.sum())
         if T is None or a < T:
             break  # largest first: every later flat is smaller
         key = mask.tobytes()
-        m = _beyond_floor(_blind_counts(front, side), a) + 1
+        m = _beyond_floor(counts, a) + 1
         if key in passed or m > most[1 - side]:
             continue
         budget.tick("sigma: front proof")
         checked += 1
+        if K is None:
+            K = _kernel(own.rows[mask].reshape(-1, own.n_columns), margins)
         best = _most_zeros(other @ K, m, budget, margins)
         if best is None:
             passed.add(key)
             continue
         hits += 1
         front.offer(maximal_zero_set(space, K @ best, margins)[None, :])
+        T, counts = threshold(front, side, most), _blind_counts(front, side)
     return hits, checked
 
 
