@@ -40,6 +40,7 @@ from ._adjugate import to_fmpq_mat
 from ._algebraic import AlgebraicReal, power_minus
 from ._balls import MAX_PREC, START_PREC, horner, precision, sign, to_float
 from ._eigen import DIGITS, EigenFactor, X, eigen_factors
+from ._modp import ModP
 from ._modulus import modulus_squared
 from ._phases import PhaseBlock, RankOracle, Slot
 from ._unity import Root as UnityRoot
@@ -420,6 +421,8 @@ class _ExactRows:
         self.groups = groups
         self.period = period
         self._cache: dict[int, list[list[Any]]] = {}
+        self._modp = ModP.for_field(K)
+        self._reduced: dict[int, list[list[int]] | None] = {}
 
     def _rows(self, n: int) -> list[list[Any]]:
         n %= self.period
@@ -433,14 +436,34 @@ class _ExactRows:
             self._cache[n] = [[self.columns[j][i] * pw[j] for j in range(len(self.columns))] for i in range(p)]
         return self._cache[n]
 
+    def _reduced_rows(self, n: int) -> list[list[int]] | None:
+        """The rows of phase ``n`` modulo the prime of :class:`ModP` (``None`` if one does not reduce)."""
+        n %= self.period
+        if n not in self._reduced:
+            assert self._modp is not None
+            red = [[self._modp.element(x) for x in row] for row in self._rows(n)]
+            ok = [[x for x in row if x is not None] for row in red]
+            self._reduced[n] = ok if all(len(a) == len(b) for a, b in zip(ok, red)) else None
+        return self._reduced[n]
+
     def __call__(self, slots: Iterable[Slot]) -> int | None:
+        slots = list(slots)
         rows: list[list[Any]] = []
         for n, g in slots:
             r = self._rows(n)
             rows.extend(r[i] for i in self.groups[g])
         if not rows:
             return 0
-        return int(DomainMatrix(rows, (len(rows), len(self.columns)), self.K).rank())
+        L = len(self.columns)
+        if self._modp is not None and len(rows) >= L:
+            # Full rank modulo a prime of degree one is full rank (module _modp);
+            # anything less is decided over Q(theta).
+            reduced = [self._reduced_rows(n) for n, _ in slots]
+            if all(r is not None for r in reduced):
+                red = [r[i] for (_, g), r in zip(slots, reduced) for i in self.groups[g]]  # type: ignore[index]
+                if self._modp.rank(red, L) == L:
+                    return L
+        return int(DomainMatrix(rows, (len(rows), L), self.K).rank())
 
 
 def _cyclotomic_form(
