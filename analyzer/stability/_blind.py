@@ -234,6 +234,12 @@ class SlotSpace:
         return min(tuple(int(i) for i in np.flatnonzero(self.rotate(mask, k))) for k in range(self.n_phases))
 
 
+def group_space(space: SlotSpace, g: int) -> SlotSpace:
+    """The slots of group ``g`` alone, as a one-group space (same tolerance)."""
+    rows = space.rows[g :: space.n_groups]
+    return SlotSpace(n_phases=space.n_phases, n_groups=1, rows=np.ascontiguousarray(rows), tol=space.tol)
+
+
 @dataclass
 class Flat:
     """A node of the closure search.
@@ -438,12 +444,16 @@ class SearchResult:
         Flats with a 2-dimensional kernel resolved in batch (:func:`plane_leaves`).
     window:
         ``W``, the window length used for canonical rotation.
+    checked:
+        Flats of one group checked by the two-group front proof
+        (:mod:`kfio.stability._pareto_proof`), ``None`` when the walk finished alone.
     """
 
     maximal: tuple[np.ndarray, ...]
     nodes: int
     planes: int
     window: int
+    checked: int | None = None
 
 
 @dataclass

@@ -41,7 +41,7 @@ import functools
 import numpy as np
 
 from .._budget import Budget
-from ._blind import Margins, Objective, SearchResult, SlotSpace, search
+from ._blind import Margins, Objective, SearchResult, SlotSpace, group_space, search
 
 #: Flats the walk over both groups may expand before a two-group front is
 #: completed from the big flats of one group (:mod:`kfio.stability._pareto_proof`).
@@ -109,12 +109,6 @@ class Front:
             keep = ~(self.vectors >= zi[None, :]).all(axis=1)
             self.vectors = np.concatenate([self.vectors[keep], zi[None, :]])
             self.masks = [m for m, k in zip(self.masks, keep) if k] + [masks[i].copy()]
-
-
-def group_space(space: SlotSpace, g: int) -> SlotSpace:
-    """The slots of group ``g`` alone, as a one-group space (same tolerance)."""
-    rows = space.rows[g :: space.n_groups]
-    return SlotSpace(n_phases=space.n_phases, n_groups=1, rows=np.ascontiguousarray(rows), tol=space.tol)
 
 
 def group_extremes(space: SlotSpace, budget: Budget, margins: Margins) -> tuple[np.ndarray, list[np.ndarray]]:
@@ -192,10 +186,12 @@ def pareto_search(space: SlotSpace, budget: Budget, margins: Margins) -> SearchR
         front.offer(np.array(seeds))
     real = real_space(space)
     cap = PROBE_FLATS if space.n_groups == 2 else None
+    checked = None
     try:
         nodes = walk(real, budget, margins, front, max_nodes=cap)
     except NodeCap:
-        nodes = (cap or 0) + prove_front(real, front, budget, margins)
+        nodes = cap or 0
+        checked = prove_front(real, front, budget, margins)
     keys = sorted(space.orbit_key(m) for m in front.masks)
     reps = tuple(np.isin(np.arange(space.size), key) for key in keys)
-    return SearchResult(maximal=reps, nodes=nodes, planes=0, window=real.window(margins))
+    return SearchResult(maximal=reps, nodes=nodes, planes=0, window=real.window(margins), checked=checked)

@@ -32,13 +32,26 @@ from __future__ import annotations
 import itertools
 import math
 from functools import lru_cache
+from typing import Protocol
 
 import numpy as np
 
 from .._budget import Budget
-from ._blind import Flat, Margins, SlotSpace, expand, root
+from ._blind import Flat, Margins, SlotSpace, expand, group_space, root
 from ._blind_batch import walk
-from ._pareto import Front, group_space
+
+
+class Front(Protocol):
+    """What the proof needs of :class:`kfio.stability._pareto.Front` (which imports this module)."""
+
+    space: SlotSpace
+    lower: np.ndarray
+    vectors: np.ndarray
+
+    def offer(self, masks: np.ndarray) -> None:
+        """Add maximal blind sets whose miss vectors the front does not dominate or equal."""
+        ...  # pragma: no cover - protocol
+
 
 #: Most ``(k - 1)``-subsets of the other group's rows enumerated for one flat;
 #: beyond it the closure search over the projected rows answers.

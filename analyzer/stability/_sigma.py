@@ -557,6 +557,8 @@ def _find_worst(
             f"Pareto branch and bound over per-sensor miss counts: {len(res.maximal)} undominated "
             f"vector{'' if len(res.maximal) == 1 else 's'} over {res.nodes} flats"
         )
+        if res.checked is not None:
+            method += f", completed and proved from the big flats of one sensor at a time ({res.checked} checked)"
     else:
         res = enumerate_orbits(space, budget, margins)
         method = f"enumerated {len(res.maximal)} shift orbits of maximal blind sets over {res.nodes} flats"
