@@ -15,7 +15,10 @@ import math
 import numpy as np
 
 from kfio import load_request
-from kfio.stability._blind import SlotSpace
+from kfio._budget import Budget
+from kfio.stability._blind import Margins, SlotSpace
+from kfio.stability._blind_batch import enumerate_orbits
+from kfio.stability._sigma import undominated
 from kfio.structure import fmo_blocks
 from kfio.structure._phases import PhaseBlock
 
@@ -108,3 +111,11 @@ def bench_block(factors: tuple[int, ...], dense: bool) -> PhaseBlock:
     (block,) = [b for b in fmo_blocks(load_request(json.dumps(body)).system) if b.phase is not None]
     assert block.phase is not None
     return block.phase
+
+
+def assert_front_matches_enumeration(space: SlotSpace, maximal) -> None:
+    """``maximal`` holds maximal blind sets with exactly the undominated miss vectors of every shift orbit."""
+    every = enumerate_orbits(space, Budget(max_steps=2_000_000), Margins(space.tol))
+    assert vectors(space, maximal) == sorted(set(vectors(space, undominated(space, list(every.maximal)))))
+    for m in maximal:
+        assert_maximal_blind(space, m)
