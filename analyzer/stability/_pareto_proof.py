@@ -355,6 +355,8 @@ def prove_front(space: SlotSpace, front: Front, budget: Budget, margins: Margins
             found = big_flats(groups[source], want, budget, margins)
             found.sort(key=lambda f: -int(f[0].sum()))
             walked[source] = (want, found)
+            if M is not None or len(walked) == 2:
+                seed_generic(space, front, groups, [walked[0 if M is not None else g][1] for g in (0, 1)], margins)
         if side == source:
             return walked[source][1]
         return [(mask, None) for mask, _ in walked[source][1]]  # same flats; kernels from this group's rows
@@ -370,6 +372,43 @@ def prove_front(space: SlotSpace, front: Front, budget: Budget, margins: Margins
             checked += n_checked
         if hits == 0:
             return checked
+
+
+def seed_generic(
+    space: SlotSpace,
+    front: Front,
+    groups: list[SlotSpace],
+    flats: list[list[tuple[np.ndarray, np.ndarray | None]]],
+    margins: Margins,
+) -> None:
+    """Offer the *generic front*: for ``r_0 + r_1 = L - 1``, the largest known flats of those ranks share a kernel vector.
+
+    Flats ``F_0`` of group 0 and ``F_1`` of group 1 with ranks ``r_0 + r_1 =
+    L - 1`` have kernels of dimensions ``L - r_0`` and ``L - r_1``, which sum
+    to ``L + 1``: they meet, and a common kernel vector zeroes both, so the
+    blind counts ``(|F_0|, |F_1|)`` are attained whatever the rows.  From the
+    largest flat of each rank among ``flats`` (maximal flats, with no kernel
+    basis given, have rank ``L - 1``), so the proof starts from thresholds
+    near their final values.
+    """
+    L = space.n_columns
+    largest: list[dict[int, np.ndarray]] = [{}, {}]
+    for g in (0, 1):
+        for mask, K in flats[g]:
+            r = L - 1 if K is None else L - K.shape[1]
+            if r not in largest[g] or mask.sum() > largest[g][r].sum():
+                largest[g][r] = mask
+    for r, F0 in largest[0].items():
+        F1 = largest[1].get(L - 1 - r)
+        if F1 is None:
+            continue
+        K0 = _kernel(groups[0].rows[F0].reshape(-1, L), margins)
+        K1 = _kernel(groups[1].rows[F1].reshape(-1, L), margins)
+        both = _kernel(np.concatenate([K0, -K1], axis=1), margins)
+        if both.shape[1] == 0:
+            continue  # the rank calls of the walk and of this factorization disagree: offer nothing
+        u = K0 @ both[: K0.shape[1], 0]
+        front.offer(maximal_zero_set(space, u / np.linalg.norm(u), margins)[None, :])
 
 
 def shared_matroid(a: SlotSpace, b: SlotSpace, margins: Margins) -> np.ndarray | None:

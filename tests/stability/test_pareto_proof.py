@@ -22,7 +22,9 @@ import kfio.stability._pareto as pareto
 import kfio.stability._pareto_proof as proof
 from kfio._budget import Budget
 from kfio.stability._blind import Margins, SlotSpace
+from kfio.stability._blind_batch import enumerate_orbits
 from kfio.stability._pareto import Front, group_space, pareto_search
+from kfio.stability._sigma import undominated
 
 from support.blind_blocks import (
     assert_front_matches_enumeration,
@@ -188,3 +190,32 @@ def test_shared_flats_give_the_front_of_separate_walks(i: int, monkeypatch: pyte
     monkeypatch.setattr(proof, "shared_matroid", lambda a, b, margins: None)
     separate = pareto_search(space, Budget(max_steps=2_000_000), Margins(space.tol))
     assert vectors(space, shared.maximal) == vectors(space, separate.maximal)
+
+
+@pytest.mark.parametrize("i", range(30))
+def test_generic_front_seeds_are_attained(i: int) -> None:
+    """Every seeded set is maximal blind and its vector lies under the true front (the enumeration's)."""
+    space = two_group_case(i)
+    margins = Margins(space.tol)
+    groups = [group_space(space, g) for g in (0, 1)]
+    flats = [proof.big_flats(g, 0, Budget(max_steps=1_000_000), margins) for g in groups]
+    front = Front(space, np.zeros(2, dtype=int))
+    proof.seed_generic(space, front, groups, flats, margins)
+    every = enumerate_orbits(space, Budget(max_steps=2_000_000), Margins(space.tol))
+    truth = vectors(space, undominated(space, list(every.maximal)))
+    for m in front.masks:
+        assert_maximal_blind(space, m)
+    for z in vectors(space, front.masks):
+        assert any(all(t <= x for t, x in zip(tz, z)) for tz in truth), (z, truth)
+
+
+def test_generic_front_of_period_21_is_the_whole_front() -> None:
+    """Period 21, dense rows: the generic front (g = 0, 1, 3, 4, 6, 7, 9, 10, 12, 13, 15, 17) is all of it."""
+    space = SlotSpace.from_block(bench_block((21,), dense=True))
+    margins = Margins(space.tol)
+    groups = [group_space(space, g) for g in (0, 1)]
+    flats = [proof.big_flats(g, 0, Budget(max_steps=1_000_000), margins) for g in groups]
+    front = Front(space, np.zeros(2, dtype=int))
+    proof.seed_generic(space, front, groups, flats, margins)
+    g = [0, 1, 3, 4, 6, 7, 9, 10, 12, 13, 15, 17]
+    assert vectors(space, front.masks) == sorted((21 - g[r], 21 - g[11 - r]) for r in range(12))
