@@ -29,9 +29,7 @@ a whole pass finds nothing.
 
 from __future__ import annotations
 
-import itertools
 import math
-from functools import lru_cache
 from typing import Protocol
 
 import numpy as np
@@ -53,12 +51,9 @@ class Front(Protocol):
         ...  # pragma: no cover - protocol
 
 
-#: Most ``(k - 1)``-subsets of the other group's rows enumerated for one flat;
-#: beyond it the closure search over the projected rows answers.
+#: Most ``(k - 1)``-subsets of the other group's rows (``C(n, k - 1)``) for which
+#: :func:`_hyperplanes` answers; beyond it the closure search over the projected rows does.
 _MOST_SUBSETS = 200_000
-
-#: Rows of one batched hyperplane step.
-_SUBSET_BATCH = 4096
 
 
 class _BigFlats:
@@ -80,20 +75,22 @@ class _BigFlats:
         projections, counted with margin (:func:`_most_parallel`).
         """
         later = (np.arange(self.space.size)[None, :] > cores[:, None]) & ~masks
-        ok: np.ndarray = masks.sum(axis=1) + later.sum(axis=1) >= self.T
+        held = masks.sum(axis=1)
+        ok: np.ndarray = held + later.sum(axis=1) >= self.T
         if kernels.shape[2] == 2 and self.space.rows.shape[1] == 1 and not np.iscomplexobj(self.space.rows):
             W = np.einsum("sk,ckd->csd", self.space.rows[:, 0, :], kernels)
-            ok &= masks.sum(axis=1) + _most_parallel(W, later, self.space.tol) >= self.T
+            ok &= held + _most_parallel(W, later, self.space.tol) >= self.T
         return ok
 
     def alive_hulls(self, hulls: np.ndarray) -> np.ndarray:
         return hulls.sum(axis=1) >= self.T
 
     def visit(self, masks: np.ndarray, kernels: np.ndarray) -> None:
+        if kernels.shape[2] == 0:
+            return  # full rank: not blind
         for i in np.flatnonzero(masks.sum(axis=1) >= self.T):
-            if kernels.shape[2] > 0:
-                self.masks.append(masks[i].copy())
-                self.kernels.append(kernels[i])
+            self.masks.append(masks[i].copy())
+            self.kernels.append(kernels[i])
 
     def offer(self, masks: np.ndarray) -> None:
         for m in masks[masks.sum(axis=1) >= self.T]:
@@ -154,11 +151,6 @@ def _kernel(M: np.ndarray, margins: Margins) -> np.ndarray:
     _, sv, vh = np.linalg.svd(M)
     rank = int((~margins.record(sv)).sum())
     return np.asarray(vh[rank:].conj().T)
-
-
-@lru_cache(maxsize=64)
-def _subsets(n: int, r: int) -> np.ndarray:
-    return np.array(list(itertools.combinations(range(n), r)), dtype=np.intp).reshape(-1, r)
 
 
 def most_zeros_vector(P: np.ndarray, m: int, budget: Budget, margins: Margins) -> np.ndarray | None:

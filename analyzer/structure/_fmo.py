@@ -22,7 +22,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from fractions import Fraction
-from functools import reduce
+from functools import cached_property, reduce
 from typing import Any, Callable, Iterable, Optional, Sequence
 
 import mpmath
@@ -421,8 +421,12 @@ class _ExactRows:
         self.groups = groups
         self.period = period
         self._cache: dict[int, list[list[Any]]] = {}
-        self._modp = ModP.for_field(K)
         self._reduced: dict[int, list[list[int]] | None] = {}
+
+    @cached_property
+    def _modp(self) -> ModP | None:
+        """The reduction modulo a prime of degree one, found on the first rank asked."""
+        return ModP.for_field(self.K)
 
     def _rows(self, n: int) -> list[list[Any]]:
         n %= self.period
@@ -441,9 +445,7 @@ class _ExactRows:
         n %= self.period
         if n not in self._reduced:
             assert self._modp is not None
-            red = [[self._modp.element(x) for x in row] for row in self._rows(n)]
-            ok = [[x for x in row if x is not None] for row in red]
-            self._reduced[n] = ok if all(len(a) == len(b) for a, b in zip(ok, red)) else None
+            self._reduced[n] = self._modp.matrix(self._rows(n))
         return self._reduced[n]
 
     def __call__(self, slots: Iterable[Slot]) -> int | None:
@@ -458,9 +460,13 @@ class _ExactRows:
         if self._modp is not None and len(rows) >= L:
             # Full rank modulo a prime of degree one is full rank (module _modp);
             # anything less is decided over Q(theta).
-            reduced = [self._reduced_rows(n) for n, _ in slots]
-            if all(r is not None for r in reduced):
-                red = [r[i] for (_, g), r in zip(slots, reduced) for i in self.groups[g]]  # type: ignore[index]
+            red: list[list[int]] = []
+            for n, g in slots:
+                images = self._reduced_rows(n)
+                if images is None:
+                    break
+                red.extend(images[i] for i in self.groups[g])
+            else:
                 if self._modp.rank(red, L) == L:
                     return L
         return int(DomainMatrix(rows, (len(rows), L), self.K).rank())

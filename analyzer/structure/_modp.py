@@ -77,6 +77,16 @@ class ModP:
         to_list = getattr(a, "to_list", None)
         return self.reduce(to_list() if to_list is not None else [a])
 
+    def matrix(self, rows: Sequence[Sequence[Any]]) -> list[list[int]] | None:
+        """The images of a matrix of field elements, ``None`` if an entry does not reduce."""
+        out = []
+        for row in rows:
+            images = [self.element(a) for a in row]
+            if any(x is None for x in images):
+                return None
+            out.append([int(x) for x in images if x is not None])
+        return out
+
     def rank(self, rows: Sequence[Sequence[int]], n_columns: int) -> int:
         """Rank of reduced rows over ``F_p`` (at most the rank over the field)."""
         if not rows:

@@ -67,6 +67,8 @@ def test_a_denominator_divisible_by_p_does_not_reduce() -> None:
     assert red is not None
     assert red.reduce([QQ(1, red.p), QQ(1)]) is None
     assert red.reduce([QQ(1, 2), QQ(1)]) is not None
+    assert red.matrix([[QQ(1, 2), QQ(3)], [QQ(1, red.p), QQ(1)]]) is None
+    assert red.matrix([[QQ(1, 2), QQ(3)]]) == [[pow(2, -1, red.p), 3]]
 
 
 @pytest.mark.parametrize("factors,dense", [((15,), True), ((3, 4), True), ((4, 9), True), ((21,), False)])
