@@ -210,7 +210,13 @@ def test_generic_front_seeds_are_attained(i: int) -> None:
 
 
 def test_generic_front_of_period_21_is_the_whole_front() -> None:
-    """Period 21, dense rows: the generic front (g = 0, 1, 3, 4, 6, 7, 9, 10, 12, 13, 15, 17) is all of it."""
+    """Period 21, dense rows: the generic front (g = 0, 1, 3, 4, 6, 7, 9, 10, 12, 13, 15, 17) is all of it.
+
+    ``g(r)``, the most phases of one sensor whose rows have rank ``r``, comes
+    from a brute force over all ``2^21`` subsets of the phases (numpy ranks,
+    about four minutes, so not in the suite); the seeds here come from the
+    closure walk's flats, an independent route.
+    """
     space = SlotSpace.from_block(bench_block((21,), dense=True))
     margins = Margins(space.tol)
     groups = [group_space(space, g) for g in (0, 1)]
