@@ -10,9 +10,9 @@ with ``x' >= x``, some set beats the front iff for some flat ``F`` of
 group 0 a vector of ``K(F)`` zeroes at least ``B(|F|) + 1`` slots of group
 1, or the same with the groups exchanged.  Only flats beyond a threshold
 need the check: a vector ``(x, y)`` beyond the front lies above a
-*minimal beyond point* ``(a, B(a) + 1)``; the points with ``a >= b`` are
-checked from group 0 (flats of at least ``min a`` slots), the others from
-group 1.  Flats of many slots in a block of few columns are rare, so the
+*minimal beyond point* ``(a, B(a) + 1)``; those with ``a >= B(a) + 1`` are
+checked from group 0 (flats of at least the least such ``a`` slots), the
+others, whose group-1 counts are high, from group 1 (:func:`threshold`).  Flats of many slots in a block of few columns are rare, so the
 check visits a small part of what the walk over both groups visits
 (docs/structure.md gives the numbers).
 
@@ -108,20 +108,30 @@ def _most_parallel(W: np.ndarray, rows: np.ndarray, tol: float) -> np.ndarray:
     ``|W_t| |sin(angle)| <= tol`` against the other; a row with
     ``|W_t| >= _SHORT tol`` is then within ``1 / _SHORT`` radians of the
     class direction, so every class fits in a window of ``2 / _SHORT``
-    radians of angles (taken modulo pi); shorter rows are counted in every
-    class.
+    radians of angles (taken modulo pi, on a circle); shorter rows are
+    counted in every class.  The angles of a class, sorted, are consecutive
+    with every gap at most the window: a class holds at most one more than
+    the longest circular run of such gaps.
     """
-    size = np.linalg.norm(W, axis=2)
+    C, n, _ = W.shape
+    size = np.sqrt(np.einsum("csd,csd->cs", W, W))
     short = rows & (size < _SHORT * tol)
     counted = rows & ~short
-    angle = np.where(counted, np.arctan2(W[..., 1], W[..., 0]) % np.pi, 8.0)  # 8 > 2 pi: a row not counted
-    angle = np.sort(np.concatenate([angle, angle + np.pi], axis=1), axis=1)
-    # One searchsorted for all batch rows: row c lives in [16 c, 16 c + 16).
-    keys = (angle + 16.0 * np.arange(angle.shape[0])[:, None]).ravel()
-    ends = np.searchsorted(keys, keys + 2.0 / _SHORT, side="right").reshape(angle.shape)
-    inside = ends - np.arange(angle.size).reshape(angle.shape)
-    inside[angle >= 8.0] = 0
-    return np.asarray(inside.max(axis=1, initial=0) + short.sum(axis=1))
+    angle = np.where(counted, np.arctan2(W[..., 1], W[..., 0]) % np.pi, 8.0)  # 8 > pi: a row not counted
+    angle.sort(axis=1)
+    k = np.count_nonzero(counted, axis=1)
+    has = k > 0
+    # Next angle of each counted one; the last wraps around to the first plus pi.
+    after = np.concatenate([angle[:, 1:], np.full((C, 1), 8.0)], axis=1)
+    after[np.flatnonzero(has), k[has] - 1] = angle[has, 0] + np.pi
+    small = np.zeros((C, n + 1), dtype=bool)  # a last column of False ends every run
+    small[:, :n] = (after - angle <= 2.0 / _SHORT) & (np.arange(n)[None, :] < k[:, None])
+    ones = np.cumsum(small, axis=1)
+    ending = ones - np.maximum.accumulate(np.where(small, 0, ones), axis=1)  # run of small gaps ending at each gap
+    leading = np.argmin(small, axis=1)
+    trailing = ending[np.arange(C), np.maximum(k - 1, 0)]
+    run = np.maximum(ending.max(axis=1), np.where(leading < k, leading + trailing, 0))
+    return np.asarray(np.where(has, np.minimum(run + 1, k), 0) + np.count_nonzero(short, axis=1))
 
 
 def big_flats(space: SlotSpace, T: int, budget: Budget, margins: Margins) -> list[tuple[np.ndarray, np.ndarray | None]]:
@@ -164,73 +174,138 @@ def most_zeros_vector(P: np.ndarray, m: int, budget: Budget, margins: Margins) -
     :data:`_MOST_SUBSETS`; otherwise (and with several rows per slot) a
     closure search over the flats of ``P`` with at least ``m`` slots answers.
     """
-    N, p, k = P.shape
-    zero = margins.record(np.linalg.norm(P.reshape(N, -1), axis=1))
-    need = m - int(zero.sum())
+    return most_zeros_vectors(P[None], np.array([m]), budget, margins)[0]
+
+
+def most_zeros_vectors(P: np.ndarray, m: np.ndarray, budget: Budget, margins: Margins) -> list[np.ndarray | None]:
+    """:func:`most_zeros_vector` for each ``P[b]`` (``B x N x p x k``) and ``m[b]``, the hyperplanes of all at once.
+
+    One batched :func:`_hyperplanes` walk serves every item that needs it,
+    so many small questions cost a few large array operations.
+    """
+    B, N, p, k = P.shape
+    out: list[np.ndarray | None] = [None] * B
     e0 = np.zeros(k, dtype=P.dtype)
     e0[0] = 1
-    if need <= 0:
-        return e0
-    if k == 1:
-        return None
-    rows = P[~zero]
-    if rows.shape[0] < need:
-        return None
-    if p == 1 and math.comb(rows.shape[0], k - 1) <= _MOST_SUBSETS:
-        return _hyperplanes(rows[:, 0, :], need, budget, margins)
-    return _closure_hit(P, m, budget, margins)
+    walk: list[int] = []
+    for b in range(B):
+        zero = margins.record(np.linalg.norm(P[b].reshape(N, -1), axis=1))
+        need = int(m[b]) - int(zero.sum())
+        if need <= 0:
+            out[b] = e0
+            continue
+        rows = P[b, ~zero]
+        if k == 1 or rows.shape[0] < need:
+            continue
+        if p > 1 or math.comb(rows.shape[0], k - 1) > _MOST_SUBSETS:
+            out[b] = _closure_hit(P[b], int(m[b]), budget, margins)
+            continue
+        if need <= k - 1:
+            out[b] = _kernel(rows[: k - 1, 0, :], margins)[:, 0]
+            continue
+        whole = _kernel(rows[:, 0, :], margins)
+        if whole.shape[1] > 0:
+            out[b] = whole[:, 0]
+            continue
+        walk.append(b)
+    if walk:
+        # Zero rows stay: they lie on every hyperplane, so ``m`` (not ``need``) is what counts.
+        for b, x in zip(walk, _hyperplanes(P[walk, :, 0, :], m[walk], budget, margins)):
+            out[b] = x
+    return out
 
 
-def _hyperplanes(R: np.ndarray, need: int, budget: Budget, margins: Margins) -> np.ndarray | None:
-    """A normal ``x`` of a hyperplane holding ``need`` of the (non-zero) rows of ``R``, or ``None``.
+#: Flats asked together in :func:`_check` (one batched hyperplane walk).
+_FLATS_PER_BATCH = 64
 
-    Every hyperplane spanned by ``k - 1`` independent rows is reached once
-    as an increasing sequence of rows, each outside the span of the rows
-    before it.  The walk keeps, per prefix, an orthonormal basis ``N`` of
-    the vectors its rows annihilate and shrinks it by one Householder
-    reflection per added row (``R_e N`` is reflected onto the first axis;
-    the other columns stay), so the ``C(n, k - 1)`` normals cost a few
-    elementwise operations each; one product then counts the rows on each
-    hyperplane.
+#: Most prefix rows of one level of :func:`_hyperplanes` handled in one array operation.
+_CHUNK = 1 << 14
+
+
+def _hyperplanes(R: np.ndarray, need: np.ndarray, budget: Budget, margins: Margins) -> list[np.ndarray | None]:
+    """Per ``b``, a normal ``x`` of a hyperplane holding ``need[b]`` of the rows of ``R[b]`` (``B x n x k``), or ``None``.
+
+    The rows of each ``R[b]`` span ``C^k``.  Every hyperplane ``H`` spanned
+    by ``k - 1`` independent rows is reached once, by its *greedy basis*:
+    ``s_1`` its first row, each next ``s`` its first row outside the span so
+    far.  Then every row of ``H`` up to the last ``s`` lies in that span, so
+    a prefix needs only the rows after its last ``s`` (its *window*), and
+    the number of spanned rows (``held``); a child adding row ``e`` that
+    brings an earlier row into the span is no greedy basis and is not
+    followed.  Per prefix the walk keeps ``W = R N`` on the window, the rows
+    in an orthonormal basis ``N`` of the vectors the prefix annihilates
+    (``|W_t|`` is the distance of row ``t`` from the prefix's span); adding
+    row ``e`` multiplies ``W`` by the columns of the Householder reflection
+    that maps ``W_e`` onto the first axis (all but the first), ``O(n d)``
+    per prefix; at the end ``W`` is one column, the rows' distances from
+    the hyperplane.  Prefixes with one last row share a window and walk
+    together, those of every ``b`` alike (``owner`` says whose each is).
     """
-    n, k = R.shape
-    if need <= k - 1:
-        return _kernel(R[: k - 1], margins)[:, 0]
-    whole = _kernel(R, margins)
-    if whole.shape[1] > 0:
-        return whole[:, 0]
-    last = np.full(1, -1)
-    N = np.eye(k, dtype=R.dtype)[None, :, :]
-    index = np.arange(n)
-    for _ in range(k - 1):
-        budget.tick("sigma: front proof", max(1, last.size * n // 4096))
-        W = np.matmul(R, N)
-        size = np.sqrt((W * W.conj()).real.sum(axis=2))
-        spanned = margins.record(size)
-        # Reach each hyperplane H by its greedy basis (s_1 = its first row, each next
-        # one its first row outside the span so far): then every row of H up to
-        # the last s lies in that span, so H holds at most the spanned rows plus
-        # the rows after the last s.
-        alive = spanned.sum(axis=1) + (n - 1 - last) >= need
-        if N.shape[2] == 2 and not np.iscomplexobj(R):
-            # The hyperplanes through a prefix with a plane of normals hold its
-            # span plus one class of parallel projections: count the largest.
-            alive &= spanned.sum(axis=1) + _most_parallel(W, ~spanned, margins.tol) >= need
-        later = alive[:, None] & (index[None, :] > last[:, None]) & ~spanned
-        b, e = np.nonzero(later)
-        N, last = _reflect_out(N[b], W[b, e] / size[b, e][:, None]), e
-    on = margins.record(np.abs(N[:, :, 0] @ R.T)).sum(axis=1)
-    best = np.flatnonzero(on >= need)
-    return np.asarray(N[best[0], :, 0]) if best.size else None
+    B, n, k = R.shape
+    real = not np.iscomplexobj(R)
+    # first row of the window -> parts (owner, rows held before the window, rows picked, W on the window)
+    groups: dict[int, list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]] = {
+        0: [(np.arange(B), np.zeros(B, dtype=int), np.zeros((B, 0), dtype=int), R)]
+    }
+    out: list[np.ndarray | None] = [None] * B
+    for level in range(k):
+        nxt: dict[int, list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]] = {}
+        for lo in sorted(groups):
+            o_all, hb_all, picked_all, W_all = (np.concatenate(q) for q in zip(*groups[lo]))
+            for s in range(0, o_all.size, _CHUNK):
+                o, hb, picked, W = (x[s : s + _CHUNK] for x in (o_all, hb_all, picked_all, W_all))
+                budget.tick("sigma: front proof", max(1, o.size * W.shape[1] // 4096))
+                sq = np.einsum("cnd,cnd->cn", W, W) if real else np.einsum("cnd,cnd->cn", W, W.conj()).real
+                size = np.sqrt(sq)
+                spanned = margins.record(size)
+                held = hb + np.count_nonzero(spanned, axis=1)
+                if level == k - 1:  # W is one column: the rows on each hyperplane
+                    for c in np.flatnonzero(held >= need[o]):
+                        if out[o[c]] is None:  # the normal of the k - 1 picked rows
+                            out[o[c]] = np.linalg.svd(R[o[c], picked[c]])[2][-1].conj()
+                    continue
+                after = ~spanned
+                cum = np.cumsum(after, axis=1)
+                alive = held + cum[:, -1] >= need[o]
+                if W.shape[2] == 2 and real:
+                    # The hyperplanes through a prefix with a plane of normals hold its
+                    # span plus one class of parallel projections: count the largest.
+                    alive[alive] &= held[alive] + _most_parallel(W[alive], after[alive], margins.tol) >= need[o[alive]]
+                # A child adding e holds the spanned rows, e, and at most the others after e.
+                room = (held + 1 + cum[:, -1] - need[o])[:, None] >= cum
+                b, j = np.nonzero(alive[:, None] & after & room)
+                if b.size == 0:
+                    continue
+                order = np.argsort(j, kind="stable")
+                b, j = b[order], j[order]
+                child_hb = hb[b] + np.cumsum(spanned, axis=1)[b, j] + 1
+                child_picked = np.column_stack([picked[b], lo + j])
+                child_W = _reflect_out(W[b], W[b, j] / size[b, j][:, None])
+                cuts = np.flatnonzero(np.diff(j)) + 1
+                for first, stop in zip(np.concatenate([[0], cuts]), np.concatenate([cuts, [j.size]])):
+                    jj = int(j[first])
+                    # A child whose window is empty (e the last row) adds no row after e: its
+                    # hyperplane holds no more rows than span(prefix) + r_t, r_t an earlier row outside it.
+                    if jj + 1 < W.shape[1]:
+                        nxt.setdefault(lo + jj + 1, []).append(
+                            (
+                                o[b[first:stop]],
+                                child_hb[first:stop],
+                                child_picked[first:stop],
+                                child_W[first:stop, jj + 1 :],
+                            )
+                        )
+        groups = nxt
+    return out
 
 
 def _reflect_out(N: np.ndarray, w: np.ndarray) -> np.ndarray:
-    """Per row, an orthonormal basis of ``{N y : w . y = 0}`` (``N``: ``(C, k, d)`` orthonormal, ``w``: unit ``(C, d)``).
+    """Per item, ``N H`` with ``H`` orthonormal columns spanning ``{y : w . y = 0}`` (``N``: ``(C, m, d)``, ``w``: unit ``(C, d)``).
 
-    The Householder reflection ``H = I - 2 v v^* / |v|^2``, ``v = conj(w) + s e_1``
-    (``s`` of the modulus one and phase of ``conj(w_1)``, so nothing cancels),
-    maps ``conj(w)`` to a multiple of ``e_1``; its other columns are
-    orthonormal and annihilated by ``w``.
+    ``H`` holds the last ``d - 1`` columns of the Householder reflection
+    ``I - 2 v v^* / |v|^2``, ``v = conj(w) + s e_1`` (``s`` of the modulus
+    one and phase of ``conj(w_1)``, so nothing cancels), which maps
+    ``conj(w)`` to a multiple of ``e_1``; a rank-one update gives ``N H``.
     """
     u = w.conj()
     first = u[:, 0]
@@ -238,12 +313,10 @@ def _reflect_out(N: np.ndarray, w: np.ndarray) -> np.ndarray:
     v = u.copy()
     v[:, 0] += phase
     scale = 2.0 / np.einsum("cd,cd->c", v.conj(), v).real
-    d = N.shape[2]
-    H = (
-        np.eye(d, dtype=np.result_type(N, w))[None, :, 1:]
-        - scale[:, None, None] * v[:, :, None] * v[:, None, 1:].conj()
-    )
-    return np.asarray(np.matmul(N, H))
+    Nv = N[:, :, 0] * v[:, None, 0]
+    for j in range(1, N.shape[2]):  # a few columns: cheaper than a reduction over a short axis
+        Nv += N[:, :, j] * v[:, None, j]
+    return np.asarray(N[:, :, 1:] - (scale[:, None] * Nv)[:, :, None] * v[:, None, 1:].conj())
 
 
 def _closure_hit(P: np.ndarray, m: int, budget: Budget, margins: Margins) -> np.ndarray | None:
@@ -302,18 +375,29 @@ def threshold(front: Front, side: int, most: tuple[int, int]) -> int | None:
     """Fewest slots of group ``side`` in a flat that must be checked (``None``: no check needed).
 
     ``most``: the largest blind set of each group alone, which bounds both
-    counts.  A point ``(a, B(a) + 1)`` beyond the front is checked from
-    group 0 when ``a >= b`` and from group 1 when ``a > b`` (in that group's
-    order), so every point is checked from one side.
+    counts.  A set beyond the front lies above the point ``(x, B(x) + 1)``
+    of its own count ``x`` in group 0 (``B`` from group 0's side).  Group 0
+    checks every flat of at least ``T_0`` slots, the least ``a`` with
+    ``a >= B(a) + 1`` (and ``B(a) + 1`` at most group 1's ``most``), and
+    so every set with ``x >= T_0``.  A set with ``x < T_0`` has at least
+    ``B(T_0 - 1) + 1`` slots of group 1 (``B`` does not rise with ``x``):
+    group 1 checks every flat of that many slots.  Every set beyond the
+    front is checked from one side.
     """
-    counts = _blind_counts(front, side)
-    own, other = most[side], most[1 - side]
-    best = None
-    for a in range(own + 1):
+    counts = _blind_counts(front, 0)
+    T0 = None
+    for a in range(most[0] + 1):
         b = _beyond_floor(counts, a) + 1
-        if b <= other and (a > b or (a == b and side == 0)):
-            best = a if best is None else min(best, a)
-    return best
+        if a >= b and b <= most[1]:
+            T0 = a
+            break
+    if side == 0:
+        return T0
+    top = most[0] if T0 is None else T0 - 1
+    if top < 0:
+        return None  # group 0 checks every flat: nothing is left to group 1
+    T1 = _beyond_floor(counts, top) + 1
+    return T1 if T1 <= most[1] else None
 
 
 def prove_front(space: SlotSpace, front: Front, budget: Budget, margins: Margins) -> int:
@@ -322,10 +406,9 @@ def prove_front(space: SlotSpace, front: Front, budget: Budget, margins: Margins
     See the module docstring for why a pass without a hit proves the
     front.  Flats are checked largest first, and a hit is pushed to the
     most slots of the other group that ``K(F)`` can zero, so the front, and
-    with it the thresholds, rise early.  Thresholds only rise as the front
-    grows (a point ``(a, B(a) + 1)`` with ``a >= B(a) + 1`` stays one for a
-    larger ``B``), so a flat that held no vector beyond the front keeps
-    holding none: each is checked once.  When the rows of group 1 are those
+    with it the thresholds, rise early.  The count ``B(|F|) + 1`` a flat
+    must reach only rises as the front grows, so a flat that held no vector
+    beyond the front keeps holding none: each is checked once.  When the rows of group 1 are those
     of group 0 times one invertible matrix (:func:`shared_matroid`), both
     groups have the same flats and one walk serves both.  Raises
     :class:`~kfio.errors.BudgetExceeded` when ``budget`` runs out.
@@ -345,7 +428,7 @@ def prove_front(space: SlotSpace, front: Front, budget: Budget, margins: Margins
             if M is not None:
                 want = min(T, *(t for t in (threshold(front, g, most) for g in (0, 1)) if t is not None))
             found = big_flats(groups[source], want, budget, margins)
-            found.sort(key=lambda f: -int(f[0].sum()))
+            found.sort(key=lambda f: (-int(f[0].sum()), 1 if f[1] is None else f[1].shape[1]))  # batches of one dim
             walked[source] = (want, found)
             if M is not None or len(walked) == 2:
                 seed_generic(space, front, groups, [walked[0 if M is not None else g][1] for g in (0, 1)], margins)
@@ -434,39 +517,66 @@ def _check(
     budget: Budget,
     margins: Margins,
 ) -> tuple[int, int]:
-    """Check ``flats`` (largest first) of group ``side`` against ``front``; returns ``(hits, flats checked)``."""
+    """Check ``flats`` (largest first) of group ``side`` against ``front``; returns ``(hits, flats checked)``.
+
+    Flats are asked in batches of one kernel dimension (:func:`most_zeros_vectors`)
+    with the counts ``m`` of the front as it stands.  Up to the first hit of a
+    batch the answers are those of one flat at a time; after it the front
+    has grown, so ``m`` has not fallen and every flat that held no ``m`` then
+    holds none now (it is passed), while the others are asked again.
+    """
     own, other = groups[side], groups[1 - side].rows
     hits = checked = 0
     T, counts = threshold(front, side, most), _blind_counts(front, side)
-    for mask, K in flats:
-        a = int(mask.sum())
-        if T is None or a < T:
-            break  # largest first: every later flat is smaller
-        key = mask.tobytes()
-        m = _beyond_floor(counts, a) + 1
-        if key in passed or m > most[1 - side]:
+    i = 0
+    while i < len(flats):
+        batch: list[tuple[int, bytes, np.ndarray]] = []
+        ms: list[int] = []
+        while i < len(flats) and len(batch) < _FLATS_PER_BATCH:
+            mask, K = flats[i]
+            a = int(mask.sum())
+            if T is None or a < T:
+                i = len(flats)  # largest first: every later flat is smaller
+                break
+            key = mask.tobytes()
+            m = _beyond_floor(counts, a) + 1
+            if key in passed or m > most[1 - side]:
+                i += 1
+                continue
+            if K is None:
+                K = _kernel(own.rows[mask].reshape(-1, own.n_columns), margins)
+            if batch and K.shape[1] != batch[0][2].shape[1]:
+                break
+            batch.append((i, key, K))
+            ms.append(m)
+            i += 1
+        if not batch:
             continue
-        budget.tick("sigma: front proof")
-        checked += 1
-        if K is None:
-            K = _kernel(own.rows[mask].reshape(-1, own.n_columns), margins)
-        best = _most_zeros(other @ K, m, budget, margins)
-        if best is None:
-            passed.add(key)
-            continue
-        hits += 1
-        front.offer(maximal_zero_set(space, K @ best, margins)[None, :])
-        T, counts = threshold(front, side, most), _blind_counts(front, side)
+        budget.tick("sigma: front proof", len(batch))
+        P = np.stack([other @ K for _, _, K in batch])
+        answers = most_zeros_vectors(P, np.array(ms), budget, margins)
+        first_hit = None
+        for (j, key, K), x in zip(batch, answers):
+            if x is None:
+                passed.add(key)
+                checked += 1
+            elif first_hit is None:
+                first_hit = j
+                checked += 1
+                hits += 1
+                best = _most_zeros(other @ K, x, budget, margins)
+                front.offer(maximal_zero_set(space, K @ best, margins)[None, :])
+                T, counts = threshold(front, side, most), _blind_counts(front, side)
+        if first_hit is not None:
+            i = first_hit + 1  # later flats with an answer are asked again with the grown front
     return hits, checked
 
 
-def _most_zeros(P: np.ndarray, m: int, budget: Budget, margins: Margins) -> np.ndarray | None:
-    """A unit vector zeroing the most slots of ``P`` if that is at least ``m``, else ``None``."""
-    best = None
-    while m <= P.shape[0]:
-        x = most_zeros_vector(P, m, budget, margins)
-        if x is None:
-            return best
-        best = x
+def _most_zeros(P: np.ndarray, x: np.ndarray, budget: Budget, margins: Margins) -> np.ndarray:
+    """A unit vector zeroing the most slots of ``P``, pushed up from ``x``."""
+    while True:
         m = int(margins.record(np.linalg.norm(P @ x, axis=1)).sum()) + 1
-    return best
+        better = most_zeros_vector(P, m, budget, margins) if m <= P.shape[0] else None
+        if better is None:
+            return x
+        x = better

@@ -121,6 +121,31 @@ def test_most_zeros_vector_against_all_subsets(i: int, route: str, monkeypatch: 
             assert int((np.linalg.norm(P @ x, axis=1) <= 1e-9).sum()) >= m
 
 
+@pytest.mark.parametrize("k", [2, 3, 4, 5])
+def test_most_zeros_vectors_batch_equals_all_subsets(k: int) -> None:
+    """One batched walk over 12 blocks of one shape, each asked for a different count, against all subsets."""
+    rng = np.random.default_rng([SEED, 9500 + k])
+    N = 10
+    P = rng.integers(-2, 3, size=(12, N, 1, k)).astype(float)
+    for b in range(12):
+        normal = rng.integers(-2, 3, size=k).astype(float)
+        if normal.any() and b % 3:  # plant a hyperplane holding about half the rows
+            planted = rng.random(N) < 0.6
+            P[b, planted] -= np.outer(P[b, planted, 0] @ normal, normal)[:, None, :] / (normal @ normal)
+        if b % 4 == 1:
+            P[b, 3] = 0
+    P = P @ np.linalg.qr(rng.standard_normal((k, k)))[0]
+    best = [most_zeros_by_subsets(P[b]) for b in range(12)]
+    margins = Margins(tol=1e-9)
+    for shift in (-1, 0, 1):
+        m = np.array([max(1, min(N, best[b] + shift)) for b in range(12)])
+        answers = proof.most_zeros_vectors(P, m, Budget(max_steps=100_000), margins)
+        for b, x in enumerate(answers):
+            assert (x is not None) == (m[b] <= best[b]), (b, m[b], best[b])
+            if x is not None:
+                assert int((np.linalg.norm(P[b] @ x, axis=1) <= 1e-9).sum()) >= m[b]
+
+
 def flats_by_subsets(space: SlotSpace, T: int) -> set[tuple[int, ...]]:
     """Orbit keys of the closures of all subsets with rank < L and at least ``T`` slots."""
     S, L = space.size, space.n_columns
@@ -155,18 +180,42 @@ def test_big_flats_are_every_closure_of_enough_slots(i: int) -> None:
         )
 
 
-def test_threshold_assigns_every_beyond_point_to_one_side() -> None:
-    """Front (blind counts) (0, 5), (3, 3), (5, 0), at most 5 a group: minimal beyond points (1..3, 4) and (4..5, 1)."""
+def front_of(counts: list[tuple[int, int]]) -> Front:
+    """A front of blind counts ``(group 0, group 1)`` over six phases."""
     space = SlotSpace(n_phases=6, n_groups=2, rows=np.zeros((12, 1, 2)), tol=1e-9)
     front = Front(space, np.array([1, 1]))
-    for a, b in [(0, 5), (3, 3), (5, 0)]:
+    for a, b in counts:
         mask = np.zeros((6, 2), dtype=bool)
         mask[:a, 0] = True
         mask[:b, 1] = True
         front.offer(mask.reshape(1, -1))
+    return front
+
+
+def test_threshold_assigns_every_beyond_point_to_one_side() -> None:
+    """Front (blind counts) (0, 5), (3, 3), (5, 0), at most 5 a group: minimal beyond points (1..3, 4) and (4..5, 1)."""
+    front = front_of([(0, 5), (3, 3), (5, 0)])
     assert proof.threshold(front, 0, (5, 5)) == 4  # (4, 1) and (4, 4): a >= b
-    assert proof.threshold(front, 1, (5, 5)) == 4  # (4, 1) seen from group 1, i.e. (1, 4)
+    assert proof.threshold(front, 1, (5, 5)) == 4  # (3, 4): group 1 holds at least 4
     assert proof.threshold(front, 0, (3, 3)) is None  # nothing beyond the front fits in three slots a group
+    assert proof.threshold(front, 1, (3, 3)) is None
+
+
+def test_threshold_leaves_group_1_only_what_group_0_does_not_check() -> None:
+    """Front (0, 5), (2, 4), (4, 2), (5, 0): group 0 checks x >= 3 ((3, 3) is beyond); x <= 2 needs y >= 5.
+
+    The point (4, 3) seen from group 1 (y = 4 > x = 3) needs no check from
+    group 1: group 0 already checks every set with x >= 3.
+    """
+    front = front_of([(0, 5), (2, 4), (4, 2), (5, 0)])
+    assert proof.threshold(front, 0, (5, 5)) == 3
+    assert proof.threshold(front, 1, (5, 5)) == 5
+    # Brute force over every count vector: each one beyond the front is checked from a side.
+    T0, T1 = proof.threshold(front, 0, (5, 5)), proof.threshold(front, 1, (5, 5))
+    for x in range(6):
+        for y in range(6):
+            beyond = not any(x <= a and y <= b for a, b in [(0, 5), (2, 4), (4, 2), (5, 0)])
+            assert not beyond or x >= T0 or y >= T1, (x, y)
 
 
 def test_shared_matroid_is_the_column_scaling_between_groups() -> None:
