@@ -30,6 +30,7 @@ a whole pass finds nothing.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from typing import Protocol
 
 import numpy as np
@@ -56,15 +57,43 @@ class Front(Protocol):
 _MOST_SUBSETS = 200_000
 
 
-class _BigFlats:
-    """Collector of every flat of one group with at least ``T`` slots, with its kernel."""
+FlatList = list[tuple[np.ndarray, "np.ndarray | None"]]
 
-    def __init__(self, space: SlotSpace, T: int) -> None:
+
+class _BigFlats:
+    """Collector of every flat of one group with at least ``T`` slots, with its kernel (``None``: to be computed).
+
+    With ``on_found``, new flats are handed over in batches as the walk finds
+    them (every :data:`_ONLINE_NODES` flats asked about, so a short walk
+    hands them over once, at its end); it returns a new least size of interest (``None``: none), and
+    ``T`` rises to it (never falls) for the rest of the walk.
+    """
+
+    def __init__(self, space: SlotSpace, T: int, on_found: Callable[[FlatList], int | None] | None = None) -> None:
         self.space = space
         self.T = T
-        self.masks: list[np.ndarray] = []
-        self.kernels: list[np.ndarray] = []
-        self.leaves: list[np.ndarray] = []
+        self.found: FlatList = []
+        self.pending: FlatList = []
+        self.seen: set[bytes] = set()
+        self.on_found = on_found
+        self.nodes = 0
+
+    def _add(self, mask: np.ndarray, K: np.ndarray | None) -> None:
+        key = mask.tobytes()
+        if key in self.seen:
+            return  # a maximal flat is visited with its kernel and then offered as a leaf
+        self.seen.add(key)
+        self.found.append((mask.copy(), K))
+        if self.on_found is not None:
+            self.pending.append(self.found[-1])
+
+    def flush(self) -> None:
+        """Hand the pending flats to ``on_found`` and raise ``T`` to its answer."""
+        if self.on_found is None or not self.pending:
+            return
+        batch, self.pending = self.pending, []
+        T = self.on_found(batch)
+        self.T = max(self.T, self.space.size + 1 if T is None else T)
 
     def alive(self, masks: np.ndarray, cores: np.ndarray, kernels: np.ndarray) -> np.ndarray:
         """Flats below a flat with core ``c`` add only slots after ``c``; below a plane, only one parallel class.
@@ -74,12 +103,19 @@ class _BigFlats:
         ``r K`` are parallel: at most the largest class of (nearly) parallel
         projections, counted with margin (:func:`_most_parallel`).
         """
+        self.nodes += masks.shape[0]
+        if self.nodes >= _ONLINE_NODES:
+            self.nodes = 0
+            self.flush()
         later = (np.arange(self.space.size)[None, :] > cores[:, None]) & ~masks
         held = masks.sum(axis=1)
         ok: np.ndarray = held + later.sum(axis=1) >= self.T
         if kernels.shape[2] == 2 and self.space.rows.shape[1] == 1 and not np.iscomplexobj(self.space.rows):
             W = np.einsum("sk,ckd->csd", self.space.rows[:, 0, :], kernels)
-            ok &= held + _most_parallel(W, later, self.space.tol) >= self.T
+            # Below Q no flat holds a slot up to the core that Q misses: a class of
+            # such a slot is the closure of no child that keeps Q's prefix.
+            before = ~later & ~masks
+            ok &= held + _most_parallel(W, later, self.space.tol, poison=before) >= self.T
         return ok
 
     def alive_hulls(self, hulls: np.ndarray) -> np.ndarray:
@@ -89,68 +125,96 @@ class _BigFlats:
         if kernels.shape[2] == 0:
             return  # full rank: not blind
         for i in np.flatnonzero(masks.sum(axis=1) >= self.T):
-            self.masks.append(masks[i].copy())
-            self.kernels.append(kernels[i])
+            self._add(masks[i], kernels[i])
 
     def offer(self, masks: np.ndarray) -> None:
         for m in masks[masks.sum(axis=1) >= self.T]:
-            self.leaves.append(m.copy())
+            self._add(m, None)
 
 
 #: Projections shorter than this many tolerances count as parallel to every other.
 _SHORT = 1e4
 
 
-def _most_parallel(W: np.ndarray, rows: np.ndarray, tol: float) -> np.ndarray:
+def _most_parallel(W: np.ndarray, rows: np.ndarray, tol: float, poison: np.ndarray | None = None) -> np.ndarray:
     """Per batch row, an upper bound on the most ``rows`` whose real 2-vectors ``W`` are parallel.
 
     Two rows count as parallel for the closure when one leaves a residual
     ``|W_t| |sin(angle)| <= tol`` against the other; a row with
     ``|W_t| >= _SHORT tol`` is then within ``1 / _SHORT`` radians of the
-    class direction, so every class fits in a window of ``2 / _SHORT``
-    radians of angles (taken modulo pi, on a circle); shorter rows are
-    counted in every class.  The angles of a class, sorted, are consecutive
-    with every gap at most the window: a class holds at most one more than
-    the longest circular run of such gaps.
+    class direction, so every class lies in one *chain* of angles (taken
+    modulo pi, on a circle) with consecutive gaps of at most ``2 / _SHORT``;
+    shorter rows are counted in every class.  A class counts no more than
+    the ``rows`` of its chain.  With ``poison`` (rows that no class may
+    hold), a chain is dropped when it holds a poison row and is *tight*:
+    its angles spread less than ``tol / (2 max |W_t|)``, so each of its rows
+    is parallel to each other.
     """
     C, n, _ = W.shape
     size = np.sqrt(np.einsum("csd,csd->cs", W, W))
     short = rows & (size < _SHORT * tol)
     counted = rows & ~short
-    angle = np.where(counted, np.arctan2(W[..., 1], W[..., 0]) % np.pi, 8.0)  # 8 > pi: a row not counted
-    angle.sort(axis=1)
-    k = np.count_nonzero(counted, axis=1)
+    bad = np.zeros_like(rows) if poison is None else poison & (size >= _SHORT * tol)
+    member = counted | bad
+    angle = np.where(member, np.arctan2(W[..., 1], W[..., 0]) % np.pi, 8.0)  # 8 > pi: not in any chain
+    order = np.argsort(angle, axis=1)
+    angle = np.take_along_axis(angle, order, axis=1)
+    counted = np.take_along_axis(counted, order, axis=1)
+    bad = np.take_along_axis(bad, order, axis=1)
+    size = np.take_along_axis(size, order, axis=1)
+    k = np.count_nonzero(member, axis=1)
+    inside = np.arange(n)[None, :] < k[:, None]
+    # A chain starts where the gap from the angle before is large (or at the first angle).
+    starts = np.ones((C, n), dtype=bool)
+    starts[:, 1:] = angle[:, 1:] - angle[:, :-1] > 2.0 / _SHORT
+    chain = np.cumsum(starts, axis=1) - 1
+    # Across the wrap (the first angle plus pi after the last) the last chain is the first.
     has = k > 0
-    # Next angle of each counted one; the last wraps around to the first plus pi.
-    after = np.concatenate([angle[:, 1:], np.full((C, 1), 8.0)], axis=1)
-    after[np.flatnonzero(has), k[has] - 1] = angle[has, 0] + np.pi
-    small = np.zeros((C, n + 1), dtype=bool)  # a last column of False ends every run
-    small[:, :n] = (after - angle <= 2.0 / _SHORT) & (np.arange(n)[None, :] < k[:, None])
-    ones = np.cumsum(small, axis=1)
-    ending = ones - np.maximum.accumulate(np.where(small, 0, ones), axis=1)  # run of small gaps ending at each gap
-    leading = np.argmin(small, axis=1)
-    trailing = ending[np.arange(C), np.maximum(k - 1, 0)]
-    run = np.maximum(ending.max(axis=1), np.where(leading < k, leading + trailing, 0))
-    return np.asarray(np.where(has, np.minimum(run + 1, k), 0) + np.count_nonzero(short, axis=1))
+    lastpos = np.maximum(k - 1, 0)
+    wraps = has & (angle[:, 0] + np.pi - angle[np.arange(C), lastpos] <= 2.0 / _SHORT)
+    last_chain = chain[np.arange(C), lastpos]
+    chain = np.where(wraps[:, None] & (chain == last_chain[:, None]) & inside, 0, chain)
+    unwrapped = np.where(wraps[:, None] & (chain == 0) & (angle > np.pi / 2), angle - np.pi, angle)
+    ids = (np.arange(C)[:, None] * n + chain)[inside]
+    counts = np.bincount(ids, weights=counted[inside], minlength=C * n)
+    if poison is not None:
+        poisoned = np.bincount(ids, weights=bad[inside], minlength=C * n) > 0
+        hi = np.full(C * n, -4.0)  # angles lie in (-pi/2, pi): an empty chain spans -8, times size 0
+        lo = np.full(C * n, 4.0)
+        big = np.zeros(C * n)
+        np.maximum.at(hi, ids, unwrapped[inside])
+        np.minimum.at(lo, ids, unwrapped[inside])
+        np.maximum.at(big, ids, size[inside])
+        tight = (hi - lo) * big < tol / 2
+        counts[poisoned & tight] = 0
+    best = counts.reshape(C, n).max(axis=1)
+    return np.asarray(best.astype(int) + np.count_nonzero(short, axis=1))
 
 
-def big_flats(space: SlotSpace, T: int, budget: Budget, margins: Margins) -> list[tuple[np.ndarray, np.ndarray | None]]:
-    """Every blind flat of a one-group space with at least ``T`` slots, one per shift orbit.
+#: Flats the walk of :func:`big_flats` asks about between two hand-overs to ``on_found``.
+_ONLINE_NODES = 4096
+
+
+def big_flats(
+    space: SlotSpace,
+    T: int,
+    budget: Budget,
+    margins: Margins,
+    on_found: Callable[[FlatList], int | None] | None = None,
+) -> tuple[FlatList, int]:
+    """Every blind flat of a one-group space with at least ``T`` slots, one per shift orbit, and the least size kept.
 
     The batched closure walk of :func:`kfio.stability._blind_batch.walk`
     (gap-canonical rotation), cutting every subtree whose hull holds fewer
     than ``T`` slots.  Expanded flats come with an orthonormal kernel basis;
     maximal ones (``None``) get theirs when they are checked, most never are.
+    With ``on_found`` (see :class:`_BigFlats`) the size ``T`` may rise during
+    the walk: every flat of at least the returned size is listed.
     """
-    found = _BigFlats(space, T)
+    found = _BigFlats(space, T, on_found)
     walk(space, budget, margins, found)
-    out: list[tuple[np.ndarray, np.ndarray | None]] = list(zip(found.masks, found.kernels))
-    seen = {m.tobytes() for m in found.masks}
-    for m in found.leaves:
-        if m.tobytes() not in seen:
-            seen.add(m.tobytes())
-            out.append((m, None))
-    return out
+    found.flush()
+    return found.found, found.T
 
 
 def _kernel(M: np.ndarray, margins: Margins) -> np.ndarray:
@@ -417,24 +481,49 @@ def prove_front(space: SlotSpace, front: Front, budget: Budget, margins: Margins
     most = (n - int(front.lower[0]), n - int(front.lower[1]))
     groups = [group_space(space, g) for g in (0, 1)]
     M = shared_matroid(groups[0], groups[1], margins)
-    walked: dict[int, tuple[int, list[tuple[np.ndarray, np.ndarray | None]]]] = {}
+    walked: dict[int, tuple[int, FlatList]] = {}
     passed: dict[int, set[bytes]] = {0: set(), 1: set()}
+    largest: list[dict[int, np.ndarray]] = [{}, {}]
+    seeded: set[bytes] = set()
     checked = 0
 
-    def flats(side: int, T: int) -> list[tuple[np.ndarray, np.ndarray | None]]:
+    def served(source: int) -> tuple[int, ...]:
+        """The groups whose flats the walk over ``source`` lists."""
+        return (0, 1) if M is not None else (source,)
+
+    def least(source: int) -> int | None:
+        """The fewest slots of a flat that some group served by ``source`` must check."""
+        Ts = [t for t in (threshold(front, g, most) for g in served(source)) if t is not None]
+        return min(Ts) if Ts else None
+
+    def as_side(side: int, source: int, found: FlatList) -> FlatList:
+        if side == source:
+            return found
+        return [(mask, None) for mask, _ in found]  # same flats; kernels from this group's rows
+
+    def flats(side: int, T: int) -> FlatList:
         source = 0 if M is not None else side
         if source not in walked or walked[source][0] > T:
-            want = T
-            if M is not None:
-                want = min(T, *(t for t in (threshold(front, g, most) for g in (0, 1)) if t is not None))
-            found = big_flats(groups[source], want, budget, margins)
-            found.sort(key=lambda f: (-int(f[0].sum()), 1 if f[1] is None else f[1].shape[1]))  # batches of one dim
-            walked[source] = (want, found)
-            if M is not None or len(walked) == 2:
-                seed_generic(space, front, groups, [walked[0 if M is not None else g][1] for g in (0, 1)], margins)
-        if side == source:
-            return walked[source][1]
-        return [(mask, None) for mask, _ in walked[source][1]]  # same flats; kernels from this group's rows
+
+            def on_found(batch: FlatList) -> int | None:
+                # Checked as the walk finds them: a hit raises the front, and with it
+                # the size below which the walk needs no flat.
+                nonlocal checked
+                batch = sorted(batch, key=_largest_first)
+                for g in served(source):
+                    largest_by_rank(batch, space.n_columns, largest[g])
+                seed_generic(space, front, groups, largest, margins, seeded)
+                for g in served(source):
+                    if threshold(front, g, most) is not None:
+                        checked += _check(
+                            space, front, g, as_side(g, source, batch), groups, passed[g], most, budget, margins
+                        )[1]
+                return least(source)
+
+            found, kept = big_flats(groups[source], min(T, least(source) or T), budget, margins, on_found)
+            found.sort(key=_largest_first)
+            walked[source] = (kept, found)
+        return as_side(side, source, walked[source][1])
 
     while True:
         hits = 0
@@ -449,34 +538,48 @@ def prove_front(space: SlotSpace, front: Front, budget: Budget, margins: Margins
             return checked
 
 
+def _largest_first(flat: tuple[np.ndarray, np.ndarray | None]) -> tuple[int, int]:
+    """Sort key: most slots first, then (for batches of one kernel dimension) by kernel dimension."""
+    mask, K = flat
+    return -int(mask.sum()), 1 if K is None else K.shape[1]
+
+
+def largest_by_rank(flats: FlatList, L: int, largest: dict[int, np.ndarray]) -> None:
+    """Keep in ``largest`` the flat of most slots of each rank (maximal flats, with no kernel given, have rank ``L - 1``)."""
+    for mask, K in flats:
+        r = L - 1 if K is None else L - K.shape[1]
+        if r not in largest or mask.sum() > largest[r].sum():
+            largest[r] = mask
+
+
 def seed_generic(
     space: SlotSpace,
     front: Front,
     groups: list[SlotSpace],
-    flats: list[list[tuple[np.ndarray, np.ndarray | None]]],
+    largest: list[dict[int, np.ndarray]],
     margins: Margins,
+    seeded: set[bytes] | None = None,
 ) -> None:
     """Offer the *generic front*: for ``r_0 + r_1 = L - 1``, the largest known flats of those ranks share a kernel vector.
 
     Flats ``F_0`` of group 0 and ``F_1`` of group 1 with ranks ``r_0 + r_1 =
     L - 1`` have kernels of dimensions ``L - r_0`` and ``L - r_1``, which sum
     to ``L + 1``: they meet, and a common kernel vector zeroes both, so the
-    blind counts ``(|F_0|, |F_1|)`` are attained whatever the rows.  From the
-    largest flat of each rank among ``flats`` (maximal flats, with no kernel
-    basis given, have rank ``L - 1``), so the proof starts from thresholds
-    near their final values.
+    blind counts ``(|F_0|, |F_1|)`` are attained whatever the rows.  From
+    the largest flat of each rank of each group (:func:`largest_by_rank`),
+    so the proof starts from thresholds near their final values; pairs in
+    ``seeded`` are skipped, and the new ones added to it.
     """
     L = space.n_columns
-    largest: list[dict[int, np.ndarray]] = [{}, {}]
-    for g in (0, 1):
-        for mask, K in flats[g]:
-            r = L - 1 if K is None else L - K.shape[1]
-            if r not in largest[g] or mask.sum() > largest[g][r].sum():
-                largest[g][r] = mask
     for r, F0 in largest[0].items():
         F1 = largest[1].get(L - 1 - r)
         if F1 is None:
             continue
+        key = F0.tobytes() + F1.tobytes()
+        if seeded is not None:
+            if key in seeded:
+                continue
+            seeded.add(key)
         K0 = _kernel(groups[0].rows[F0].reshape(-1, L), margins)
         K1 = _kernel(groups[1].rows[F1].reshape(-1, L), margins)
         both = _kernel(np.concatenate([K0, -K1], axis=1), margins)

@@ -22,7 +22,7 @@ import kfio.stability._pareto as pareto
 import kfio.stability._pareto_proof as proof
 from kfio._budget import Budget
 from kfio.stability._blind import Margins, SlotSpace
-from kfio.stability._blind_batch import enumerate_orbits
+from kfio.stability._blind_batch import enumerate_orbits, real_space
 from kfio.stability._pareto import Front, group_space, pareto_search
 from kfio.stability._sigma import undominated
 
@@ -44,10 +44,13 @@ def two_group_case(i: int) -> SlotSpace:
     return SlotSpace.from_block(random_block(rng, N0, 2, rows=1 + (i % 5 == 4), real=i % 3 != 0))
 
 
+@pytest.mark.parametrize("online", [4096, 1])
 @pytest.mark.parametrize("probe", [0, 5])
 @pytest.mark.parametrize("i", range(60))
-def test_proof_equals_undominated_orbits(i: int, probe: int, monkeypatch: pytest.MonkeyPatch) -> None:
+def test_proof_equals_undominated_orbits(i: int, probe: int, online: int, monkeypatch: pytest.MonkeyPatch) -> None:
+    """``online = 1``: the walk hands its flats to the checks after every batch, and may raise its size mid-walk."""
     monkeypatch.setattr(pareto, "PROBE_FLATS", probe)
+    monkeypatch.setattr(proof, "_ONLINE_NODES", online)
     space = two_group_case(i)
     front = pareto_search(space, Budget(max_steps=2_000_000), Margins(space.tol))
     assert_front_matches_enumeration(space, front.maximal)
@@ -164,12 +167,15 @@ def flats_by_subsets(space: SlotSpace, T: int) -> set[tuple[int, ...]]:
     return out
 
 
+@pytest.mark.parametrize("real", [False, True])
 @pytest.mark.parametrize("i", range(20))
-def test_big_flats_are_every_closure_of_enough_slots(i: int) -> None:
+def test_big_flats_are_every_closure_of_enough_slots(i: int, real: bool) -> None:
     rng = np.random.default_rng([SEED, 9500 + i])
-    space = group_space(SlotSpace.from_block(random_block(rng, int(rng.integers(3, 10)), 2, rows=1, real=False)), 0)
+    space = group_space(SlotSpace.from_block(random_block(rng, int(rng.integers(3, 10)), 2, rows=1, real=real)), 0)
+    space = real_space(space)
     T = int(rng.integers(1, 4))
-    found = proof.big_flats(space, T, Budget(max_steps=100_000), Margins(space.tol))
+    found, kept = proof.big_flats(space, T, Budget(max_steps=100_000), Margins(space.tol))
+    assert kept == T
     assert {space.orbit_key(m) for m, _ in found} == flats_by_subsets(space, T)
     for m, K in found:
         if K is None:
@@ -241,15 +247,73 @@ def test_shared_flats_give_the_front_of_separate_walks(i: int, monkeypatch: pyte
     assert vectors(space, shared.maximal) == vectors(space, separate.maximal)
 
 
+@pytest.mark.parametrize(("factors", "dense"), [((15,), True), ((21,), True), ((3, 5), False), ((3, 4, 5), False)])
+def test_big_flats_bounds_cut_no_flat_of_enough_slots(factors: tuple[int, ...], dense: bool) -> None:
+    """On cyclotomic blocks (many parallel classes with rows e_1): the flats of the bounded walk are those of the whole walk.
+
+    The walk with ``T = 0`` cuts nothing; with ``T`` it cuts by hulls and,
+    below planes of kernels, by the largest parallel class that holds no
+    slot the flat misses up to its core.
+    """
+    space = real_space(group_space(SlotSpace.from_block(bench_block(factors, dense=dense)), 0))
+    margins = Margins(space.tol)
+    every, _ = proof.big_flats(space, 0, Budget(max_steps=10_000_000), margins)
+    sizes = sorted({int(m.sum()) for m, _ in every})
+    for T in sizes[len(sizes) // 3 :: 2]:
+        found, _ = proof.big_flats(space, T, Budget(max_steps=10_000_000), margins)
+        assert {m.tobytes() for m, _ in found} == {m.tobytes() for m, _ in every if m.sum() >= T}, T
+
+
+def test_most_parallel_drops_only_classes_that_surely_hold_a_poison_row() -> None:
+    """Later rows a, b parallel (angle 0.3); a poison row 1.5e-4 rad away is in their chain of angles, not their class.
+
+    The bound must still count a and b; a poison row parallel to them (the
+    chain is tight) drops the class, and a later row elsewhere then counts 1.
+    """
+    tol = 1e-9
+    angles = np.array([0.3, 0.3, 0.3 + 1.5e-4, 2.0])
+    W = np.stack([np.cos(angles), np.sin(angles)], axis=1)[None, :, :] * np.array([1.0, 2.0, 1.0, 1.0])[None, :, None]
+    later = np.array([[True, True, False, True]])
+    poison = ~later
+    assert proof._most_parallel(W, later, tol, poison=poison)[0] == 2
+    W_tight = W.copy()
+    W_tight[0, 2] = 3 * W[0, 0]  # the poison row now parallel to a and b
+    assert proof._most_parallel(W_tight, later, tol, poison=poison)[0] == 1
+    assert proof._most_parallel(W_tight, later, tol)[0] == 2  # without poison: the class of a and b
+    # Across the wrap (angles near 0 and near pi are parallel): one class of three.
+    wrap = np.array([1e-13, np.pi - 1e-13, np.pi - 2e-13])
+    Ww = np.stack([np.cos(wrap), np.sin(wrap)], axis=1)[None, :, :]
+    assert proof._most_parallel(Ww, np.ones((1, 3), dtype=bool), tol)[0] == 3
+
+
+def test_big_flats_size_never_falls_during_the_walk() -> None:
+    """``on_found`` answering a smaller size than before leaves ``T`` where it was; ``None`` lifts it past every flat."""
+    space = group_space(SlotSpace.from_block(bench_block((15,), dense=True)), 0)
+    found = proof._BigFlats(space, 2, on_found=lambda batch: answers.pop(0))
+    answers = [5, 3, None]
+    for T in (5, 5, space.size + 1):
+        found.pending.append((np.ones(space.size, dtype=bool), None))
+        found.flush()
+        assert found.T == T
+
+
+def largest_flats(groups: list[SlotSpace], margins: Margins) -> list[dict[int, np.ndarray]]:
+    """The flat of most slots of each rank of each group, from every flat of the closure walk."""
+    largest: list[dict[int, np.ndarray]] = [{}, {}]
+    for g, sub in enumerate(groups):
+        found, _ = proof.big_flats(sub, 0, Budget(max_steps=1_000_000), margins)
+        proof.largest_by_rank(found, sub.n_columns, largest[g])
+    return largest
+
+
 @pytest.mark.parametrize("i", range(30))
 def test_generic_front_seeds_are_attained(i: int) -> None:
     """Every seeded set is maximal blind and its vector lies under the true front (the enumeration's)."""
     space = two_group_case(i)
     margins = Margins(space.tol)
     groups = [group_space(space, g) for g in (0, 1)]
-    flats = [proof.big_flats(g, 0, Budget(max_steps=1_000_000), margins) for g in groups]
     front = Front(space, np.zeros(2, dtype=int))
-    proof.seed_generic(space, front, groups, flats, margins)
+    proof.seed_generic(space, front, groups, largest_flats(groups, margins), margins)
     every = enumerate_orbits(space, Budget(max_steps=2_000_000), Margins(space.tol))
     truth = vectors(space, undominated(space, list(every.maximal)))
     for m in front.masks:
@@ -269,8 +333,7 @@ def test_generic_front_of_period_21_is_the_whole_front() -> None:
     space = SlotSpace.from_block(bench_block((21,), dense=True))
     margins = Margins(space.tol)
     groups = [group_space(space, g) for g in (0, 1)]
-    flats = [proof.big_flats(g, 0, Budget(max_steps=1_000_000), margins) for g in groups]
     front = Front(space, np.zeros(2, dtype=int))
-    proof.seed_generic(space, front, groups, flats, margins)
+    proof.seed_generic(space, front, groups, largest_flats(groups, margins), margins)
     g = [0, 1, 3, 4, 6, 7, 9, 10, 12, 13, 15, 17]
     assert vectors(space, front.masks) == sorted((21 - g[r], 21 - g[11 - r]) for r in range(12))
