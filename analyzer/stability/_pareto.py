@@ -45,7 +45,10 @@ from ._blind import Margins, Objective, SearchResult, SlotSpace, group_space, se
 
 #: Flats the walk over both groups may expand before a two-group front is
 #: completed from the big flats of one group (:mod:`kfio.stability._pareto_proof`).
-PROBE_FLATS: int | None = 2000
+#: 0: two groups go straight to the proof (docs/structure.md: faster on every
+#: bench block and on 150 random ones, within 10 ms where it is not);
+#: ``None``: the walk alone, to its end.
+PROBE_FLATS: int | None = 0
 
 
 class Front:
@@ -159,10 +162,10 @@ def pareto_search(space: SlotSpace, budget: Budget, margins: Margins) -> SearchR
     The batched closure walk of :func:`kfio.stability._blind_batch.walk`
     (gap-canonical rotations, real rows where the plant is real) with
     :class:`Front` deciding which subtrees to keep.  With two groups the
-    walk stops after :data:`PROBE_FLATS` flats and
-    :func:`kfio.stability._pareto_proof.prove_front` completes its front
-    from the big flats of one group at a time (the walk over both groups
-    grows like ``C(S, L - 1) / N0`` with dense sensor rows).
+    walk stops after :data:`PROBE_FLATS` flats (by default it does not
+    start) and :func:`kfio.stability._pareto_proof.prove_front` completes
+    the front from the big flats of one group at a time (the walk over both
+    groups grows like ``C(S, L - 1) / N0`` with dense sensor rows).
 
     Returns
     -------
@@ -188,6 +191,8 @@ def pareto_search(space: SlotSpace, budget: Budget, margins: Margins) -> SearchR
     cap = PROBE_FLATS if space.n_groups == 2 else None
     checked = None
     try:
+        if cap == 0:
+            raise NodeCap("no walk over both groups")
         nodes = walk(real, budget, margins, front, max_nodes=cap)
     except NodeCap:
         nodes = cap or 0

@@ -157,13 +157,17 @@ def _most_parallel(W: np.ndarray, rows: np.ndarray, tol: float, poison: np.ndarr
     bad = np.zeros_like(rows) if poison is None else poison & (size >= _SHORT * tol)
     member = counted | bad
     angle = np.where(member, np.arctan2(W[..., 1], W[..., 0]) % np.pi, 8.0)  # 8 > pi: not in any chain
-    order = np.argsort(angle, axis=1)
-    angle = np.take_along_axis(angle, order, axis=1)
-    counted = np.take_along_axis(counted, order, axis=1)
-    bad = np.take_along_axis(bad, order, axis=1)
-    size = np.take_along_axis(size, order, axis=1)
     k = np.count_nonzero(member, axis=1)
     inside = np.arange(n)[None, :] < k[:, None]
+    if poison is None:
+        angle = np.sort(angle, axis=1)
+        counted = inside  # every member is counted
+    else:
+        order = np.argsort(angle, axis=1)
+        angle = np.take_along_axis(angle, order, axis=1)
+        counted = np.take_along_axis(counted, order, axis=1)
+        bad = np.take_along_axis(bad, order, axis=1)
+        size = np.take_along_axis(size, order, axis=1)
     # A chain starts where the gap from the angle before is large (or at the first angle).
     starts = np.ones((C, n), dtype=bool)
     starts[:, 1:] = angle[:, 1:] - angle[:, :-1] > 2.0 / _SHORT

@@ -553,12 +553,14 @@ def _find_worst(
         return _Found(res.maximal[0], (), False, method)
     if all(ch.order == 0 for ch in channels):
         res = pareto_search(space, budget, margins)
-        method = (
-            f"Pareto branch and bound over per-sensor miss counts: {len(res.maximal)} undominated "
-            f"vector{'' if len(res.maximal) == 1 else 's'} over {res.nodes} flats"
-        )
-        if res.checked is not None:
-            method += f", completed and proved from the big flats of one sensor at a time ({res.checked} checked)"
+        vectors = f"{len(res.maximal)} undominated vector{'' if len(res.maximal) == 1 else 's'}"
+        proof = f"proved from the big flats of one sensor at a time ({res.checked} checked)"
+        if res.checked is None:
+            method = f"Pareto branch and bound over per-sensor miss counts: {vectors} over {res.nodes} flats"
+        elif res.nodes == 0:
+            method = f"Pareto front of per-sensor miss counts: {vectors}, {proof}"
+        else:
+            method = f"Pareto branch and bound over per-sensor miss counts: {vectors} over {res.nodes} flats, completed and {proof}"
     else:
         res = enumerate_orbits(space, budget, margins)
         method = f"enumerated {len(res.maximal)} shift orbits of maximal blind sets over {res.nodes} flats"

@@ -1,9 +1,9 @@
 """Completing a two-sensor front from the big flats of one sensor, against enumeration and brute force.
 
 :mod:`kfio.stability._pareto_proof` takes over from the walk over both
-groups once it has expanded ``PROBE_FLATS`` flats.  Here the probe is cut to
-nothing (or almost), so the proof builds the whole front from the one-group
-extremes, and the answer must equal:
+groups once it has expanded ``PROBE_FLATS`` flats (by default none: the
+proof builds the whole front from the one-group extremes).  With no probe,
+or a short one, the answer must equal:
 
 * the undominated vectors of every shift orbit (:func:`enumerate_orbits`);
 * the undominated vectors of all subsets of tiny blocks;
