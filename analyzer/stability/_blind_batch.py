@@ -226,6 +226,28 @@ def gap_canonical_possible(space: SlotSpace, masks: np.ndarray, cores: np.ndarra
     return ok
 
 
+def _gap_canonical_children(Q: np.ndarray, b: np.ndarray, e: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """One group: :func:`gap_canonical_possible` of ``Q[b] + e`` with core ``e``, and its largest decided gap.
+
+    Slots are phases.  The decided phases of ``Q[b] + e`` are those of
+    ``Q[b]`` before ``e`` and ``e``, so per flat of ``Q`` the last phase
+    before each ``t`` and the largest gap ending before ``t`` (running
+    maxima) give every pair in a few lookups, where the general test scans
+    every slot of every pair.  Phase 0 must be held (or be ``e``), and the
+    largest gap at most ``N0`` minus the last phase.
+    """
+    C, N0 = Q.shape
+    phases = np.arange(N0)
+    upto = np.maximum.accumulate(np.where(Q, phases, -1), axis=1)  # last phase of Q at or before t
+    prev = np.concatenate([np.full((C, 1), -1), upto[:, :-1]], axis=1)  # ... before t
+    ending = np.where(Q & (phases >= 1), phases - prev, 0)  # the gap that ends at each phase of Q
+    widest = np.maximum.accumulate(ending, axis=1)
+    widest_before = np.concatenate([np.zeros((C, 1), dtype=widest.dtype), widest[:, :-1]], axis=1)
+    gap = np.maximum(widest_before[b, e], np.where(e >= 1, e - prev[b, e], 0))
+    ok = (Q[b, 0] | (e == 0)) & (gap <= N0 - np.maximum(upto[b, -1], e))
+    return ok, gap
+
+
 def _expand(
     space: SlotSpace,
     masks: np.ndarray,
@@ -259,7 +281,12 @@ def _expand(
     later = blind_ext[b] & (index[None, :] > e[:, None])
     early = found.alive_hulls(grown | later)
     b, e, grown, later = b[early], e[early], grown[early], later[early]
-    early = gap_canonical_possible(space, grown, e)
+    one = space.n_groups == 1
+    if one:
+        early, gap = _gap_canonical_children(Q, b, e)
+        gap = gap[early]
+    else:
+        early = gap_canonical_possible(space, grown, e)
     b, e, later = b[early], e[early], later[early]
     if b.size == 0:
         return []
@@ -268,7 +295,13 @@ def _expand(
     ppc = ~(new & (index[None, :] < e[:, None])).any(axis=1)
     b, e, closures, later = b[ppc], e[ppc], closures[ppc], later[ppc]
     dims = d - rank[b, e]
-    keep = gap_canonical_possible(space, closures, e) & found.alive_hulls(closures | later)
+    if one:
+        # The closure adds slots after e only: the decided gaps stay, the last phase moves.
+        last = space.size - 1 - np.argmax(closures[:, ::-1], axis=1)
+        canonical = gap[ppc] <= space.size - last
+    else:
+        canonical = gap_canonical_possible(space, closures, e)
+    keep = canonical & found.alive_hulls(closures | later)
     found.offer(closures[keep & (dims == 1)])
     inner = np.flatnonzero(keep & (dims > 1))
     if inner.size == 0:

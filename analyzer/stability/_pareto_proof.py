@@ -111,7 +111,13 @@ class _BigFlats:
         held = masks.sum(axis=1)
         ok: np.ndarray = held + later.sum(axis=1) >= self.T
         if kernels.shape[2] == 2 and self.space.rows.shape[1] == 1 and not np.iscomplexobj(self.space.rows):
-            W = np.einsum("sk,ckd->csd", self.space.rows[:, 0, :], kernels)
+            C, L, _ = kernels.shape
+            # One product for the batch: (S x L) times (L x 2C), back to (C, S, 2).
+            W = (
+                (self.space.rows[:, 0, :] @ kernels.transpose(1, 0, 2).reshape(L, -1))
+                .reshape(-1, C, 2)
+                .transpose(1, 0, 2)
+            )
             # Below Q no flat holds a slot up to the core that Q misses: a class of
             # such a slot is the closure of no child that keeps Q's prefix.
             before = ~later & ~masks
@@ -151,7 +157,7 @@ def _most_parallel(W: np.ndarray, rows: np.ndarray, tol: float, poison: np.ndarr
     is parallel to each other.
     """
     C, n, _ = W.shape
-    size = np.sqrt(np.einsum("csd,csd->cs", W, W))
+    size = np.hypot(W[..., 0], W[..., 1])
     short = rows & (size < _SHORT * tol)
     counted = rows & ~short
     bad = np.zeros_like(rows) if poison is None else poison & (size >= _SHORT * tol)
@@ -323,8 +329,7 @@ def _hyperplanes(R: np.ndarray, need: np.ndarray, budget: Budget, margins: Margi
             for s in range(0, o_all.size, _CHUNK):
                 o, hb, picked, W = (x[s : s + _CHUNK] for x in (o_all, hb_all, picked_all, W_all))
                 budget.tick("sigma: front proof", max(1, o.size * W.shape[1] // 4096))
-                sq = np.einsum("cnd,cnd->cn", W, W) if real else np.einsum("cnd,cnd->cn", W, W.conj()).real
-                size = np.sqrt(sq)
+                size = np.sqrt(_squares(W))
                 spanned = margins.record(size)
                 held = hb + np.count_nonzero(spanned, axis=1)
                 if level == k - 1:  # W is one column: the rows on each hyperplane
@@ -365,6 +370,16 @@ def _hyperplanes(R: np.ndarray, need: np.ndarray, budget: Budget, margins: Margi
                         )
         groups = nxt
     return out
+
+
+def _squares(W: np.ndarray) -> np.ndarray:
+    """``|W_t|^2`` over the last (short) axis, one column at a time (faster than a reduction over it)."""
+    if np.iscomplexobj(W):
+        return np.asarray((W * W.conj()).real.sum(axis=-1))
+    out = W[..., 0] * W[..., 0]
+    for j in range(1, W.shape[-1]):
+        out += W[..., j] * W[..., j]
+    return np.asarray(out)
 
 
 def _reflect_out(N: np.ndarray, w: np.ndarray) -> np.ndarray:

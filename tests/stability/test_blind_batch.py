@@ -14,7 +14,7 @@ from kfio._budget import Budget
 from kfio.model._types import MarkovChannel
 from kfio.stability import compute_sigma
 from kfio.stability._blind import Margins, SlotSpace, search
-from kfio.stability._blind_batch import enumerate_orbits, gap_canonical_possible, real_space
+from kfio.stability._blind_batch import _gap_canonical_children, enumerate_orbits, gap_canonical_possible, real_space
 from kfio.stability._sigma import undominated
 from kfio.structure import fmo_blocks
 from kfio.structure._phases import PhaseBlock
@@ -115,6 +115,22 @@ def test_every_orbit_has_a_gap_canonical_rotation(N0: int) -> None:
     for m in masks:
         rotations = np.array([space.rotate(m, k) for k in range(N0)])
         assert gap_canonical_possible(space, rotations, core).any()
+
+
+@pytest.mark.parametrize("N0", [1, 2, 5, 12, 31])
+def test_gap_canonical_children_equal_the_general_test(N0: int) -> None:
+    """One group: the lookup version for ``Q + e`` and for a closure adding slots after ``e`` equals the scan."""
+    rng = np.random.default_rng([SEED, 40 + N0])
+    space = SlotSpace.from_block(PhaseBlock(N0, (0,), np.ones((1, 1), complex), ((0,),)))
+    Q = rng.random((300, N0)) < rng.random((300, 1))
+    b, e = np.nonzero(~Q)
+    ok, gap = _gap_canonical_children(Q, b, e)
+    grown = Q[b].copy()
+    grown[np.arange(b.size), e] = True
+    assert np.array_equal(ok, gap_canonical_possible(space, grown, e))
+    closures = grown | ((rng.random(grown.shape) < 0.3) & (np.arange(N0)[None, :] > e[:, None]))
+    last = N0 - 1 - np.argmax(closures[:, ::-1], axis=1)
+    assert np.array_equal(ok & (gap <= N0 - last), gap_canonical_possible(space, closures, e))
 
 
 def two_sensor_block(A: list[list[int]], rows: list[list[int]]) -> PhaseBlock:
