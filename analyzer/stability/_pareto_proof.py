@@ -292,6 +292,9 @@ def most_zeros_vectors(P: np.ndarray, m: np.ndarray, budget: Budget, margins: Ma
 #: Flats asked together in :func:`_check` (one batched hyperplane walk).
 _FLATS_PER_BATCH = 64
 
+#: Most hyperplanes (``C(rows, k - 1)`` a flat) one batched walk may reach: bounds its memory.
+_BATCH_PREFIXES = 1 << 19
+
 #: Most prefix rows of one level of :func:`_hyperplanes` handled in one array operation.
 _CHUNK = 1 << 14
 
@@ -654,7 +657,8 @@ def _check(
     while i < len(flats):
         batch: list[tuple[int, bytes, np.ndarray]] = []
         ms: list[int] = []
-        while i < len(flats) and len(batch) < _FLATS_PER_BATCH:
+        limit = _FLATS_PER_BATCH
+        while i < len(flats) and len(batch) < limit:
             mask, K = flats[i]
             a = int(mask.sum())
             if T is None or a < T:
@@ -669,6 +673,8 @@ def _check(
                 K = _kernel(own.rows[mask].reshape(-1, own.n_columns), margins)
             if batch and K.shape[1] != batch[0][2].shape[1]:
                 break
+            # Memory: the last level of a hyperplane walk holds up to C(rows, k - 1) prefixes a flat.
+            limit = max(1, min(_FLATS_PER_BATCH, _BATCH_PREFIXES // math.comb(other.shape[0], max(K.shape[1] - 1, 0))))
             batch.append((i, key, K))
             ms.append(m)
             i += 1

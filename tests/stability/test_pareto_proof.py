@@ -81,6 +81,16 @@ def test_dense_bench_blocks_equal_the_walk(
         assert_maximal_blind(space, m)
 
 
+def test_one_flat_a_batch_gives_the_same_front(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The memory bound on a batched hyperplane walk (one flat a walk at its tightest) changes no answer."""
+    space = SlotSpace.from_block(bench_block((15,), dense=True))
+    batched = pareto_search(space, Budget(max_steps=10_000_000), Margins(space.tol))
+    monkeypatch.setattr(proof, "_BATCH_PREFIXES", 1)
+    single = pareto_search(space, Budget(max_steps=10_000_000), Margins(space.tol))
+    assert vectors(space, single.maximal) == vectors(space, batched.maximal)
+    assert single.checked == batched.checked
+
+
 def configuration(i: int) -> np.ndarray:
     """``N x p x k`` rows with coincidences: small integers, a planted hyperplane, parallel and zero rows."""
     rng = np.random.default_rng([SEED, 9000 + i])
