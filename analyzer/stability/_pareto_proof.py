@@ -674,7 +674,8 @@ def _check(
             if batch and K.shape[1] != batch[0][2].shape[1]:
                 break
             # Memory: the last level of a hyperplane walk holds up to C(rows, k - 1) prefixes a flat.
-            limit = max(1, min(_FLATS_PER_BATCH, _BATCH_PREFIXES // math.comb(other.shape[0], max(K.shape[1] - 1, 0))))
+            reach = max(1, math.comb(other.shape[0], max(K.shape[1] - 1, 0)))
+            limit = max(1, min(_FLATS_PER_BATCH, _BATCH_PREFIXES // reach))
             batch.append((i, key, K))
             ms.append(m)
             i += 1
