@@ -65,8 +65,9 @@ class _BigFlats:
 
     With ``on_found``, new flats are handed over in batches as the walk finds
     them (every :data:`_ONLINE_NODES` flats asked about, so a short walk
-    hands them over once, at its end); it returns a new least size of interest (``None``: none), and
-    ``T`` rises to it (never falls) for the rest of the walk.
+    hands them over once, at its end); it returns a new least size of
+    interest (``None``: none), and ``T`` rises to it (never falls) for the
+    rest of the walk.
     """
 
     def __init__(self, space: SlotSpace, T: int, on_found: Callable[[FlatList], int | None] | None = None) -> None:
@@ -101,7 +102,8 @@ class _BigFlats:
         With a 2-dimensional kernel ``K`` every flat below is ``Q`` plus the
         later rows that vanish at one ``u`` in ``K``, i.e. whose projections
         ``r K`` are parallel: at most the largest class of (nearly) parallel
-        projections, counted with margin (:func:`_most_parallel`).
+        projections, counted with margin, that holds no slot up to the core
+        which ``Q`` misses (:func:`_most_parallel`).
         """
         self.nodes += masks.shape[0]
         if self.nodes >= _ONLINE_NODES:
@@ -321,14 +323,14 @@ def _hyperplanes(R: np.ndarray, need: np.ndarray, budget: Budget, margins: Margi
     B, n, k = R.shape
     real = not np.iscomplexobj(R)
     # first row of the window -> parts (owner, rows held before the window, rows picked, W on the window)
-    groups: dict[int, list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]] = {
+    windows: dict[int, list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]] = {
         0: [(np.arange(B), np.zeros(B, dtype=int), np.zeros((B, 0), dtype=int), R)]
     }
     out: list[np.ndarray | None] = [None] * B
     for level in range(k):
         nxt: dict[int, list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]] = {}
-        for lo in sorted(groups):
-            o_all, hb_all, picked_all, W_all = (np.concatenate(q) for q in zip(*groups[lo]))
+        for lo in sorted(windows):
+            o_all, hb_all, picked_all, W_all = (np.concatenate(q) for q in zip(*windows[lo]))
             for s in range(0, o_all.size, _CHUNK):
                 o, hb, picked, W = (x[s : s + _CHUNK] for x in (o_all, hb_all, picked_all, W_all))
                 budget.tick("sigma: front proof", max(1, o.size * W.shape[1] // 4096))
@@ -371,7 +373,7 @@ def _hyperplanes(R: np.ndarray, need: np.ndarray, budget: Budget, margins: Margi
                                 child_W[first:stop, jj + 1 :],
                             )
                         )
-        groups = nxt
+        windows = nxt
     return out
 
 
@@ -490,14 +492,18 @@ def prove_front(space: SlotSpace, front: Front, budget: Budget, margins: Margins
     """Add to ``front`` until no maximal blind set of a two-group ``space`` beats it; returns the flats checked.
 
     See the module docstring for why a pass without a hit proves the
-    front.  Flats are checked largest first, and a hit is pushed to the
-    most slots of the other group that ``K(F)`` can zero, so the front, and
-    with it the thresholds, rise early.  The count ``B(|F|) + 1`` a flat
-    must reach only rises as the front grows, so a flat that held no vector
-    beyond the front keeps holding none: each is checked once.  When the rows of group 1 are those
-    of group 0 times one invertible matrix (:func:`shared_matroid`), both
-    groups have the same flats and one walk serves both.  Raises
-    :class:`~kfio.errors.BudgetExceeded` when ``budget`` runs out.
+    front.  Flats are checked as the walk finds them (largest first within
+    each hand-over, after seeding the generic front from the largest flat
+    of each rank so far), then all of them largest first until a pass finds
+    nothing; a hit is pushed to the most slots of the other group that
+    ``K(F)`` can zero, so the front, and with it the thresholds and the size
+    the walk needs, rise early.  The count ``B(|F|) + 1`` a flat must reach
+    only rises as the front grows, so a flat that held no vector beyond the
+    front keeps holding none: each is checked once.  When the rows of group
+    1 are those of group 0 times one invertible matrix
+    (:func:`shared_matroid`), both groups have the same flats and one walk
+    serves both.  Raises :class:`~kfio.errors.BudgetExceeded` when
+    ``budget`` runs out.
     """
     n = space.n_phases
     most = (n - int(front.lower[0]), n - int(front.lower[1]))
@@ -542,7 +548,8 @@ def prove_front(space: SlotSpace, front: Front, budget: Budget, margins: Margins
                         )[1]
                 return least(source)
 
-            found, kept = big_flats(groups[source], min(T, least(source) or T), budget, margins, on_found)
+            want = least(source)  # at most T: side is one of the groups served
+            found, kept = big_flats(groups[source], T if want is None else min(T, want), budget, margins, on_found)
             found.sort(key=_largest_first)
             walked[source] = (kept, found)
         return as_side(side, source, walked[source][1])
