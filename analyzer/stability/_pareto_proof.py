@@ -24,7 +24,7 @@ question in ``dim K(F)`` dimensions, answered exactly by the hyperplanes
 spanned by ``dim K(F) - 1`` of the rows when there are few of them, and by
 a closure search over the rows of ``P`` otherwise.  A hit is a real blind
 set beyond the front: it joins the front and the check starts over, until
-a whole pass finds nothing.
+a whole pass leaves the front unchanged.
 """
 
 from __future__ import annotations
@@ -491,11 +491,11 @@ def threshold(front: Front, side: int, most: tuple[int, int]) -> int | None:
 def prove_front(space: SlotSpace, front: Front, budget: Budget, margins: Margins) -> int:
     """Add to ``front`` until no maximal blind set of a two-group ``space`` beats it; returns the flats checked.
 
-    See the module docstring for why a pass without a hit proves the
-    front.  Flats are checked as the walk finds them (largest first within
+    See the module docstring for why a pass that leaves the front as it
+    was proves it.  Flats are checked as the walk finds them (largest first within
     each hand-over, after seeding the generic front from the largest flat
-    of each rank so far), then all of them largest first until a pass finds
-    nothing; a hit is pushed to the most slots of the other group that
+    of each rank so far), then all of them largest first until a pass leaves
+    the front as it was; a hit is pushed to the most slots of the other group that
     ``K(F)`` can zero, so the front, and with it the thresholds and the size
     the walk needs, rise early.  The count ``B(|F|) + 1`` a flat must reach
     only rises as the front grows, so a flat that held no vector beyond the
@@ -555,15 +555,17 @@ def prove_front(space: SlotSpace, front: Front, budget: Budget, margins: Margins
         return as_side(side, source, walked[source][1])
 
     while True:
-        hits = 0
+        # A pass proves the front when the front did not change during it: then every
+        # threshold held still, each side's list reached down to it, and each of its
+        # flats passed. A change (a hit of the checks or of the walk) can lower group 1's
+        # threshold below what it checked (a higher T_0 leaves it more), so pass again.
+        start = front.vectors.copy()
         for side in (0, 1):
             T = threshold(front, side, most)
             if T is None:
                 continue
-            new, n_checked = _check(space, front, side, flats(side, T), groups, passed[side], most, budget, margins)
-            hits += new
-            checked += n_checked
-        if hits == 0:
+            checked += _check(space, front, side, flats(side, T), groups, passed[side], most, budget, margins)[1]
+        if np.array_equal(start, front.vectors):
             return checked
 
 

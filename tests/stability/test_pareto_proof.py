@@ -91,6 +91,39 @@ def test_one_flat_a_batch_gives_the_same_front(monkeypatch: pytest.MonkeyPatch) 
     assert single.checked == batched.checked
 
 
+@pytest.mark.parametrize("i", range(30))
+def test_a_falling_threshold_walks_again(i: int, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Group 1's first walk is told a size too high (all it could hold); once told the truth it walks again.
+
+    With separate walks (no shared matroid) the list of group 1 stays cut at
+    the false size unless a threshold below the size walked makes it walk
+    again: the front must still be every undominated vector.
+    """
+    monkeypatch.setattr(pareto, "PROBE_FLATS", 0)
+    monkeypatch.setattr(proof, "shared_matroid", lambda a, b, margins: None)
+    space = two_group_case(i)
+    group1 = group_space(real_space(space), 1).rows
+    true_threshold, true_walk = proof.threshold, proof.big_flats
+    walks: list[int] = []
+
+    def threshold(front: Front, side: int, most: tuple[int, int]) -> int | None:
+        T = true_threshold(front, side, most)
+        return most[1] if side == 1 and T is not None and not walks else T
+
+    def big_flats(sub: SlotSpace, T: int, *args, **kwargs):  # type: ignore[no-untyped-def]
+        out = true_walk(sub, T, *args, **kwargs)
+        if sub.rows.shape == group1.shape and np.array_equal(sub.rows, group1):
+            walks.append(T)
+        return out
+
+    monkeypatch.setattr(proof, "threshold", threshold)
+    monkeypatch.setattr(proof, "big_flats", big_flats)
+    front = pareto_search(space, Budget(max_steps=2_000_000), Margins(space.tol))
+    assert_front_matches_enumeration(space, front.maximal)
+    if len(walks) > 1:
+        assert walks[-1] < walks[0]
+
+
 def configuration(i: int) -> np.ndarray:
     """``N x p x k`` rows with coincidences: small integers, a planted hyperplane, parallel and zero rows."""
     rng = np.random.default_rng([SEED, 9000 + i])
