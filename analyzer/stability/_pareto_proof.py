@@ -12,8 +12,9 @@ group 0 a vector of ``K(F)`` zeroes at least ``B(|F|) + 1`` slots of group
 need the check: a vector ``(x, y)`` beyond the front lies above a
 *minimal beyond point* ``(a, B(a) + 1)``; those with ``a >= B(a) + 1`` are
 checked from group 0 (flats of at least the least such ``a`` slots), the
-others, whose group-1 counts are high, from group 1 (:func:`threshold`).  Flats of many slots in a block of few columns are rare, so the
-check visits a small part of what the walk over both groups visits
+others, whose group-1 counts are high, from group 1 (:func:`threshold`).
+Flats of many slots in a block of few columns are rare, so the check
+visits a small part of what the walk over both groups visits
 (docs/structure.md gives the numbers).
 
 Flats are those of one group, one per shift orbit (gap-canonical
@@ -491,12 +492,11 @@ def threshold(front: Front, side: int, most: tuple[int, int]) -> int | None:
 def prove_front(space: SlotSpace, front: Front, budget: Budget, margins: Margins) -> int:
     """Add to ``front`` until no maximal blind set of a two-group ``space`` beats it; returns the flats checked.
 
-    See the module docstring for why a pass that leaves the front as it
-    was proves it.  Flats are checked as the walk finds them (largest first within
-    each hand-over, after seeding the generic front from the largest flat
-    of each rank so far), then all of them largest first until a pass leaves
-    the front as it was; a hit is pushed to the most slots of the other group that
-    ``K(F)`` can zero, so the front, and with it the thresholds and the size
+    Flats are checked as the walk finds them (largest first within each
+    hand-over, after seeding the generic front from the largest flat of
+    each rank so far), then all of them largest first until a pass leaves
+    the front as it was, which proves it (see the module docstring); a hit
+    is pushed to the most slots of the other group that ``K(F)`` can zero, so the front, and with it the thresholds and the size
     the walk needs, rise early.  The count ``B(|F|) + 1`` a flat must reach
     only rises as the front grows, so a flat that held no vector beyond the
     front keeps holding none: each is checked once.  When the rows of group
@@ -545,7 +545,7 @@ def prove_front(space: SlotSpace, front: Front, budget: Budget, margins: Margins
                     if threshold(front, g, most) is not None:
                         checked += _check(
                             space, front, g, as_side(g, source, batch), groups, passed[g], most, budget, margins
-                        )[1]
+                        )
                 return least(source)
 
             want = least(source)  # at most T: side is one of the groups served
@@ -564,7 +564,7 @@ def prove_front(space: SlotSpace, front: Front, budget: Budget, margins: Margins
             T = threshold(front, side, most)
             if T is None:
                 continue
-            checked += _check(space, front, side, flats(side, T), groups, passed[side], most, budget, margins)[1]
+            checked += _check(space, front, side, flats(side, T), groups, passed[side], most, budget, margins)
         if np.array_equal(start, front.vectors):
             return checked
 
@@ -644,14 +644,14 @@ def _check(
     space: SlotSpace,
     front: Front,
     side: int,
-    flats: list[tuple[np.ndarray, np.ndarray | None]],
+    flats: FlatList,
     groups: list[SlotSpace],
     passed: set[bytes],
     most: tuple[int, int],
     budget: Budget,
     margins: Margins,
-) -> tuple[int, int]:
-    """Check ``flats`` (largest first) of group ``side`` against ``front``; returns ``(hits, flats checked)``.
+) -> int:
+    """Check ``flats`` (largest first) of group ``side`` against ``front``; returns the flats checked.
 
     Flats are asked in batches of one kernel dimension (:func:`most_zeros_vectors`)
     with the counts ``m`` of the front as it stands.  Up to the first hit of a
@@ -660,7 +660,7 @@ def _check(
     holds none now (it is passed), while the others are asked again.
     """
     own, other = groups[side], groups[1 - side].rows
-    hits = checked = 0
+    checked = 0
     T, counts = threshold(front, side, most), _blind_counts(front, side)
     i = 0
     while i < len(flats):
@@ -701,13 +701,12 @@ def _check(
             elif first_hit is None:
                 first_hit = j
                 checked += 1
-                hits += 1
                 best = _most_zeros(other @ K, x, budget, margins)
                 front.offer(maximal_zero_set(space, K @ best, margins)[None, :])
                 T, counts = threshold(front, side, most), _blind_counts(front, side)
         if first_hit is not None:
             i = first_hit + 1  # later flats with an answer are asked again with the grown front
-    return hits, checked
+    return checked
 
 
 def _most_zeros(P: np.ndarray, x: np.ndarray, budget: Budget, margins: Margins) -> np.ndarray:
