@@ -171,7 +171,10 @@ def _matches(shown: list[str], printed: list[str]) -> bool:
     return re.fullmatch(pattern, "\n".join(printed), flags=re.S) is not None
 
 
-@pytest.mark.parametrize("argv,code,shown", readme_runs(), ids=lambda x: " ".join(x) if isinstance(x, list) else None)
+README_RUNS = readme_runs()
+
+
+@pytest.mark.parametrize(("argv", "code", "shown"), README_RUNS, ids=[" ".join(argv) for argv, _, _ in README_RUNS])
 def test_readme_commands_run_as_shown(argv, code, shown, capsys: pytest.CaptureFixture[str], monkeypatch) -> None:
     monkeypatch.chdir(ROOT)
     assert main(argv) == code
