@@ -68,7 +68,13 @@ class BlockReport(ShortRepr):
 
 @dataclass(frozen=True, repr=False)
 class StabilityReport(Report):
-    """The verdict of Theorem 1 for a whole request, with its evidence."""
+    """The verdict of Theorem 1 for a whole request, with its evidence.
+
+    Every attribute has the name of its key in :meth:`to_dict` (the JSON of
+    ``kfio analyze --json``) but one: the Gilbert-Elliott region is the
+    attribute ``gilbert_elliott`` and the JSON key ``gilbert_elliott_region``;
+    :attr:`gilbert_elliott_region` is the same object under the JSON's name.
+    """
 
     _repr_fields = ("verdict", "critical_arrival_probability", "critical_arrival_probability_exact", "blocks")
 
@@ -87,6 +93,11 @@ class StabilityReport(Report):
 
     #: Short forms of long exact texts for :meth:`summary` (never in the JSON).
     display: Mapping[str, str] = field(default_factory=dict, repr=False, compare=False)
+
+    @property
+    def gilbert_elliott_region(self) -> Optional[GeRegion]:
+        """:attr:`gilbert_elliott` under its JSON key's name (``to_dict()["gilbert_elliott_region"]``)."""
+        return self.gilbert_elliott
 
     def _short(self, text: str, value: complex | float | None) -> str:
         if value is None:
