@@ -43,7 +43,14 @@ DEFAULT_BUDGET_S = 120.0
 
 @dataclass(frozen=True, repr=False)
 class BlockReport(ShortRepr):
-    """Theorem 1 applied to one FMO block."""
+    """Theorem 1 applied to one FMO block.
+
+    ``certified`` is true when every decision the block's verdict rests on
+    was proved (its eigenvalue classes, the rank decisions ``sigma`` rests
+    on, the comparison with 1), not when every rank decision of the blind-set
+    search was: the search's completeness rests on its numerical ranks.  The
+    one precise definition is in docs/theory.md, "What certified means".
+    """
 
     _repr_fields = ("eigenvalues", "modulus", "period", "sigma", "rate", "verdict")
 
