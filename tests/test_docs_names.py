@@ -6,6 +6,7 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import kfio
@@ -32,3 +33,15 @@ def test_the_mapping_is_documented() -> None:
     api = (ROOT / "docs" / "python_api.md").read_text(encoding="utf-8")
     assert "`r.gilbert_elliott`" in api and "`gilbert_elliott_region`" in api
     assert "gilbert_elliott_region" in kfio.StabilityReport.__doc__
+
+
+def test_certified_is_defined_once_and_everything_else_links_there() -> None:
+    theory = (ROOT / "docs" / "theory.md").read_text(encoding="utf-8")
+    assert theory.count("### What `certified` means") == 1  # the anchor #what-certified-means
+    pages = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+    for page in pages:
+        if page.name == "theory.md":
+            continue
+        for paragraph in page.read_text(encoding="utf-8").split("\n\n"):
+            if re.search(r"`certified(: (true|false))?`[^.]*\b(means|says)\b", paragraph):
+                assert "theory.md#what-certified-means" in paragraph, (page.name, paragraph[:120])
