@@ -175,9 +175,14 @@ def analyze(
         :func:`kfio.bernoulli`, :func:`kfio.gilbert_elliott`,
         :func:`kfio.markov`, :func:`kfio.per_sensor`, or a channel's JSON object.
     options:
-        ``options.analyze`` of a request (analyze takes none today).
+        ``options.analyze`` of a request: ``ge_grid`` (integer 2..101, a
+        Gilbert-Elliott channel only) adds the exact (p, q) map;
+        ``critical_parameter`` (a JSON pointer such as
+        ``"/channel/recovery_rate"``) adds the exact critical value of that
+        one probability, the others fixed.  The README's options table lists
+        every option of every command.
     budget:
-        Seconds (as ``options.time_budget_s``, in ``(0, 3600]``) or a
+        Seconds (as ``options.time_budget_s``, in ``[0.01, 3600]``) or a
         :class:`kfio.Budget`; default 120 s.
 
     Returns
@@ -225,7 +230,7 @@ def bounds(
         As in :func:`analyze`.
     options:
         ``options.bounds`` of a request: ``tolerance``, ``horizon``, ``grid``,
-        ``arrival_probability``.
+        ``arrival_probability``, ``trace_target``.
 
     Returns
     -------
@@ -274,6 +279,9 @@ def simulate(
         trajectories as the work cap allows, seed 0, ``P0 = Q``, stationary
         channel); a keyword wins over the same key in ``options``, as the
         CLI's flags do.
+    options:
+        ``options.simulate`` of a request: the keys above and
+        ``percentiles``, ``outage_thresholds``, ``outage_target``.
 
     Returns
     -------

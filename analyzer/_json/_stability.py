@@ -17,7 +17,7 @@ if TYPE_CHECKING:
 
 THEOREM_1 = "Rohr, Marelli and Fu 2014, Theorem 1"
 GE_REFERENCE = (
-    "Rohr, Marelli and Fu (2014), Theorem 1, on the Gilbert-Elliott family; Wu, Shi, Anderson, Johansson (2018)"
+    "Rohr, Marelli and Fu (2014), Theorem 1, on the Gilbert-Elliott family; Wu, Shi, Anderson and Johansson (2018)"
 )
 TAIL_RULE = "P(trace P > M) ~ M^(-kappa); the moment of order r is finite iff kappa > r"
 

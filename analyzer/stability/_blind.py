@@ -8,8 +8,8 @@ column rank ``L`` (docs/theory.md, section 2).  Equivalently some ``v != 0`` has
 of rank ``k < L`` is the closure of at most ``k`` slots, so the search walks
 flats, never the ``2^(N0 G)`` subsets:
 
-* **prefix-preserving closure extension** (Uno, Asai, Uchida, Arimura, LCM,
-  2004): a flat ``Q`` with core slot ``c`` has the children ``cl(Q + e)``,
+* **prefix-preserving closure extension** (LCM: Uno, Asai, Uchida and
+  Arimura 2004): a flat ``Q`` with core slot ``c`` has the children ``cl(Q + e)``,
   ``e > c``, that add nothing below ``e``; every flat is reached once.  A node
   keeps an orthonormal basis ``K`` of its kernel and tests all extensions at
   once (``W = r K``, one batched product).  A child whose kernel is a line

@@ -20,8 +20,8 @@ the variance threshold ``lambda > 1 - 1/|alpha|^4`` of Rohr, Marelli and Fu
 non-degenerate systems with Gilbert-Elliott losses (Bernoulli is the case
 ``p + q = 1``): those blocks are labelled ``theorem``.  Degenerate blocks,
 several packets and channels of order above 1 are kfio's **extension** of the
-same argument (``sigma_k`` from the blind-set construction of Rohr et al.,
-2014), checked against simulated tails in ``tests/stability/test_tail.py``.
+same argument (``sigma_k`` from the blind-set construction of Rohr, Marelli
+and Fu 2014), checked against simulated tails in ``tests/stability/test_tail.py``.
 
 Everything is exact where ``sigma_k^N`` is: the moment comparisons are the
 exact comparisons of :mod:`kfio.stability._decide` with ``N`` replaced by

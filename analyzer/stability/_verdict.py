@@ -43,7 +43,14 @@ DEFAULT_BUDGET_S = 120.0
 
 @dataclass(frozen=True, repr=False)
 class BlockReport(ShortRepr):
-    """Theorem 1 applied to one FMO block."""
+    """Theorem 1 applied to one FMO block.
+
+    ``certified`` is true when every decision the block's verdict rests on
+    was proved (its eigenvalue classes, the rank decisions ``sigma`` rests
+    on, the comparison with 1), not when every rank decision of the blind-set
+    search was: the search's completeness rests on its numerical ranks.  The
+    one precise definition is in docs/theory.md, "What certified means".
+    """
 
     _repr_fields = ("eigenvalues", "modulus", "period", "sigma", "rate", "verdict")
 
@@ -68,7 +75,13 @@ class BlockReport(ShortRepr):
 
 @dataclass(frozen=True, repr=False)
 class StabilityReport(Report):
-    """The verdict of Theorem 1 for a whole request, with its evidence."""
+    """The verdict of Theorem 1 for a whole request, with its evidence.
+
+    Every attribute has the name of its key in :meth:`to_dict` (the JSON of
+    ``kfio analyze --json``) but one: the Gilbert-Elliott region is the
+    attribute ``gilbert_elliott`` and the JSON key ``gilbert_elliott_region``;
+    :attr:`gilbert_elliott_region` is the same object under the JSON's name.
+    """
 
     _repr_fields = ("verdict", "critical_arrival_probability", "critical_arrival_probability_exact", "blocks")
 
@@ -87,6 +100,11 @@ class StabilityReport(Report):
 
     #: Short forms of long exact texts for :meth:`summary` (never in the JSON).
     display: Mapping[str, str] = field(default_factory=dict, repr=False, compare=False)
+
+    @property
+    def gilbert_elliott_region(self) -> Optional[GeRegion]:
+        """:attr:`gilbert_elliott` under its JSON key's name (``to_dict()["gilbert_elliott_region"]``)."""
+        return self.gilbert_elliott
 
     def _short(self, text: str, value: complex | float | None) -> str:
         if value is None:
