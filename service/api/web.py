@@ -73,6 +73,9 @@ def install(app: FastAPI) -> None:
             swagger_css_url="/docs-assets/swagger-ui.css",
             swagger_favicon_url="/docs-assets/favicon.png",
             oauth2_redirect_url="/docs/oauth2-redirect",
+            # Swagger UI's default validatorUrl draws a badge from validator.swagger.io whenever the page is
+            # not opened as localhost or 127.0.0.1 (a server reached by its host name): switched off
+            swagger_ui_parameters={"validatorUrl": None},
         )
 
     @app.get("/docs/oauth2-redirect", include_in_schema=False)
