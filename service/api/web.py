@@ -73,8 +73,8 @@ def install(app: FastAPI) -> None:
             swagger_css_url="/docs-assets/swagger-ui.css",
             swagger_favicon_url="/docs-assets/favicon.png",
             oauth2_redirect_url="/docs/oauth2-redirect",
-            # Swagger UI's default validatorUrl draws a badge from validator.swagger.io whenever the page is
-            # not opened as localhost or 127.0.0.1 (a server reached by its host name): switched off
+            # the bundle's default validatorUrl is validator.swagger.io, whose badge image the standalone layout
+            # draws for a page opened by host name; BaseLayout draws no badge, and null keeps it so
             swagger_ui_parameters={"validatorUrl": None},
         )
 
