@@ -50,6 +50,12 @@ function dec(x, digits = 6) {
   return s.includes(".") && !s.includes("e") ? s.replace(/0+$/, "").replace(/\.$/, "") : s;
 }
 
+/** The value of an exact rational text such as "3/5" (null if it is not one). */
+function ratio(text) {
+  const m = /^(-?\d+)(?:\/(\d+))?$/.exec(text || "");
+  return m ? Number(m[1]) / Number(m[2] || 1) : null;
+}
+
 /** Exact texts short enough to read at a glance ("9/25", "-5/4", "2"): shown beside the decimal. */
 const SHORT_EXACT = /^-?\d{1,6}(\/\d{1,6})?$/;
 
@@ -187,7 +193,7 @@ function criticalParameterSection(c) {
   const frag = document.createDocumentFragment();
   frag.append(el("h3", `Critical value of ${c.pointer}, the rest of the channel fixed (Theorem 1 on a one-parameter family)`));
   const d = facts([
-    ["the request's value", num(c.value, Number(c.value))],
+    ["the request's value", num(c.value, ratio(c.value))],
     ["critical value", crossingsAnswer(c.crossings, null, c.exact)],
     ["along the parameter", intervalsText(c.intervals, "x")],
     ["basis", `${c.basis}${c.exact ? "" : "; labels not exact"}`],
@@ -282,15 +288,14 @@ function renderAnalyze(r) {
   if (r.tail) out.append(tailSection(r.tail));
   out.append(el("h3", "Blocks (one per class of eigenvalues with the same modulus up to a root of unity)"));
   out.append(table(
-    ["eigenvalues", "verdict", "rate |alpha|^2 sigma", "|alpha|", "sigma", "period", "degenerate", "basis"],
+    ["eigenvalues", "verdict", "rate |alpha|^2 sigma", "|alpha|", "sigma", "period", "basis"],
     (r.blocks || []).map((b) => [
       eigenvalues(b.eigenvalues, b.eigenvalues_numeric),
       b.verdict,
       dec(b.rate),
       num(b.modulus_exact, b.modulus),
       num(b.sigma_exact, b.sigma),
-      b.period,
-      b.degenerate ? "yes" : "no",
+      b.degenerate ? `${b.period}, degenerate` : b.period,
       b.basis,
     ]),
     "blocks",
