@@ -281,3 +281,37 @@ def test_tables_fit_at_400_and_1280_px_with_the_verdict_column_visible(
         assert page.evaluate("document.documentElement.scrollWidth") <= width
         shot(page, f"tables-{source.removesuffix('.json')}-{width}")
     assert outside == []
+
+
+NO_EXACT = """(report) => {
+  const problem = {status: 504, title: "Budget exceeded", detail: "the analysis took longer than its budget"};
+  const sim = {...report, stationary: {...report.stationary, verdict: null}};
+  const out = {};
+  for (const [name, node] of [["simulate", renderSimulate(sim, problem)], ["bounds", renderBounds({operating_point: {verdict_by_bounds: "stable"}}, problem)]]) {
+    const div = document.createElement("div");
+    div.append(node);
+    document.body.append(div);
+    const box = div.querySelector("#verdict");
+    out[name] = {verdict: box.dataset.verdict, word: box.querySelector(":scope > strong").innerText, text: box.innerText};
+    div.remove();
+  }
+  return out;
+}"""
+
+
+def test_where_no_exact_verdict_was_computed_the_headline_says_so(
+    server: LiveServer,
+    browser_context: tuple[Any, list[str]],
+) -> None:
+    context, outside = browser_context
+    outside.clear()
+    page = open_page(context, server.url + "/")
+    report = run_example(page, "bursty-gilbert-elliott", "simulate")
+    shown = page.evaluate(NO_EXACT, report)  # the page's own renderers, given a report without the exact verdict
+    for name in ("simulate", "bounds"):
+        assert shown[name]["verdict"] == "none"
+        assert shown[name]["word"].lower() == "no exact verdict"
+        assert "no exact verdict was computed: the analysis took longer than its budget" in shown[name]["text"]
+    assert "Monte Carlo: sample mean unreliable" in shown["simulate"]["text"]  # the evidence stays, as evidence
+    assert "Bounds: stable" in shown["bounds"]["text"]
+    assert outside == []
