@@ -216,7 +216,8 @@ function tailSection(t) {
     ["tail exponent kappa", num(t.kappa_exact, t.kappa, 4)],
     ["mean of P_t", MOMENT.mean[m.mean] || m.mean],
     ["variance of P_t", MOMENT.variance[m.variance] || m.variance],
-    ["what it means", `${t.statement}. ${m.variance === "finite" ? "" : "Sample means and variances of simulations are not to be trusted here; read quantiles."}`.trim()],
+    ["what it means", `${t.statement}. ${m.mean !== "finite" ? "A simulated mean is dominated by rare long runs of losses: read quantiles, not the sample mean."
+      : m.variance !== "finite" ? "The 95% band of a simulated mean is not to be trusted (infinite variance): read quantiles." : ""}`.trim()],
   ]);
   d.id = "tail";
   frag.append(d);
@@ -261,6 +262,20 @@ function regionsSection(reg) {
   return frag;
 }
 
+/** "gilbert_elliott: failure_rate = 3/10, recovery_rate = 3/5"; Markov histories as P(arrival | 01); per-sensor in turn. */
+function channelText(ch) {
+  const history = (k) => /^[01]+$/.test(k);
+  const params = (c) => {
+    const keys = Object.keys(c).filter((k) => k !== "model" && k !== "channels" && !(k === "order" && c.model !== "markov"));
+    return [...keys.filter((k) => !history(k)).map((k) => `${k} = ${typeof c[k] === "object" ? JSON.stringify(c[k]) : c[k]}`),
+      ...keys.filter(history).sort().map((k) => `P(arrival | ${k}) = ${c[k]}`)].join(", ");
+  };
+  if (ch.model === "per_sensor" && ch.channels) {
+    return `per sensor; ${Object.entries(ch.channels).map(([name, c]) => `${name}: ${c.model}, ${params(c)}`).join("; ")}`;
+  }
+  return `${ch.model}: ${params(ch)}`;
+}
+
 function renderAnalyze(r) {
   const out = document.createDocumentFragment();
   out.append(exactHeadline(r.verdict, []));
@@ -271,9 +286,10 @@ function renderAnalyze(r) {
     ["critical arrival probability", cap
       ? (ch.model === "gilbert_elliott" ? "no single arrival probability: see the critical rates below"
         : ch.model === "per_sensor" ? "one per sensor: see below"
-          : "not defined for this channel (it has no single arrival probability)")
+          : r.critical_parameter ? "no single arrival probability: see the critical value of the parameter below"
+            : "not defined for this channel (it has no single arrival probability)")
       : num(r.critical_arrival_probability_exact, r.critical_arrival_probability)],
-    ["channel", Object.entries(ch).map(([k, v]) => `${k}: ${typeof v === "object" ? JSON.stringify(v) : v}`).join(", ")],
+    ["channel", channelText(ch)],
     ["system", r.system ? `n = ${r.system.n}, p = ${r.system.p}` : null],
     ["theorem", r.theorem],
   ]));
