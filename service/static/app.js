@@ -268,7 +268,7 @@ async function runNow(endpoint, body) {
   setStatus(`Running ${endpoint}...`);
   const answer = await readAnswer(await post(`/v1/${endpoint}`, body));
   if (!answer.ok) return showProblem(answer.doc || { status: answer.status, title: "Error", detail: answer.text });
-  showReport(endpoint, answer.text, answer.doc, body);
+  await showReport(endpoint, answer.text, answer.doc, body);
 }
 
 async function runJob(endpoint, body) {
@@ -291,7 +291,7 @@ async function runJob(endpoint, body) {
     setStatus(`Job ${job.id}: ${job.status}`);
     if (job.status === "done") {
       const result = await fetch(`${location}/result`);
-      showReport(endpoint, await result.text(), job.result, body);
+      await showReport(endpoint, await result.text(), job.result, body);
       break;
     }
     if (job.status === "failed") { showProblem(job.problem); break; }
@@ -312,150 +312,29 @@ async function cancelJob() {
 
 // ---------------------------------------------------------------- the report
 
-const MEANING = {
-  stable: "The expected error covariance E[P_t] stays bounded: with this many packets arriving, the filter's "
-    + "mean-square error settles (Rohr, Marelli and Fu 2011, Theorem 1).",
-  unstable: "The expected error covariance E[P_t] grows without bound: too many measurements are lost "
-    + "for this system (Rohr, Marelli and Fu 2011, Theorem 1).",
-  boundary: "Exactly on the edge: some block has |alpha|^2 sigma = 1, the case the theorem leaves open "
-    + "(Rohr, Marelli and Fu 2011, Theorem 1). Any better channel is stable, any worse one unstable.",
-  undecided: "The bounds do not decide this operating point: it lies between the lower bound and the LMI "
-    + "upper bound on the critical probability (Sinopoli et al. 2003). The exact verdict (Analyze) decides it.",
-};
-
-function el(tag, text, cls) {
-  const e = document.createElement(tag);
-  if (text !== undefined && text !== null) e.textContent = String(text);
-  if (cls) e.className = cls;
-  return e;
-}
-
-function headline(verdict, extra) {
-  const box = el("div", null, `headline ${verdict}`);
-  box.id = "verdict";
-  box.append(el("strong", verdict));
-  box.append(el("p", extra || MEANING[verdict] || ""));
-  return box;
-}
-
-function facts(pairs) {
-  const dl = el("dl", null, "facts");
-  for (const [k, v] of pairs) {
-    if (v === undefined) continue;
-    dl.append(el("dt", k), el("dd", v === null ? "-" : v));
+/** The exact verdict for a report that lacks one: analyze of the same request (its report, or the problem). */
+async function exactFor(body) {
+  try {
+    const answer = await readAnswer(await post("/v1/analyze", body));
+    return answer.doc || { detail: `HTTP ${answer.status}` };
+  } catch (e) {
+    return { detail: e.message };
   }
-  return dl;
 }
 
-function table(headers, rows) {
-  const wrap = el("div", null, "table-wrap");
-  const t = el("table");
-  const tr = el("tr");
-  headers.forEach((h) => { const th = el("th", h); th.scope = "col"; tr.append(th); });
-  t.append(el("thead"));
-  t.tHead.append(tr);
-  const tb = el("tbody");
-  rows.forEach((r) => { const row = el("tr"); r.forEach((c) => row.append(el("td", c))); tb.append(row); });
-  t.append(tb);
-  wrap.append(t);
-  return wrap;
-}
-
-function list(title, items) {
-  const frag = document.createDocumentFragment();
-  frag.append(el("h3", title));
-  if (!items || items.length === 0) { frag.append(el("p", "none", "note")); return frag; }
-  const ul = el("ul", null, "list");
-  items.forEach((i) => ul.append(el("li", typeof i === "string" ? i : JSON.stringify(i))));
-  frag.append(ul);
-  return frag;
-}
-
-const num = (x) => (typeof x === "number" ? (Number.isInteger(x) ? String(x) : x.toPrecision(6).replace(/\.?0+$/, "")) : x);
-const exactAndFloat = (exact, value) => (exact === null || exact === undefined ? (value === null || value === undefined ? null : num(value)) : `${exact} = ${num(value)}`);
-
-function renderAnalyze(r) {
-  const out = document.createDocumentFragment();
-  out.append(headline(r.verdict));
-  out.append(facts([
-    ["critical arrival probability", r.critical_arrival_probability_exact === null && r.critical_arrival_probability === null
-      ? "not defined for this channel (it has no single arrival probability)"
-      : exactAndFloat(r.critical_arrival_probability_exact, r.critical_arrival_probability)],
-    ["channel", r.channel ? Object.entries(r.channel).map(([k, v]) => `${k}: ${typeof v === "object" ? JSON.stringify(v) : v}`).join(", ") : null],
-    ["system", r.system ? `n = ${r.system.n}, p = ${r.system.p}` : null],
-    ["theorem", r.theorem],
-  ]));
-  out.append(el("h3", "Blocks (one per class of eigenvalues with the same modulus up to a root of unity)"));
-  out.append(table(
-    ["eigenvalues", "|alpha|", "period", "degenerate", "sigma", "rate |alpha|^2 sigma", "verdict", "basis"],
-    (r.blocks || []).map((b) => [
-      (b.eigenvalues || []).join(", "),
-      exactAndFloat(b.modulus_exact, b.modulus),
-      b.period,
-      b.degenerate ? "yes" : "no",
-      exactAndFloat(b.sigma_exact, b.sigma),
-      num(b.rate),
-      b.verdict,
-      b.basis,
-    ]),
-  ));
-  out.append(list("Warnings", r.warnings));
-  out.append(list("Assumptions", r.assumptions));
-  return out;
-}
-
-function renderBounds(r) {
-  const out = document.createDocumentFragment();
-  const op = r.operating_point || {};
-  const why = op.reason ? ` Here: ${op.reason}.` : "";
-  out.append(headline(op.verdict_by_bounds || "undecided", `${MEANING[op.verdict_by_bounds] || ""}${why}`.trim()));
-  const cp = r.critical_probability || {};
-  const lo = cp.lower || {}, up = cp.upper || {};
-  out.append(facts([
-    ["critical probability, lower bound", lo.value === undefined ? undefined : exactAndFloat(lo.exact, lo.value)],
-    ["critical probability, upper bound (LMI)", up.value === undefined ? undefined : exactAndFloat(up.exact, up.value)],
-    ["gap", cp.gap === undefined ? undefined : num(cp.gap)],
-    ["spectral radius of A", r.spectral_radius_A === undefined ? undefined : num(r.spectral_radius_A)],
-    ["variance threshold", r.variance_threshold ? `${num(r.variance_threshold.value)} (${r.variance_threshold.meaning})` : undefined],
-    ["trace S_bar (lower bound on E[P])", r.covariance && r.covariance.S_bar ? num(r.covariance.S_bar.trace) : undefined],
-    ["trace V_bar (upper bound on E[P])", r.covariance && r.covariance.V_bar ? num(r.covariance.V_bar.trace) : undefined],
-  ]));
-  if (Array.isArray(r.sensors) && r.sensors.length) {
-    out.append(el("h3", "Critical probability of each sensor, the others held at their own (Liu and Goldsmith 2004)"));
-    out.append(table(["sensor", "lower bound", "upper bound (LMI)", "gap"], r.sensors.map((s) => {
-      const ci = s.critical_interval || {};
-      const l = ci.lower || {}, u = ci.upper || {};
-      return [s.name, exactAndFloat(l.exact, l.value), exactAndFloat(u.exact, u.value), ci.gap === undefined ? "-" : num(ci.gap)];
-    })));
-  }
-  if (r.packets) out.append(el("h3", "Packets"), table(["name", "rows", "arrival probability"], r.packets.map((p) => [p.name || "-", JSON.stringify(p.rows), exactAndFloat(p.arrival_probability_exact, p.arrival_probability)])));
-  out.append(list("Notes", r.notes));
-  return out;
-}
-
-function renderSimulate(r) {
-  const out = document.createDocumentFragment();
-  const last = (a) => (Array.isArray(a) && a.length ? a[a.length - 1] : null);
-  out.append(headline(r.diverged ? "unstable" : "stable",
-    r.diverged ? `The simulated mean of trace(P_t) diverged (at step ${r.mean_diverged_at}).`
-      : "No simulated mean of trace(P_t) diverged over the horizon. A simulation is evidence, not proof: Analyze gives the exact verdict."));
-  out.append(facts([
-    ["steps x trajectories", `${r.steps} x ${r.trajectories} (seed ${r.seed})`],
-    ["mean trace(P_t) at the last step", num(last(r.mean_trace))],
-    ["95% band at the last step", `${num(last(r.ci95_low))} to ${num(last(r.ci95_high))}`],
-    ["diverged trajectories", r.diverged_trajectories],
-    ["exact agreement", r.checks && r.checks.exact_agreement ? `${r.checks.exact_agreement.within_ci95} of ${r.checks.exact_agreement.steps_compared} exact steps inside the 95% band` : undefined],
-  ]));
-  return out;
-}
-
-function showReport(endpoint, text, doc, body) {
+async function showReport(endpoint, text, doc, body) {
   state.report = doc;
   state.reportText = text;
+  let exact = null;
+  const needsExact = endpoint === "bounds" || (endpoint === "simulate" && !(doc.stationary && doc.stationary.verdict));
+  if (needsExact) {
+    setStatus("Running analyze for the exact verdict...");
+    exact = await exactFor(body);
+  }
   const report = $("report");
   report.replaceChildren();
   const render = { analyze: renderAnalyze, bounds: renderBounds, simulate: renderSimulate }[endpoint];
-  report.append(render(doc));
+  report.append(render(doc, exact));
   setStatus(`Done: ${endpoint}.`);
   showCommands(endpoint, body);
   $("actions").hidden = false;
@@ -464,17 +343,6 @@ function showReport(endpoint, text, doc, body) {
 }
 
 // ---------------------------------------------------------------- plots
-
-function plotsFor(endpoint, request) {
-  if (endpoint === "simulate") return [["simulation", "Simulated trace(P_t): mean, 95% band and percentiles"]];
-  const ch = request && request.channel;
-  if (!ch) return [];
-  if (ch.model === "bernoulli") return [["phase-transition", "trace(S_bar) and trace(V_bar) against the arrival probability, critical values marked (Sinopoli et al. 2003, Figs. 1-3)"]];
-  if (ch.model === "per_sensor" && ch.channels && Object.keys(ch.channels).length === 2) {
-    return [["region", "Stability region of the two arrival probabilities, exact boundary overlaid (Liu and Goldsmith 2004, Figs. 4-5)"]];
-  }
-  return [];
-}
 
 async function drawPlots(endpoint, body) {
   let request = null;
