@@ -65,6 +65,11 @@ class BlockReport(ShortRepr):
     bernoulli_blind_fraction: tuple[Fraction, ...] | None = field(default=None, repr=False)
     modulus_sq_expr: Any = field(default=None, repr=False)
 
+    def _repr_items(self) -> list[tuple[str, Any]]:
+        # long algebraic texts (CRootOf with 100-digit coefficients) stay in to_dict(); the repr shows their value
+        shown = tuple(short_text(t, z) for t, z in zip(self.eigenvalues, self.eigenvalues_numeric))
+        return [("eigenvalues", shown), *super()._repr_items()[1:]]
+
 
 @dataclass(frozen=True, repr=False)
 class StabilityReport(Report):
@@ -92,6 +97,13 @@ class StabilityReport(Report):
         if value is None:
             return text
         return self.display.get(text) or short_text(text, value)
+
+    def _repr_items(self) -> list[tuple[str, Any]]:
+        items = dict(super()._repr_items())
+        exact = self.critical_arrival_probability_exact
+        if exact is not None:
+            items["critical_arrival_probability_exact"] = self._short(exact, self.critical_arrival_probability)
+        return list(items.items())
 
     def summary(self) -> str:
         """Readable multi-line summary for the terminal."""
