@@ -42,6 +42,7 @@ import sympy
 from .._budget import Budget
 from .._reporting import ReportPart
 from ..model._types import MarkovChannel
+from ..structure._display import readable
 from ..structure._fmo import FmoBlock
 from ._blind import Margins, SlotSpace, search
 from ._line import Candidate, add_candidates, roots_in_unit, scan
@@ -469,16 +470,25 @@ class GeRegion(ReportPart):
     def summary_lines(self) -> list[str]:
         out = []
         for line, name in ((self.recovery, "recovery rate q"), (self.failure, "failure rate p")):
-            fixed = f"at {'p' if line.variable == 'recovery_rate' else 'q'} = {line.fixed}"
+            fixed = f"at {'p' if line.variable == 'recovery_rate' else 'q'} = {readable(line.fixed)}"
             if line.crossings:
                 parts = ", ".join(
-                    f"{c.value:.6g}" + (f" (exact: {c.value_exact})" if c.value_exact else "") + f" [{c.left} below]"
+                    f"{c.value:.6g}"
+                    + (f" (exact: {_exact_shown(c.value_exact, c.value, line.variable)})" if c.value_exact else "")
+                    + f" [{c.left} below]"
                     for c in line.crossings
                 )
                 out.append(f"critical {name} {fixed}: {parts}")
             else:
                 out.append(f"critical {name} {fixed}: none ({line.status()})")
         return out
+
+
+def _exact_shown(text: str, value: float, variable: str) -> str:
+    """The exact text of a critical value when short; else the JSON field that keeps it (the decimal is beside it)."""
+    if readable(text, value) == text:
+        return text
+    return f"JSON field gilbert_elliott_region.critical_{variable}.crossings[].value_exact"
 
 
 def ge_region(

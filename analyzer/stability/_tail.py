@@ -123,7 +123,7 @@ class TailReport(ReportPart):
 
         exact = ""
         if self.kappa_exact and len(self.kappa_exact) > SHORT_TEXT_CHARS:
-            exact = " (exact form, too long to print here: JSON field tail.kappa_exact)"
+            exact = " (exact form: JSON field tail.kappa_exact)"
         elif self.kappa_exact:
             exact = f" (exact: {self.kappa_exact})"
         return [

@@ -103,7 +103,7 @@ def test_reprs_show_algebraic_numbers_as_decimals_with_their_degree(pendulum) ->
 def test_long_tail_exponent_names_its_json_field(pendulum) -> None:
     (line,) = [ln for ln in pendulum.summary().splitlines() if ln.startswith("tail exponent")]
     assert "see --json" not in line
-    assert "tail exponent kappa = 12.3872 (exact form, too long to print here: JSON field tail.kappa_exact)" in line
+    assert "tail exponent kappa = 12.3872 (exact form: JSON field tail.kappa_exact)" in line
     assert len(pendulum.to_dict()["tail"]["kappa_exact"]) > 40
 
 
@@ -121,3 +121,25 @@ def test_bounds_summary_says_it_computes_no_exact_verdict() -> None:
     first = report.summary().splitlines()[0]
     assert first.startswith("exact verdict: not computed here (kfio analyze gives it")
     assert "verdict" not in report.to_dict() or report.to_dict()["verdict"] == report.verdict
+
+
+def test_gilbert_elliott_summary_shows_long_exact_numbers_as_decimals() -> None:
+    import re
+
+    report = analyze(
+        load_request(
+            json.dumps(
+                {
+                    "system": {"A": [[1.2504897194771216, 0], [0, -1.2504897194771216]], "C": [[1, 1]]},
+                    "channel": {"model": "gilbert_elliott", "failure_rate": 0.30000123456789, "recovery_rate": 0.5},
+                }
+            )
+        )
+    )
+    text = report.summary()
+    assert not re.search(r"\d{13}", text), text  # no 13-digit numerators, denominators or coefficients
+    assert "eigenvalues ~1.25049, ~-1.25049:" in text
+    assert "critical recovery rate q at p = ~0.300001: 0.487428 (exact: JSON field " in text
+    crossing = report.to_dict()["gilbert_elliott_region"]["critical_recovery_rate"]["crossings"][0]
+    assert crossing["value"] == pytest.approx(0.487428, abs=1e-6) and "sqrt(" in crossing["value_exact"]
+    assert report.to_dict()["blocks"][0]["eigenvalues"][0] == "781556074673201/625000000000000"
