@@ -13,6 +13,7 @@ import numpy as np
 
 from kfio.errors import InvalidInput
 from kfio.model import parse_number
+from kfio.structure._display import readable
 from kfio.sweep._boundary import exact_boundary
 from kfio.sweep._engine import SweepResult
 
@@ -94,7 +95,10 @@ def sweep_figure(result: SweepResult) -> Any:
             ax.axhline(1.0, color="black", lw=0.8, ls="--", label="rate = 1")
         if boundary and boundary["kind"] == "threshold":
             ax.axvline(
-                boundary["value"], color="#264653", lw=1.2, label=f"exact critical probability {boundary['exact']}"
+                boundary["value"],
+                color="#264653",
+                lw=1.2,
+                label=f"exact critical probability {readable(boundary['exact'], boundary['value'])}",
             )
         if cmd != "analyze" and np.nanmin(np.where(y > 0, y, np.nan), initial=np.inf) < np.inf:
             ax.set_yscale("log")

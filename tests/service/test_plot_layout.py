@@ -132,3 +132,28 @@ def test_sweep_plot_title_says_whose_verdict_the_colours_are() -> None:
     )
     title = _check_layout(sweep_figure(run_sweep(spec, engine="serial")))
     assert "exact verdict per point (Rohr, Marelli and Fu 2014, Theorem 1)" in title
+
+
+def test_one_axis_sweep_plot_names_a_long_critical_probability_by_its_decimal() -> None:
+    from pathlib import Path
+
+    pendulum = json.loads((Path(__file__).resolve().parents[2] / "examples" / "pendulum_c2d.json").read_text())
+    spec = load_sweep(
+        json.dumps(
+            {
+                "command": "analyze",
+                "base": pendulum,
+                "axes": [{"pointer": "/channel/arrival_probability", "values": ["1/2", "9/10"]}],
+            }
+        )
+    )
+    fig = sweep_figure(run_sweep(spec, engine="serial"))
+    _check_layout(fig)
+    (ax,) = fig.axes
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    exact = analyze(load_request(json.dumps(pendulum)))
+    assert "CRootOf" in exact.critical_arrival_probability_exact
+    (label,) = [t for t in labels if t.startswith("exact critical probability")]
+    assert "CRootOf" not in label and label.endswith(f"algebraic number, {exact.critical_arrival_probability:.6g}")
+    (line,) = [ln for ln in ax.get_lines() if ln.get_label().startswith("exact critical probability")]
+    assert list(line.get_xdata()) == [exact.critical_arrival_probability] * 2
