@@ -16,6 +16,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from kfio import Budget, InvalidInput, Request
+from kfio.errors import AnalyzerError
 from kfio.model._types import MarkovChannel, PerSensorChannel, to_float
 
 _SIZE = (7.0, 4.5)
@@ -294,7 +295,10 @@ def region(request: Request, budget: Budget, params: Mapping[str, Any]) -> bytes
     if grid is None:  # outside Assumption 1: let the exact route say why
         grid = exact_region_grid(request, points, budget=budget)
     exact = np.array([[_EXACT_CODE[x] for x in row] for row in grid.labels])
-    verdict = analyze(request, budget=budget).verdict
+    try:
+        verdict: str | None = analyze(request, budget=budget).verdict
+    except AnalyzerError:  # the title then says no exact verdict was computed; the map is still the bounds'
+        verdict = None
     return _png(region_figure(values, labels, exact, grid.curve, tuple(report["axes"]), request, verdict))
 
 
