@@ -23,8 +23,18 @@ from .model._types import Matrix, Sensor
 _MATRICES = ("A", "C", "Q", "R")
 
 
+#: Fraction texts longer than this are shown as ``~decimal`` in the repr (exact in :meth:`System.to_dict`).
+REPR_TEXT_CHARS = 12
+
+
 def _matrix_text(m: Matrix) -> list[list[str]]:
     return [[fraction_text(x) for x in row] for row in m]
+
+
+def _readable(x: Any) -> str:
+    """The exact text when short (``'11/10'``), else ``'~'`` and 6 significant digits (``'~1.00049'``)."""
+    text = fraction_text(x)
+    return text if len(text) <= REPR_TEXT_CHARS else f"~{float(x):.6g}"
 
 
 class System(_types.System):
@@ -75,6 +85,8 @@ class System(_types.System):
     (Fraction(11, 10), 2, 1)
     >>> sys
     System(A=[['5/4', '0'], ['1', '11/10']], C=[['1', '1']], Q=[['20', '0'], ['0', '20']], R=[['5/2']])
+    >>> System(A=[[1.0004897194771216]], C=[[1]])  # long exact texts: see to_dict()
+    System(A=[['~1.00049']], C=[['1']])
     >>> System(A=[[1, 2j]], C=[[1]])
     Traceback (most recent call last):
     ...
@@ -173,7 +185,12 @@ class System(_types.System):
         return out
 
     def __repr__(self) -> str:
-        parts = [f"{k}={v!r}" for k, v in self.to_dict().items() if k != "sensors"]
+        """Short exact texts as they are, long ones (a ``control.c2d`` plant) as ``'~'`` and a decimal."""
+        parts = [
+            f"{k}={[[_readable(x) for x in row] for row in getattr(self, k)]!r}"
+            for k in _MATRICES
+            if getattr(self, k) is not None
+        ]
         if self.sensors is not None:
             parts.append(f"sensors={ {s.name: list(s.rows) for s in self.sensors}!r}")
         return f"System({', '.join(parts)})"

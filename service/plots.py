@@ -16,6 +16,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from kfio import Budget, InvalidInput, Request
+from kfio.errors import AnalyzerError
 from kfio.model._types import MarkovChannel, PerSensorChannel, to_float
 
 _SIZE = (7.0, 4.5)
@@ -23,15 +24,44 @@ _DPI = 100
 
 
 def _figure() -> Any:
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    return Figure(figsize=_SIZE, dpi=_DPI, layout="constrained")
+    fig = Figure(figsize=_SIZE, dpi=_DPI, layout="constrained")
+    FigureCanvasAgg(fig)  # a renderer to measure text with (titles are fitted to the width)
+    return fig
 
 
 def _png(fig: Any) -> bytes:
     buf = io.BytesIO()
     fig.savefig(buf, format="png", metadata={"Software": None})
     return buf.getvalue()
+
+
+def _headline(fig: Any, text: str, fontsize: float = 10.0) -> Any:
+    """The figure's title (the exact verdict first), shrunk until every line fits the figure's width.
+
+    A figure title, not an axes title: it is centred on the figure, so a legend
+    beside the axes cannot push it past the left edge.
+    """
+    title = fig.suptitle(text, fontsize=fontsize, parse_math=False)
+    renderer = fig.canvas.get_renderer()
+    while title.get_window_extent(renderer).width > 0.98 * fig.bbox.width and title.get_fontsize() > 5:
+        title.set_fontsize(title.get_fontsize() - 0.5)
+    return title
+
+
+def _legend_beside(ax: Any, handles: Any = None, fontsize: str = "x-small") -> Any:
+    """The legend right of the axes (outside them): it never covers data."""
+    kwargs: dict[str, Any] = {} if handles is None else {"handles": handles}
+    return ax.legend(fontsize=fontsize, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, **kwargs)
+
+
+def _verdict_text(verdict: str | None) -> str:
+    """The exact verdict as a headline (Rohr, Marelli and Fu 2014, Theorem 1), or that none was computed."""
+    if verdict is None:
+        return "exact verdict not computed"
+    return f"{verdict.upper()} (exact, Rohr, Marelli and Fu 2014, Thm 1)"
 
 
 def _nan(values: Any) -> np.ndarray:
@@ -72,7 +102,14 @@ def simulation(request: Request, budget: Budget, params: Mapping[str, Any]) -> b
 
 
 def simulation_figure(report: Mapping[str, Any], request: Request) -> Any:
-    """The figure of :func:`simulation` for a simulation report (its ``to_dict()``)."""
+    """The figure of :func:`simulation` for a simulation report (its ``to_dict()``).
+
+    The title starts with the exact verdict the report carries
+    (``stationary.verdict``, Theorem 1), then what the sample shows
+    (:func:`kfio.simulation._stationary.verdict_headline`).
+    """
+    from kfio.simulation._stationary import verdict_headline
+
     t = np.arange(report["steps"] + 1)
     stationary = report.get("stationary") or {}
     unreliable = bool(stationary.get("mean_unreliable"))
@@ -115,14 +152,20 @@ def simulation_figure(report: Mapping[str, Any], request: Request) -> Any:
             ax.set_ylim(top=top * 10)
     ax.set_xlabel("t")
     ax.set_ylabel("trace(P_t), P_t = P(t|t-1)")
-    title = f"Simulated trace(P_t): n = {request.system.n}, {_channel_text(request)}"
-    if stationary.get("verdict"):
-        title += f", verdict {stationary['verdict']} (Theorem 1)"
-    sub = f"{report['trajectories']} trajectories, seed {report['seed']}"
-    if unreliable:
-        sub += f"; kappa = {stationary['tail_exponent_exact']:.3g} <= 2: sample mean unreliable, read the percentiles"
-    ax.set_title(title + "\n" + sub, fontsize="small")
-    ax.legend(fontsize="x-small")
+    exact, sample = verdict_headline(
+        stationary.get("verdict"),
+        stationary.get("tail_exponent_exact"),
+        report.get("mean_diverged_at"),
+        report["steps"],
+    )
+    if stationary.get("verdict") is None:
+        exact = _verdict_text(None)
+    _headline(
+        fig,
+        f"{exact}: n = {request.system.n}, {_channel_text(request)}\n"
+        f"{sample}; {report['trajectories']} trajectories, seed {report['seed']}",
+    )
+    _legend_beside(ax)
     ax.grid(alpha=0.3)
     return fig
 
@@ -143,7 +186,7 @@ def _value(node: Any) -> float | None:
     return None if node is None or node.get("value") is None else float(node["value"])
 
 
-def _critical_values(request: Request, budget: Budget) -> dict[str, float | None]:
+def _critical_values(request: Request, budget: Budget) -> dict[str, Any]:
     """Bounds on lambda_c (:func:`kfio.mare._compute.compute_bounds`) and the exact value (:func:`kfio.analyze`)."""
     from kfio import analyze
     from kfio.mare._compute import compute_bounds
@@ -156,6 +199,7 @@ def _critical_values(request: Request, budget: Budget) -> dict[str, float | None
         "lower": _value(crit.get("lower")),
         "upper": _value(crit.get("upper")),
         "exact": None if value is None else float(value),
+        "verdict": exact.get("verdict"),
     }
 
 
@@ -207,8 +251,12 @@ def phase_transition(request: Request, budget: Budget, params: Mapping[str, Any]
     ax.set_xlim(lo, hi)
     ax.set_xlabel("arrival probability lambda")
     ax.set_ylabel("trace")
-    ax.set_title("Phase transition of the expected error covariance")
-    ax.legend(fontsize="small")
+    _headline(
+        fig,
+        f"{_verdict_text(crit['verdict'])} at lambda = {lam0:.4g}\n"
+        "Phase transition of lim E[P_t]: bounds (Sinopoli et al. 2004) and exact lambda_c",
+    )
+    _legend_beside(ax)
     ax.grid(alpha=0.3, which="both")
     return _png(fig)
 
@@ -230,6 +278,7 @@ def region(request: Request, budget: Budget, params: Mapping[str, Any]) -> bytes
     """
     import dataclasses
 
+    from kfio import analyze
     from kfio.mare._compute import compute_bounds
     from kfio.stability._regions import exact_region_grid
 
@@ -246,15 +295,26 @@ def region(request: Request, budget: Budget, params: Mapping[str, Any]) -> bytes
     if grid is None:  # outside Assumption 1: let the exact route say why
         grid = exact_region_grid(request, points, budget=budget)
     exact = np.array([[_EXACT_CODE[x] for x in row] for row in grid.labels])
-    return _draw_region(values, labels, exact, grid.curve, tuple(report["axes"]), request)
+    try:
+        verdict: str | None = analyze(request, budget=budget).verdict
+    except AnalyzerError:  # the title then says no exact verdict was computed; the map is still the bounds'
+        verdict = None
+    return _png(region_figure(values, labels, exact, grid.curve, tuple(report["axes"]), request, verdict))
 
 
 _EXACT_CODE = {"unstable": -1.0, "stable": 1.0, "boundary": 0.0}
 
 
-def _draw_region(
-    values: np.ndarray, labels: np.ndarray, exact: np.ndarray, curve: Any, axes: tuple[str, ...], request: Request
-) -> bytes:
+def region_figure(
+    values: np.ndarray,
+    labels: np.ndarray,
+    exact: np.ndarray,
+    curve: Any,
+    axes: tuple[str, ...],
+    request: Request,
+    verdict: str | None,
+) -> Any:
+    """The figure of :func:`region`: bound labels, exact labels and curve, the request marked, the verdict on top."""
     from matplotlib.colors import ListedColormap
     from matplotlib.patches import Patch
 
@@ -297,13 +357,14 @@ def _draw_region(
     # sensor names are user text: drawn as plain text, never through mathtext or TeX
     ax.set_xlabel(f"lambda_1 ({axes[0]})", parse_math=False, usetex=False)
     ax.set_ylabel(f"lambda_2 ({axes[1]})", parse_math=False, usetex=False)
-    ax.set_title(
-        "Stability region for two sensors: bounds (colours, Liu and Goldsmith 2004)\n"
-        "and exact verdict (markers, line: kfio extension of Rohr, Marelli and Fu 2014)",
-        fontsize="medium",
+    _headline(
+        fig,
+        f"{_verdict_text(verdict)} at the request (star), lambda = ({point[0]:.4g}, {point[1]:.4g})\n"
+        "Two sensors: bounds (colours, Liu and Goldsmith 2004); exact (markers, line: kfio extension of "
+        "Rohr, Marelli and Fu 2014)",
     )
-    ax.legend(handles=handles, fontsize="x-small", loc="upper left", bbox_to_anchor=(1.01, 1.0))
-    return _png(fig)
+    _legend_beside(ax, handles)
+    return fig
 
 
 # -- exact Gilbert-Elliott region (issue 11) ----------------------------------
@@ -313,9 +374,9 @@ def ge_region(request: Request, budget: Budget, params: Mapping[str, Any]) -> by
     """The (recovery rate q, failure rate p) square of a Gilbert-Elliott channel, labelled exactly.
 
     Every cell is Theorem 1's exact verdict (Rohr, Marelli and Fu, 2014) at its
-    centre; the line is the boundary ``|alpha_k|^2 sigma_k(p, q) = 1`` drawn
-    piece by piece from the closed forms of
-    :mod:`kfio.stability._ge_region`; the star is the request.
+    centre; the lines are the boundary ``|alpha_k|^2 sigma_k(p, q) = 1`` traced by
+    :func:`kfio.stability._ge_boundary.boundary_lines` (the same lines a (p, q)
+    sweep's plot draws), one colour per closed-form piece; the star is the request.
     """
     import dataclasses
 
@@ -328,13 +389,29 @@ def ge_region(request: Request, budget: Budget, params: Mapping[str, Any]) -> by
     opts = {**request.options.get("analyze", {}), "ge_grid": points}
     gridded = dataclasses.replace(request, options={**request.options, "analyze": opts})
     report = analyze(gridded, budget)
-    region = report.gilbert_elliott
-    return _draw_ge_region(region, report.verdict, request)
+    return _draw_ge_region(report.gilbert_elliott, report.verdict, request)
 
 
 def _draw_ge_region(region: Any, verdict: str, request: Request) -> bytes:
+    return _png(ge_region_figure(region, verdict, request))
+
+
+#: Gid of the boundary lines in the Gilbert-Elliott and sweep figures (tests find them by it).
+GE_BOUNDARY_GID = "ge-boundary"
+
+
+def ge_region_figure(region: Any, verdict: str, request: Request) -> Any:
+    """The figure of :func:`ge_region` for an analysis' ``gilbert_elliott`` region (with its map).
+
+    The title starts with the exact verdict at the request's ``(q, p)``, which
+    is marked by a star; the critical rates ``q*(p)`` and ``p*(q)`` of the
+    request's lines are drawn as ticks on the dashed lines through it.
+    """
     from matplotlib.colors import ListedColormap
     from matplotlib.patches import Patch
+
+    from kfio.stability._ge_boundary import boundary_lines
+    from kfio.stability._ge_region import GeStructure
 
     m = region.map
     rates = np.array(m.rates)
@@ -350,28 +427,61 @@ def _draw_ge_region(region: Any, verdict: str, request: Request) -> bytes:
         Patch(color="#e8a0a0", label="unstable (exact)"),
     ]
     colours = ["navy", "darkorange", "purple", "teal", "brown", "black"]
-    curve = np.array(m.curve, dtype=float).reshape(-1, 3)
-    for k, piece in enumerate(m.pieces):
-        pts = curve[curve[:, 2] == k]
-        if pts.size:
-            label = f"block {', '.join(piece['eigenvalues'])}: {piece['equation']}"
-            handles.append(
-                ax.scatter(pts[:, 0], pts[:, 1], s=3, c=colours[k % len(colours)], label=_shorten(label, 70))
-            )
+    patterns = region.patterns
+    labelled: dict[int, Any] = {}
+    for line in boundary_lines(GeStructure(patterns)):
+        q, p, which = np.array(line.q), np.array(line.p), np.array(line.pattern)
+        if line.closed:
+            q, p, which = np.append(q, q[0]), np.append(p, p[0]), np.append(which, which[0])
+        cuts = np.flatnonzero(np.diff(which)) + 1
+        for lo, hi in zip([0, *cuts], [*cuts, len(q)]):
+            k = int(which[lo])
+            end = min(hi + 1, len(q))  # runs share their last vertex: the line stays connected
+            (drawn,) = ax.plot(q[lo:end], p[lo:end], color=colours[k % len(colours)], lw=1.8, gid=GE_BOUNDARY_GID)
+            if k not in labelled:
+                piece = patterns[k].describe()
+                drawn.set_label(_shorten(f"block {', '.join(piece['eigenvalues'])}: {piece['equation']}", 60))
+                labelled[k] = drawn
+    handles.extend(labelled.values())
     p0, q0 = 1 - float(request.channel.table[1]), float(request.channel.table[0])  # type: ignore[union-attr]
-    handles.append(ax.scatter([q0], [p0], marker="*", s=140, c="blue", label="request"))
+    ax.axvline(q0, color="blue", lw=0.6, ls="--")
+    ax.axhline(p0, color="blue", lw=0.6, ls="--")
+    for c in region.recovery.crossings:
+        ax.plot([c.value], [p0], "|", color="blue", ms=10, mew=1.5)
+    for c in region.failure.crossings:
+        ax.plot([q0], [c.value], "_", color="blue", ms=10, mew=1.5)
+    handles.append(ax.scatter([q0], [p0], marker="*", s=160, c="blue", edgecolors="white", zorder=5, label="request"))
     ax.set_xlim(extent[0], extent[1])
     ax.set_ylim(extent[2], extent[3])
     ax.set_xlabel("recovery rate q = P(arrived | lost)")
     ax.set_ylabel("failure rate p = P(lost | arrived)")
-    n = request.system.n
-    ax.set_title(
-        f"Gilbert-Elliott region, n = {n}; request (q, p) = ({q0:.3g}, {p0:.3g}): {verdict}\n"
-        f"{len(rates)} x {len(rates)} cells of {step:.3g}, exact per cell (Rohr, Marelli, Fu 2014, Thm 1)",
-        fontsize="small",
+    _headline(
+        fig,
+        f"{_verdict_text(verdict)} at the request (star): q = {q0:.4g}, p = {p0:.4g}\n"
+        f"{_critical_text(region)}\n"
+        f"Gilbert-Elliott region, n = {request.system.n}: {len(rates)} x {len(rates)} cells of {step:.3g}, "
+        "exact per cell; lines: exact boundary",
     )
-    ax.legend(handles=handles, fontsize="xx-small", loc="upper left", bbox_to_anchor=(1.01, 1.0))
-    return _png(fig)
+    _legend_beside(ax, handles, fontsize="xx-small")
+    return fig
+
+
+def _critical_text(region: Any) -> str:
+    """``q*(p0) = ...; p*(q0) = ...`` from the report's exact critical rates (ticks on the dashed lines)."""
+    parts = []
+    for line, name, at in ((region.recovery, "q*", "p"), (region.failure, "p*", "q")):
+        values = ", ".join(f"{c.value:.4g}" for c in line.crossings) or f"none ({line.status()})"
+        parts.append(f"{name}({at} = {_short_fraction(line.fixed)}) = {values}")
+    return "critical rates (ticks): " + "; ".join(parts)
+
+
+def _short_fraction(text: str) -> str:
+    """Exact rational text, or its decimal when long."""
+    if len(text) <= 9:
+        return text
+    from fractions import Fraction
+
+    return f"{float(Fraction(text)):.6g}"
 
 
 def _shorten(text: str, width: int) -> str:

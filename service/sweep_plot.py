@@ -13,10 +13,11 @@ import numpy as np
 
 from kfio.errors import InvalidInput
 from kfio.model import parse_number
+from kfio.structure._display import readable
 from kfio.sweep._boundary import exact_boundary
 from kfio.sweep._engine import SweepResult
 
-from .plots import _figure, _png
+from .plots import GE_BOUNDARY_GID, _figure, _headline, _legend_beside, _png
 
 _COLORS = {"stable": "#2a9d8f", "boundary": "#e9c46a", "unstable": "#e76f51", None: "#bbbbbb"}
 _METRIC = {"analyze": "worst_rate", "bounds": "trace_V_bar", "simulate": "final_mean_trace"}
@@ -39,13 +40,30 @@ def _label(command: str, fields: dict[str, Any]) -> str | None:
     return v
 
 
+#: What each command's colours are: only ``analyze`` computes the exact verdict.
+_WHAT = {
+    "analyze": "exact verdict per point (Rohr, Marelli and Fu 2014, Theorem 1)",
+    "bounds": "verdict of the bounds per point (Sinopoli et al. 2004); no exact verdict computed",
+    "simulate": "Monte Carlo divergence per point; no exact verdict computed (sweep analyze for it)",
+}
+
+
 def sweep_png(result: SweepResult) -> bytes:
+    """The PNG of :func:`sweep_figure`."""
+    return _png(sweep_figure(result))
+
+
+def sweep_figure(result: SweepResult) -> Any:
     """A 1-D sweep as the key metric against the axis; a 2-D sweep as a labelled map.
 
     1-D ``analyze``: the worst rate ``|alpha|^2 sigma`` against the coordinate,
     coloured by verdict, with the line rate = 1 and the exact critical
     probability where kfio knows it.  2-D: each grid cell coloured by its
-    verdict (grey: error), with the exact boundary curve of a two-sensor sweep.
+    verdict (grey: error), with the exact boundary of
+    :func:`kfio.sweep._boundary.exact_boundary` (for a Gilbert-Elliott (p, q)
+    sweep the lines of :func:`kfio.stability._ge_boundary.boundary_lines`, the
+    ones ``kfio analyze --ge-plot`` draws).  The title says whose verdict the
+    colours are; the legend sits beside the axes.
     """
     spec = result.spec
     if spec.requests is not None or not 1 <= len(spec.axes) <= 2 or (len(spec.axes) == 2 and spec.combine != "grid"):
@@ -77,7 +95,10 @@ def sweep_png(result: SweepResult) -> bytes:
             ax.axhline(1.0, color="black", lw=0.8, ls="--", label="rate = 1")
         if boundary and boundary["kind"] == "threshold":
             ax.axvline(
-                boundary["value"], color="#264653", lw=1.2, label=f"exact critical probability {boundary['exact']}"
+                boundary["value"],
+                color="#264653",
+                lw=1.2,
+                label=f"exact critical probability {readable(boundary['exact'], boundary['value'])}",
             )
         if cmd != "analyze" and np.nanmin(np.where(y > 0, y, np.nan), initial=np.inf) < np.inf:
             ax.set_yscale("log")
@@ -85,7 +106,7 @@ def sweep_png(result: SweepResult) -> bytes:
         ax.set_ylabel(
             {"analyze": "worst rate |alpha|^2 sigma", "bounds": "trace V_bar", "simulate": "final mean trace P"}[cmd]
         )
-        ax.legend(fontsize=8)
+        _legend_beside(ax)
     else:
         ax_x, ax_y = spec.axes
         xs = [_coordinate(v, ax_x.name) for v in ax_x.values]
@@ -108,15 +129,16 @@ def sweep_png(result: SweepResult) -> bytes:
         if boundary and boundary["kind"] == "curve":
             bx = np.array([np.nan if v is None else v for v in boundary["x"]], dtype=float)
             by = np.array([np.nan if v is None else v for v in boundary["y"]], dtype=float)
-            (line,) = ax.plot(bx, by, color="black", lw=1.5, label="exact boundary")
+            (line,) = ax.plot(bx, by, color="black", lw=1.5, label="exact boundary", gid=GE_BOUNDARY_GID)
             handles.append(line)
-        ax.set_xlim(min(xs), max(xs)) if len(xs) > 1 else None
-        ax.set_ylim(min(ys), max(ys)) if len(ys) > 1 else None
+        ex, ey = _edges(xs), _edges(ys)
+        ax.set_xlim(ex.min(), ex.max())
+        ax.set_ylim(ey.min(), ey.max())
         ax.set_xlabel(ax_x.name, parse_math=False)
         ax.set_ylabel(ax_y.name, parse_math=False)
-        ax.legend(handles=handles, fontsize=8, loc="lower left")
-    ax.set_title(f"kfio sweep: {cmd}, {spec.size} points", parse_math=False)
-    return _png(fig)
+        _legend_beside(ax, handles)
+    _headline(fig, f"kfio sweep {cmd}, {spec.size} points: {_WHAT[cmd]}")
+    return fig
 
 
 def _edges(v: list[float]) -> np.ndarray:
@@ -128,4 +150,4 @@ def _edges(v: list[float]) -> np.ndarray:
     return np.concatenate([[c[0] - (mid[0] - c[0])], mid, [c[-1] + (c[-1] - mid[-1])]])
 
 
-__all__ = ["sweep_png"]
+__all__ = ["sweep_figure", "sweep_png"]

@@ -108,6 +108,13 @@ class RegionMap(ReportPart):
     exact: RegionGrid | None = None  # kfio.stability._regions.exact_region_grid(...), an extension
 
 
+#: The bounds decide only where they are conclusive; the exact verdict is another command's.
+NO_EXACT_VERDICT = (
+    "exact verdict: not computed here (kfio analyze gives it, Rohr, Marelli and Fu 2014, Theorem 1); "
+    "the bounds below are evidence"
+)
+
+
 @dataclass(frozen=True, repr=False)
 class BoundsReport(Report):
     """Everything ``kfio bounds`` reports; :meth:`to_dict` is the JSON, :meth:`summary` the text."""
@@ -133,7 +140,8 @@ class BoundsReport(Report):
     def _repr_items(self) -> list[tuple[str, Any]]:
         intervals = tuple((c.lower, None if c.upper.value is None else float(c.upper.value)) for c in self.critical)
         return [
-            ("verdict", self.verdict),
+            ("exact_verdict", "not computed (kfio.analyze)"),
+            ("verdict_by_bounds", self.verdict),
             ("critical_intervals", intervals),
             ("trace_S_bar", _trace(self.covariance.s_bar)),
             ("trace_V_bar", _trace(self.covariance.v_bar.matrix)),
@@ -160,6 +168,7 @@ class BoundsReport(Report):
         where = ", ".join(
             f"{p.name or 'packet'}: lambda = {float(lam):g}" for p, lam in zip(self.packets, self.arrival)
         )
+        lines.append(NO_EXACT_VERDICT)
         lines.append(f"kfio bounds ({len(self.packets)} packet{'s' if len(self.packets) > 1 else ''}; {where})")
         lines.append(f"  rho(A) = {self.rho:.6g}")
         for p, c in zip(self.packets, self.critical):

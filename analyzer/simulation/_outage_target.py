@@ -122,14 +122,32 @@ class OutageTarget(ReportPart):
     probes: tuple[tuple[float, float, float, float], ...]
 
     def summary_lines(self) -> list[str]:
-        def f(x: float | None) -> str:
-            return "none in [0, 1]" if x is None else f"{x:.4g}"
-
-        return [
+        """One line: the estimate and its bracket, or plainly why the target cannot be reached."""
+        head = (
             f"outage target P(trace P > {self.threshold:g}) <= {self.epsilon:g} (estimated, {self.trajectories} "
-            f"trajectories x {self.steps} steps): smallest lambda about {f(self.estimate)}; the 95% interval "
-            f"straddles epsilon between {f(self.insufficient)} and {f(self.sufficient)}"
-        ]
+            f"trajectories x {self.steps} steps): "
+        )
+        if self.estimate is None:
+            at_one = [o for lam, o, _, _ in self.probes if lam == 1.0]
+            seen = f" (estimated outage {at_one[0]:.4g})" if at_one else ""
+            return [
+                head + "cannot be reached for any lambda in [0, 1]: even when every packet arrives (lambda = 1) "
+                f"the outage exceeds {self.epsilon:g}{seen}, so the threshold {self.threshold:g} lies below the "
+                "trace the filter settles at without losses"
+            ]
+        if self.estimate == 0.0:
+            return [head + "met at every lambda in [0, 1], even lambda = 0 (no packet arrives)"]
+        if self.insufficient is not None and self.sufficient is not None:
+            bracket = (
+                f"the 95% interval straddles epsilon between lambda = {self.insufficient:.4g} and {self.sufficient:.4g}"
+            )
+        elif self.sufficient is not None:
+            bracket = f"the 95% interval lies at or below epsilon from lambda = {self.sufficient:.4g}; no probe has it wholly above"
+        elif self.insufficient is not None:
+            bracket = f"the 95% interval lies above epsilon below lambda = {self.insufficient:.4g}; no probe has it wholly at or below"
+        else:
+            bracket = "the 95% interval contains epsilon at every probe: more trajectories would narrow it"
+        return [head + f"smallest lambda about {self.estimate:.4g}; {bracket}"]
 
 
 def _first_true(test: Callable[[float], bool], tol: float) -> float | None:

@@ -62,7 +62,7 @@ from ._setup import (
     parse_options,
     sim_system,
 )
-from ._stationary import StationaryReport, parse_thresholds, stationary_report
+from ._stationary import StationaryReport, parse_thresholds, stationary_report, verdict_headline
 
 #: Seconds the simulation may spend on Theorem 1's report (tail exponent, growth rate) before going without it.
 EXACT_ANALYSIS_S = 5.0
@@ -180,9 +180,21 @@ class SimulationReport(Report):
             "max_abs_z": json_float(z.max()) if z.size else None,
         }
 
+    def headline(self) -> tuple[str, str]:
+        """The exact verdict and the Monte Carlo evidence (:func:`kfio.simulation._stationary.verdict_headline`)."""
+        st = self.stationary
+        return verdict_headline(
+            None if st is None else st.verdict,
+            None if st is None else st.kappa,
+            self.mean_diverged_at,
+            self.options.steps,
+        )
+
     def _repr_items(self) -> list[tuple[str, Any]]:
         o = self.options
+        st = self.stationary
         return [
+            ("exact_verdict", "not computed" if st is None or st.verdict is None else st.verdict),
             ("steps", o.steps),
             ("trajectories", o.trajectories),
             ("seed", o.seed),
@@ -193,7 +205,8 @@ class SimulationReport(Report):
     def summary(self) -> str:
         o = self.options
         low, high = self.ci95
-        lines = [w for w in self.stationary.summary_lines() if w.startswith("warning")] if self.stationary else []
+        lines = [". ".join(self.headline())]
+        lines += [w for w in self.stationary.summary_lines() if w.startswith("warning")] if self.stationary else []
         lines += [
             f"Monte Carlo: {o.trajectories} trajectories x {o.steps} steps, seed {o.seed}, "
             f"channel history at t = 0: {o.initial_channel}, P0 = {'Q' if o.P0_is_default else 'given'}",

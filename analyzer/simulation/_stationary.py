@@ -163,6 +163,51 @@ class StationaryReport(ReportPart):
         return lines
 
 
+def verdict_headline(
+    verdict: str | None, kappa: float | None, mean_diverged_at: int | None, steps: int
+) -> tuple[str, str]:
+    """The first line of every view of a simulation: the exact verdict, then what the sample shows.
+
+    A simulation never decides stability: the verdict is Theorem 1's (Rohr,
+    Marelli and Fu, 2014) for the same request, and the Monte Carlo sample is
+    evidence beside it.  Where the exact tail exponent is ``kappa <= 2`` (Mo and
+    Sinopoli, 2012) the sample mean is not to be read.
+
+    Parameters
+    ----------
+    verdict:
+        The exact verdict, or ``None`` when the exact analysis did not run.
+    kappa:
+        The exact tail exponent, or ``None``.
+    mean_diverged_at, steps:
+        First step at which a trajectory left float range (or ``None``), and the horizon.
+
+    Returns
+    -------
+    (str, str)
+        The exact part and the Monte Carlo part.
+
+    Examples
+    --------
+    >>> verdict_headline("unstable", 0.4398, None, 200)
+    ('UNSTABLE (exact, Rohr, Marelli and Fu 2014, Theorem 1)', \
+'Monte Carlo: sample mean unreliable (kappa = 0.44 <= 2); read the quantiles')
+    >>> verdict_headline(None, None, None, 200)[0]
+    'exact verdict not computed (the exact analysis failed or ran out of its budget; run kfio analyze)'
+    """
+    if verdict is None:
+        exact = "exact verdict not computed (the exact analysis failed or ran out of its budget; run kfio analyze)"
+    else:
+        exact = f"{verdict.upper()} (exact, Rohr, Marelli and Fu 2014, Theorem 1)"
+    if kappa is not None and kappa <= 2:
+        sample = f"Monte Carlo: sample mean unreliable (kappa = {kappa:.2g} <= 2); read the quantiles"
+    elif mean_diverged_at is not None:
+        sample = f"Monte Carlo: the sample mean diverged at t = {mean_diverged_at}"
+    else:
+        sample = f"Monte Carlo: no sample mean diverged over {steps} steps"
+    return exact, sample
+
+
 def _quantile_ci(x: np.ndarray, q: float) -> tuple[float, float, float]:
     M = x.size
     s = np.sort(x)
@@ -229,4 +274,4 @@ def stationary_report(
     )
 
 
-__all__ = ["StationaryReport", "hill", "parse_thresholds", "stationary_report", "wilson"]
+__all__ = ["StationaryReport", "hill", "parse_thresholds", "stationary_report", "verdict_headline", "wilson"]

@@ -36,6 +36,7 @@ from .._budget import Budget
 from .._reporting import ReportPart
 from ..errors import InvalidInput
 from ..model._types import MarkovChannel, PerSensorChannel, Request
+from ..structure._display import readable
 from ..structure._fmo import FmoBlock
 from ._blind import Margins, SlotSpace, search
 from ._decide import compare_rate_markov
@@ -210,10 +211,19 @@ class CriticalParameter(ReportPart):
         if not self.crossings:
             return [f"critical value of {self.pointer}: none ({self.intervals[0][2]} on all of (0, 1))"]
         parts = ", ".join(
-            f"{c.value:.6g}" + (f" (exact: {c.exact_text})" if c.exact_text else "") + f" [{c.left} below]"
+            f"{c.value:.6g}"
+            + (f" (exact: {_exact_shown(c.exact_text, c.value)})" if c.exact_text else "")
+            + f" [{c.left} below]"
             for c in self.crossings
         )
         return [f"critical value of {self.pointer}: {parts}  [{self.basis}]"]
+
+
+def _exact_shown(text: str, value: float) -> str:
+    """The exact text of a critical value when short; else the JSON field that keeps it (the decimal is beside it)."""
+    if readable(text, value) == text:
+        return text
+    return "JSON field critical_parameter.crossings[].value_exact"
 
 
 def critical_parameter(

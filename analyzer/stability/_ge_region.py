@@ -33,7 +33,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any, Sequence
+from typing import Any, Callable, Sequence
 
 import mpmath
 import numpy as np
@@ -42,6 +42,7 @@ import sympy
 from .._budget import Budget
 from .._reporting import ReportPart
 from ..model._types import MarkovChannel
+from ..structure._display import readable
 from ..structure._fmo import FmoBlock
 from ._blind import Margins, SlotSpace, search
 from ._line import Candidate, add_candidates, roots_in_unit, scan
@@ -52,25 +53,29 @@ LABELS = ("stable", "boundary", "unstable")
 _SIGN = {-1: "stable", 0: "boundary", 1: "unstable"}
 
 
-def _u_exact(k: int, p: Fraction, q: Fraction) -> Fraction:
-    u = 1 - q
+def _same(x: Any) -> Any:
+    return x
+
+
+def _u(k: int, p: Any, q: Any, tidy: Callable[[Any], Any] = _same) -> Any:
+    """``u_k(p, q) = P(lost at t + k | lost at t)``: ``u_1 = 1 - q``, ``u_{k+1} = p + (1 - p - q) u_k``.
+
+    The one definition of the recurrence, for every number type kfio evaluates
+    it in: :class:`~fractions.Fraction` (exact labels), NumPy float arrays (the
+    drawn curve) and SymPy symbols (boundary polynomials, ``tidy=sympy.expand``).
+    """
+    u = tidy(1 - q)
     for _ in range(k - 1):
-        u = p + (1 - p - q) * u
+        u = tidy(p + (1 - p - q) * u)
     return u
 
 
-def _u_float(k: int, p: np.ndarray, q: np.ndarray) -> np.ndarray:
-    u = 1 - q
-    for _ in range(k - 1):
-        u = p + (1 - p - q) * u
-    return u
-
-
-def _u_expr(k: int, p: Any, q: Any) -> Any:
-    u = 1 - q
-    for _ in range(k - 1):
-        u = sympy.expand(p + (1 - p - q) * u)
-    return u
+def _rho(gaps: Sequence[int], p: Any, q: Any, one: Any, tidy: Callable[[Any], Any] = _same) -> Any:
+    """``rho(P_F) = prod_m u_{a_m + 1}(p, q)`` starting from ``one`` (``Fraction(1)``, an array of ones, ``1``)."""
+    out = one
+    for a in gaps:
+        out = tidy(out * _u(a + 1, p, q, tidy))
+    return out
 
 
 @dataclass(frozen=True)
@@ -105,22 +110,17 @@ class GePattern:
 
     def rho(self, p: Fraction, q: Fraction) -> Fraction:
         """``rho(P_F) = prod_m u_{a_m+1}(p, q)``, exactly."""
-        out = Fraction(1)
-        for a in self.gaps:
-            out *= _u_exact(a + 1, p, q)
-        return out
+        return _rho(self.gaps, p, q, Fraction(1))
 
     def rho_float(self, p: np.ndarray, q: np.ndarray) -> np.ndarray:
-        out = np.ones(np.broadcast(p, q).shape)
-        for a in self.gaps:
-            out = out * _u_float(a + 1, p, q)
+        """:meth:`rho` in floating point (the same recurrence on NumPy arrays), for drawing."""
+        p, q = np.asarray(p, dtype=float), np.asarray(q, dtype=float)
+        out: np.ndarray = _rho(self.gaps, p, q, np.ones(np.broadcast(p, q).shape))
         return out
 
     def rho_expr(self) -> Any:
-        out = sympy.Integer(1)
-        for a in self.gaps:
-            out *= _u_expr(a + 1, P_SYM, Q_SYM)
-        return sympy.expand(out)
+        """:meth:`rho` as a polynomial in the SymPy symbols ``p, q`` (expanded)."""
+        return _rho(self.gaps, P_SYM, Q_SYM, sympy.Integer(1), sympy.expand)
 
     def sign(self, p: Fraction, q: Fraction) -> int:
         """Sign of ``beta^N rho(P_F) - 1`` at ``(p, q)``, exactly."""
@@ -153,7 +153,7 @@ class GePattern:
             factors[a + 1] = factors.get(a + 1, 0) + 1
         parts = []
         for k, mult in sorted(factors.items()):
-            u = sympy.factor(_u_expr(k, P_SYM, Q_SYM))
+            u = sympy.factor(_u(k, P_SYM, Q_SYM, sympy.expand))
             parts.append(f"({u})" + (f"**{mult}" if mult > 1 else ""))
         return f"({beta})**{self.period} * " + " * ".join(parts) + " = 1"
 
@@ -470,16 +470,25 @@ class GeRegion(ReportPart):
     def summary_lines(self) -> list[str]:
         out = []
         for line, name in ((self.recovery, "recovery rate q"), (self.failure, "failure rate p")):
-            fixed = f"at {'p' if line.variable == 'recovery_rate' else 'q'} = {line.fixed}"
+            fixed = f"at {'p' if line.variable == 'recovery_rate' else 'q'} = {readable(line.fixed)}"
             if line.crossings:
                 parts = ", ".join(
-                    f"{c.value:.6g}" + (f" (exact: {c.value_exact})" if c.value_exact else "") + f" [{c.left} below]"
+                    f"{c.value:.6g}"
+                    + (f" (exact: {_exact_shown(c.value_exact, c.value, line.variable)})" if c.value_exact else "")
+                    + f" [{c.left} below]"
                     for c in line.crossings
                 )
                 out.append(f"critical {name} {fixed}: {parts}")
             else:
                 out.append(f"critical {name} {fixed}: none ({line.status()})")
         return out
+
+
+def _exact_shown(text: str, value: float, variable: str) -> str:
+    """The exact text of a critical value when short; else the JSON field that keeps it (the decimal is beside it)."""
+    if readable(text, value) == text:
+        return text
+    return f"JSON field gilbert_elliott_region.critical_{variable}.crossings[].value_exact"
 
 
 def ge_region(

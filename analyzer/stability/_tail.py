@@ -123,7 +123,7 @@ class TailReport(ReportPart):
 
         exact = ""
         if self.kappa_exact and len(self.kappa_exact) > SHORT_TEXT_CHARS:
-            exact = " (exact closed form: see --json)"
+            exact = " (exact form: JSON field tail.kappa_exact)"
         elif self.kappa_exact:
             exact = f" (exact: {self.kappa_exact})"
         return [

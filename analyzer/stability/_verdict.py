@@ -26,7 +26,7 @@ from ..errors import BudgetExceeded
 from ..model._request import require_assumption_1
 from ..model._types import MarkovChannel, PerSensorChannel, Request, System, packets_of
 from ..structure._adjugate import to_fmpq_mat
-from ..structure._display import SHORT_TEXT_CHARS, algebraic_degree, short_text
+from ..structure._display import SHORT_TEXT_CHARS, algebraic_degree, readable, short_text
 from ..structure._fmo import FmoBlock, fmo_blocks
 from ._critical_parameter import CriticalParameter, critical_parameter
 from ._decide import VERDICTS, bernoulli_factor, compare_rate_bernoulli, compare_rate_markov
@@ -72,6 +72,11 @@ class BlockReport(ShortRepr):
     bernoulli_blind_fraction: tuple[Fraction, ...] | None = field(default=None, repr=False)
     modulus_sq_expr: Any = field(default=None, repr=False)
 
+    def _repr_items(self) -> list[tuple[str, Any]]:
+        # long algebraic texts (CRootOf with 100-digit coefficients) stay in to_dict(); the repr shows their value
+        shown = tuple(readable(t, z) for t, z in zip(self.eigenvalues, self.eigenvalues_numeric))
+        return [("eigenvalues", shown), *super()._repr_items()[1:]]
+
 
 @dataclass(frozen=True, repr=False)
 class StabilityReport(Report):
@@ -107,9 +112,14 @@ class StabilityReport(Report):
         return self.gilbert_elliott
 
     def _short(self, text: str, value: complex | float | None) -> str:
-        if value is None:
-            return text
-        return self.display.get(text) or short_text(text, value)
+        return self.display.get(text) or readable(text, value)
+
+    def _repr_items(self) -> list[tuple[str, Any]]:
+        items = dict(super()._repr_items())
+        exact = self.critical_arrival_probability_exact
+        if exact is not None:
+            items["critical_arrival_probability_exact"] = self._short(exact, self.critical_arrival_probability)
+        return list(items.items())
 
     def summary(self) -> str:
         """Readable multi-line summary for the terminal."""

@@ -109,4 +109,36 @@ def short_text(
     return f"root of a degree-{degree} polynomial, {shown}"
 
 
-__all__ = ["SHORT_TEXT_CHARS", "algebraic_degree", "short_text"]
+#: Fractions whose text is longer than this are shown as ``~`` and a decimal in summaries and reprs.
+SHORT_FRACTION_CHARS = 12
+_RATIONAL = re.compile(r"-?\d+(/\d+)?")
+
+
+def readable(text: str, value: complex | float | None = None, degree: int | None = None) -> str:
+    """What a person reads for an exact number: short texts as they are, long ones as a decimal.
+
+    A rational with a long text (a ``control.c2d`` entry,
+    ``2501225941561293/2500000000000000``) becomes ``~`` and 6 significant
+    digits; a long algebraic text becomes :func:`short_text`'s
+    ``root of a degree-d polynomial, <value>``.  The exact text stays in the
+    JSON; nothing here feeds back into a decision.
+
+    Examples
+    --------
+    >>> readable("11/10"), readable("2501225941561293/2500000000000000")
+    ('11/10', '~1.00049')
+    >>> readable("7/8 - sqrt(7009)/200", 0.456401)
+    '7/8 - sqrt(7009)/200'
+    """
+    if _RATIONAL.fullmatch(text):
+        if len(text) <= SHORT_FRACTION_CHARS:
+            return text
+        from fractions import Fraction
+
+        return f"~{float(Fraction(text)):.6g}"
+    if value is None:
+        return text
+    return short_text(text, value, degree)
+
+
+__all__ = ["SHORT_FRACTION_CHARS", "SHORT_TEXT_CHARS", "algebraic_degree", "readable", "short_text"]

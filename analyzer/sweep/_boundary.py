@@ -6,9 +6,10 @@ sensors of a per-sensor Bernoulli channel, the stable region is known exactly
 :mod:`kfio.stability._regions`): its boundary curve is taken from the report of
 the base request.  For a 1-D ``analyze`` sweep of a one-packet Bernoulli
 arrival probability, the boundary is the exact critical probability; for a
-2-D sweep of a Gilbert-Elliott channel's failure and recovery rates, the exact
-curve of :mod:`kfio.stability._ge_region` (Rohr, Marelli and Fu (2014),
-Theorem 1, on the Gilbert-Elliott family).
+2-D sweep of a Gilbert-Elliott channel's failure and recovery rates, the
+boundary lines of :func:`kfio.stability._ge_boundary.boundary_lines` (Rohr,
+Marelli and Fu (2014), Theorem 1, on the Gilbert-Elliott family), the same
+lines ``kfio analyze --ge-plot`` draws.
 """
 
 from __future__ import annotations
@@ -18,9 +19,6 @@ from typing import Any
 from ..errors import AnalyzerError
 from ..model import parse_request
 from ._spec import SweepSpec
-
-#: Resolution of the exact Gilbert-Elliott boundary drawn under a (p, q) sweep.
-_GE_GRID = 61
 
 
 def exact_boundary(spec: SweepSpec) -> dict[str, Any] | None:
@@ -52,25 +50,23 @@ def exact_boundary(spec: SweepSpec) -> dict[str, Any] | None:
             if sorted(pointers) != sorted(rate_of):
                 return None
             from ..stability import analyze
+            from ..stability._ge_boundary import boundary_lines
+            from ..stability._ge_region import GeStructure
 
-            base = dict(spec.base)
-            base["options"] = {**base.get("options", {}), "analyze": {"ge_grid": _GE_GRID}}
-            region = analyze(parse_request(base)).to_dict().get("gilbert_elliott_region") or {}
-            curve = (region.get("map") or {}).get("curve") or []
-            columns = (region.get("map") or {}).get("curve_columns") or ["recovery_rate", "failure_rate", "piece"]
-            ix, iy = columns.index(rate_of[pointers[0]]), columns.index(rate_of[pointers[1]])
-            pieces: dict[Any, list[tuple[float, float]]] = {}
-            for point in curve:
-                pieces.setdefault(point[columns.index("piece")], []).append((point[ix], point[iy]))
+            region = analyze(parse_request(spec.base)).gilbert_elliott
+            if region is None:  # skipped unasked (a long period): ask for it, with the request's own budget
+                base = {**spec.base, "options": {**spec.base.get("options", {}), "analyze": {"ge_grid": 1}}}
+                region = analyze(parse_request(base)).gilbert_elliott
+            if region is None:
+                return None
             x: list[float | None] = []
             y: list[float | None] = []
-            for pts in pieces.values():
-                for px, py in sorted(pts):
-                    x.append(px)
-                    y.append(py)
-                x.append(None)  # a break between pieces
-                y.append(None)
-            return {"kind": "curve", "axes": (spec.axes[0].name, spec.axes[1].name), "x": x, "y": y} if curve else None
+            for line in boundary_lines(GeStructure(region.patterns)):
+                coords = {"recovery_rate": line.q, "failure_rate": line.p}
+                close = 1 if line.closed else 0
+                x.extend([*coords[rate_of[pointers[0]]], *coords[rate_of[pointers[0]]][:close], None])
+                y.extend([*coords[rate_of[pointers[1]]], *coords[rate_of[pointers[1]]][:close], None])
+            return {"kind": "curve", "axes": (spec.axes[0].name, spec.axes[1].name), "x": x, "y": y} if x else None
         if len(spec.axes) == 2 and channel.get("model") == "per_sensor":
             names = list(channel.get("channels", {}))
             wanted = [f"/channel/channels/{n}/arrival_probability" for n in names]

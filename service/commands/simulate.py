@@ -29,7 +29,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "simulate",
         help="Monte Carlo of the error covariance (mean, 95%% band, percentiles)",
         description="Simulate many trajectories of the Kalman filter's error covariance over the lossy channel "
-        "and report trace(P_t) over time: mean with a 95%% band, median, 90%% and 99%%. "
+        "and report trace(P_t) over time: mean with a 95% band, median, 90% and 99%. "
         "Flags override options.simulate of the request. Exit 0 ok, 2 invalid input, 4 budget exceeded.",
     )
     add_request_arguments(p)

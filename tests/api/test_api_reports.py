@@ -69,7 +69,9 @@ def test_reports_are_frozen_and_read_well():
     assert "BlockReport(eigenvalues=('5/4',), modulus=1.25, period=1, sigma=0.5, rate=0.78125" in repr(r)
     assert len(repr(r)) < 400
     s = kfio.simulate(kfio.System(A=[[0.5]], C=[[1]], Q=[[1]], R=[[1]]), kfio.bernoulli(0.5), steps=4, trajectories=10)
-    assert repr(s).startswith("SimulationReport(steps=4, trajectories=10, seed=0, final_mean_trace=")
+    assert repr(s).startswith(
+        "SimulationReport(exact_verdict='stable', steps=4, trajectories=10, seed=0, final_mean_trace="
+    )
     with pytest.raises(dataclasses.FrozenInstanceError):
         SYSTEM.A = ()  # type: ignore[misc]
     assert (
@@ -86,4 +88,7 @@ def test_reports_are_frozen_and_read_well():
 @pytest.mark.slow
 def test_bounds_report_repr():
     b = kfio.bounds(kfio.System(A=[[-1.25]], C=[[1]], Q=[[1]], R=[[2.5]]), kfio.bernoulli(0.4))
-    assert repr(b).startswith("BoundsReport(verdict='stable', critical_intervals=((0.36, 0.36")
+    assert repr(b).startswith(
+        "BoundsReport(exact_verdict='not computed (kfio.analyze)', verdict_by_bounds='stable', "
+        "critical_intervals=((0.36, 0.36"
+    )

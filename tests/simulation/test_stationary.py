@@ -76,7 +76,11 @@ def test_warning_where_kappa_at_most_two():
     st = r.stationary
     assert st.mean_unreliable and st.growth_rate == pytest.approx(1.5625 * 0.7)
     assert "sample mean" in st.warnings[0] and "1.094" in st.warnings[0]
-    assert r.summary().startswith("warning: exact tail exponent kappa")
+    first, second = r.summary().splitlines()[:2]
+    assert first.startswith(
+        "UNSTABLE (exact, Rohr, Marelli and Fu 2014, Theorem 1). Monte Carlo: sample mean unreliable"
+    )
+    assert second.startswith("warning: exact tail exponent kappa")
     d = r.to_dict()["stationary"]
     assert d["mean_unreliable"] is True and d["verdict"] == "unstable" and len(d["quantiles"]) == 4
 
