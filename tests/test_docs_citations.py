@@ -39,18 +39,7 @@ TEXT_SUFFIXES = {".md", ".py", ".js", ".html", ".css", ".json", ".txt"}
 #: Citations in files other engineers own, fixed on their branches (issue 21): each entry is
 #: (file, citation as written).  The test fails on any other bad citation, and also when a
 #: listed one is gone, so the list shrinks to nothing as the fixes land.
-PENDING: set[tuple[str, str]] = {
-    ("service/static/app.js", "Rohr, Marelli and Fu 2011"),
-    ("service/static/app.js", "Sinopoli et al. 2003"),
-    ("service/static/index.html", "Rohr, Marelli and Fu (2011"),
-    ("service/static/index.html", "Sinopoli et al. (2003"),
-    ("service/static/requests/index.json", "Sinopoli et al. 2003"),
-    ("service/static/requests/index.json", "Rohr, Marelli and Fu 2011"),
-    ("docs/web.md", "Sinopoli et al. 2003"),
-    ("docs/web.md", "Rohr, Marelli and Fu 2011"),
-    ("docs/web.md", "Sinopoli et al. (2003"),
-    ("service/plots.py", "Rohr, Marelli, Fu 2014"),
-}
+PENDING: set[tuple[str, str]] = set()
 
 
 def cite_keys() -> set[tuple[str, str]]:
