@@ -76,12 +76,12 @@ MUTANTS: tuple[Mutant, ...] = (
     ),
     Mutant(
         "ge-boundary-float-recurrence",
-        "",
-        "",
-        "",
-        (),
-        "placeholder: the float copy of the Gilbert-Elliott recurrence that draws the boundary curve "
-        "(filled in with the plots work of issue 21; skipped until then)",
+        "analyzer/stability/_ge_region.py",
+        "        out: np.ndarray = _rho(self.gaps, p, q, np.ones(np.broadcast(p, q).shape))\n",
+        "        out: np.ndarray = _rho(self.gaps, p, q, np.ones(np.broadcast(p, q).shape)) * (1 + 1e-4)\n",
+        ("tests/service/test_plot_ge_boundary.py",),
+        "the float evaluation of the Gilbert-Elliott recurrence that draws the boundary curve is off by 1e-4 "
+        "(the drawn curve must be the exact one)",
     ),
     Mutant(
         "band-halved",
