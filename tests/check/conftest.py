@@ -1,24 +1,16 @@
-"""The example layout of ``kfio check`` (examples/check/), run once per session through the CLI."""
+"""Fixtures of the ``kfio check`` tests: the example layout (examples/check/), run once per session."""
 
 from __future__ import annotations
 
 import io
-import json
 import shutil
 from contextlib import redirect_stderr, redirect_stdout
-from pathlib import Path
 
 import pytest
 
 from kfio.service.cli import main
 
-EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "check"
-
-
-def run_cli(capsys, *args: str) -> tuple[int, str, str]:
-    code = main(["check", *args])
-    out, err = capsys.readouterr()
-    return code, out, err
+from support.check_layout import EXAMPLE
 
 
 @pytest.fixture(scope="session")
@@ -48,9 +40,3 @@ def layout(tmp_path):
     dest = tmp_path / "layout"
     shutil.copytree(EXAMPLE, dest)
     return dest
-
-
-def edit(path: Path, change) -> None:
-    tree = json.loads(path.read_text())
-    change(tree)
-    path.write_text(json.dumps(tree))

@@ -5,9 +5,10 @@ from __future__ import annotations
 import json
 
 import pytest
-from conftest import EXAMPLE, edit, run_cli
 
 from kfio.service import exitcodes
+
+from support.check_layout import EXAMPLE, edit, run_cli
 
 
 def test_passing_example_exits_0_with_a_table(example_runs):
