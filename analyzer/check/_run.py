@@ -14,11 +14,12 @@ from __future__ import annotations
 import multiprocessing
 import os
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any, Callable
 
 from .._budget import Budget
+from .._reporting import Report, ReportPart
 from ..errors import AnalyzerError, BudgetExceeded, InvalidInput, MissingDependency, NumericalFailure
 from ..model._exact import fraction_text
 from ._requirements import judge
@@ -36,7 +37,7 @@ ERROR_KINDS = (
 
 
 @dataclass(frozen=True)
-class Outcome:
+class Outcome(ReportPart):
     """One requirement of one entry, judged.
 
     ``status`` is ``pass``, ``fail`` or ``error`` (``error_kind`` then says
@@ -52,28 +53,15 @@ class Outcome:
     seconds: float
     error_kind: str | None = None
 
-    def to_dict(self) -> dict[str, Any]:
-        return {
-            "entry": self.entry,
-            "requirement": self.requirement,
-            "status": self.status,
-            "measured": self.measured,
-            "required": self.required,
-            "detail": self.detail,
-            "seconds": round(self.seconds, 3),
-            "error_kind": self.error_kind,
-        }
-
 
 @dataclass(frozen=True)
-class CheckResult:
+class CheckResult(Report):
     """All outcomes of a check, in the file's order (entries, then requirements)."""
 
     outcomes: tuple[Outcome, ...]
     seconds: float
     workers: int
     source: str = "<check>"
-    counts: dict[str, int] = field(default_factory=dict)
 
     @property
     def status(self) -> str:
@@ -87,24 +75,10 @@ class CheckResult:
             return "budget"
         return "pass"
 
-    def to_dict(self) -> dict[str, Any]:
-        """The JSON of ``kfio check --json``."""
-        from .._version import __version__
-
-        tally = {s: sum(1 for o in self.outcomes if o.status == s) for s in ("pass", "fail", "error")}
-        return {
-            "kfio_version": __version__,
-            "command": "check",
-            "source": self.source,
-            "status": self.status,
-            "requirements": len(self.outcomes),
-            "passed": tally["pass"],
-            "failed": tally["fail"],
-            "errors": tally["error"],
-            "seconds": round(self.seconds, 3),
-            "workers": self.workers,
-            "outcomes": [o.to_dict() for o in self.outcomes],
-        }
+    @property
+    def tally(self) -> dict[str, int]:
+        """How many requirements passed, failed, could not be judged."""
+        return {s: sum(1 for o in self.outcomes if o.status == s) for s in ("pass", "fail", "error")}
 
 
 def _worst_rate(report: Any) -> tuple[float | None, str | None]:

@@ -31,7 +31,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "of requests. Every point is validated before any work starts. Rows stream to stdout as JSON Lines. "
         "Exit 0 all points answered, 8 some points failed (their rows say why), 4 sweep budget ran out, "
         "2 invalid input, 9 a package is missing (--serial needs no Dask). Example: kfio sweep "
-        "examples/sweep_arrival_probability.json",
+        "examples/sweeps/arrival_probability.json",
     )
     p.add_argument("file", metavar="FILE", help="sweep JSON (or JSON Lines of requests), or - for standard input")
     p.add_argument("--out", metavar="TABLE", help="write the table: .csv, .parquet or .jsonl")

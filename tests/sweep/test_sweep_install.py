@@ -18,7 +18,7 @@ from kfio.service.cli import build_parser, main
 from kfio.service.problems import problem_from_exception
 
 ROOT = Path(__file__).resolve().parents[2]
-EXAMPLE = ROOT / "examples" / "sweep_arrival_probability.json"
+EXAMPLE = ROOT / "examples" / "sweeps" / "arrival_probability.json"
 
 
 def test_sweep_packages_are_regular_dependencies():
