@@ -69,7 +69,7 @@ def _check_components() -> dict[str, dict[str, Any]]:
             "properties": {
                 "threshold": _exact("M > 0", exclusiveMinimum=0),
                 "epsilon": _exact("epsilon in (0, 1)", exclusiveMinimum=0, exclusiveMaximum=1),
-                "trajectories": {"type": "integer", "minimum": 1},
+                "trajectories": {"type": "integer", "minimum": 2},
                 "steps": {"type": "integer", "minimum": 1},
                 "seed": {"type": "integer", "minimum": 0},
             },

@@ -125,7 +125,7 @@ def _parse_value(key: str, raw: Any, field: str) -> Any:
             raise InvalidInput(f"{field}/threshold", "the threshold M of P(trace P > M) must be positive")
         if not 0 < value["epsilon"] < 1:
             raise InvalidInput(f"{field}/epsilon", "epsilon must be in (0, 1)")
-        for name, lo in (("trajectories", 1), ("steps", 1), ("seed", 0)):
+        for name, lo in (("trajectories", 2), ("steps", 1), ("seed", 0)):
             if name in raw:
                 value[name] = parse_integer(raw[name], f"{field}/{name}", lo, name=name)
         return value

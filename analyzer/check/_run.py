@@ -148,21 +148,6 @@ def run_one(command: str, tree: dict[str, Any], seconds: float) -> tuple[str, An
     return "error", error, time.perf_counter() - t0
 
 
-def _request_for(entry: Any, command: str) -> dict[str, Any]:
-    """The entry's request, with the outage requirement's threshold and Monte Carlo settings for simulate."""
-    tree = dict(entry.request)
-    if command != "simulate":
-        return tree
-    outage = next(r.value for r in entry.requirements if r.key == "outage")
-    options = dict(tree.get("options") or {})
-    sim = dict(options.get("simulate") or {})
-    sim["outage_thresholds"] = [fraction_text(outage["threshold"])]
-    sim.update({k: outage[k] for k in ("trajectories", "steps", "seed") if k in outage})
-    options["simulate"] = sim
-    tree["options"] = options
-    return tree
-
-
 def _limit_memory(memory_bytes: int | None) -> None:
     if memory_bytes:
         import resource
@@ -216,7 +201,7 @@ def run_check(
             left = deadline - time.monotonic()
             if left <= 0:
                 break
-            results[(i, c)] = run_one(c, _request_for(spec.entries[i], c), min(point, left))
+            results[(i, c)] = run_one(c, spec.entries[i].request_for(c), min(point, left))
             if progress:
                 progress(k + 1, len(tasks))
     else:
@@ -224,9 +209,7 @@ def run_check(
         ctx = multiprocessing.get_context("fork")
         pool = ctx.Pool(n, initializer=_limit_memory, initargs=(memory_bytes,))
         try:
-            pending = {
-                (i, c): pool.apply_async(run_one, (c, _request_for(spec.entries[i], c), point)) for i, c in tasks
-            }
+            pending = {(i, c): pool.apply_async(run_one, (c, spec.entries[i].request_for(c), point)) for i, c in tasks}
             while pending and time.monotonic() < deadline:
                 for key in [k for k, r in pending.items() if r.ready()]:
                     try:

@@ -32,9 +32,9 @@ from pathlib import Path
 from typing import Any, Mapping
 
 from ..errors import InvalidInput
-from ..model._exact import load_json, parse_number
+from ..model._exact import fraction_text, load_json, parse_number
 from ..model._request import parse_request
-from ._requirements import Requirement, parse_requirements
+from ._requirements import OUTAGE_KEYS, Requirement, parse_requirements
 
 _TOP_KEYS = {"$schema", "description", "options", "checks"}
 _ENTRY_KEYS = {"name", "description", "plant", "channel", "options", "requirements"}
@@ -66,6 +66,40 @@ class CheckEntry:
         """The commands whose reports judge this entry's requirements, in a fixed order."""
         needed = {r.command for r in self.requirements}
         return tuple(c for c in ("analyze", "bounds", "simulate") if c in needed)
+
+    def request_for(self, command: str) -> dict[str, Any]:
+        """The request tree ``command`` runs: for simulate, with the outage requirement's threshold and settings."""
+        tree = dict(self.request)
+        if command != "simulate":
+            return tree
+        outage = next(r.value for r in self.requirements if r.key == "outage")
+        options = dict(tree.get("options") or {})
+        sim = dict(options.get("simulate") or {})
+        sim["outage_thresholds"] = [fraction_text(outage["threshold"])]
+        sim.update({k: outage[k] for k in ("trajectories", "steps", "seed") if k in outage})
+        options["simulate"] = sim
+        tree["options"] = options
+        return tree
+
+
+def _validate_options(entry: CheckEntry, where: str) -> None:
+    """Check each command's options now (a Monte Carlo too large is a bad file, exit 2, not a failed run)."""
+    for command in entry.commands:
+        try:
+            request = parse_request(entry.request_for(command))
+            if command == "simulate":
+                from ..simulation._setup import parse_options
+
+                parse_options(request)
+            elif command == "bounds":
+                from ..mare._options import parse_bounds_options
+
+                parse_bounds_options(request)
+        except InvalidInput as exc:
+            key = exc.field.removeprefix("/options/simulate/").split("/")[0]
+            if command == "simulate" and exc.field.startswith("/options/simulate/") and key in OUTAGE_KEYS:
+                raise InvalidInput(f"{where}/requirements/outage", f"{exc.field}: {exc.rule}") from None
+            raise InvalidInput(f"{where}/options", f"{exc.field}: {exc.rule}") from None
 
 
 @dataclass(frozen=True)
@@ -198,7 +232,9 @@ def parse_check(tree: Any, base: str | Path = ".", source: str = "<check>") -> C
         if any(r.command in ("bounds", "simulate") for r in requirements) and not {"Q", "R"} <= set(system):
             need = [r.key for r in requirements if r.command != "analyze"]
             raise InvalidInput(f"{where}/plant", f"the requirements {need} need Q and R in the plant's system")
-        entries.append(CheckEntry(name=name, request=request, requirements=requirements))
+        entry_ = CheckEntry(name=name, request=request, requirements=requirements)
+        _validate_options(entry_, where)
+        entries.append(entry_)
     return CheckSpec(
         entries=tuple(entries),
         time_budget_s=_budget(opts, "time_budget_s", DEFAULT_TIME_BUDGET_S),

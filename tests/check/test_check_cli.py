@@ -84,6 +84,12 @@ def test_default_file_is_kfio_check_json_here(layout, capsys, monkeypatch):
         (lambda t: t["checks"][1].update(name=t["checks"][0]["name"]), "/checks/1/name"),
         (lambda t: t.update(check=[]), "/check"),
         (lambda t: t["options"].update(time_budget_s=0), "/options/time_budget_s"),
+        # a Monte Carlo over the simulation limits is a bad file, found before any work
+        (
+            lambda t: t["checks"][0]["requirements"]["outage"].update(trajectories=20000),
+            "/checks/0/requirements/outage",
+        ),
+        (lambda t: t["checks"][1].update(options={"bounds": {"horizon": 0}}), "/checks/1/options"),
     ],
 )
 def test_bad_check_file_exits_2_naming_the_field(layout, capsys, change, field):
