@@ -106,12 +106,13 @@ def test_check_report_validates(capsys):
     assert list(schema("check-report").iter_errors(json.loads(capsys.readouterr().out))) == []
 
 
-def test_served_at_schemas(tmp_path):
-    with TestClient(create_app(Settings(workers=1, time_budget_s=20))) as client:
-        for name in DOCUMENTS:
-            r = client.get(f"/schemas/{name}.json")
-            assert r.status_code == 200 and r.headers["content-type"] == "application/schema+json"
-            assert r.json() == json.loads((PACKAGE_DIR / f"{name}.json").read_text())
-        r = client.get("/schemas/nope.json")
-        assert r.status_code == 404 and r.headers["content-type"] == "application/problem+json"
-        assert r.json()["status"] == 404 and "nope" in r.json()["detail"]
+def test_served_at_schemas():
+    # no `with`: the lifespan (the worker pool) does not start; serving a file needs none
+    client = TestClient(create_app(Settings(workers=1, time_budget_s=20)))
+    for name in DOCUMENTS:
+        r = client.get(f"/schemas/{name}.json")
+        assert r.status_code == 200 and r.headers["content-type"] == "application/schema+json"
+        assert r.json() == json.loads((PACKAGE_DIR / f"{name}.json").read_text())
+    r = client.get("/schemas/nope.json")
+    assert r.status_code == 404 and r.headers["content-type"] == "application/problem+json"
+    assert r.json()["status"] == 404 and "nope" in r.json()["detail"]
