@@ -54,6 +54,36 @@ def test_hook_manifest_and_action_run_kfio_check():
     assert action["inputs"]["file"]["default"] == "kfio-check.json"
 
 
+@pytest.mark.parametrize(("name", "code"), [("kfio-check.json", 0), ("kfio-check-failing.json", 1)])
+def test_action_check_step_writes_junit_and_summary_and_passes_the_exit_code_on(tmp_path, name, code):
+    """The action's `kfio check` step, run by bash as a runner would, with kfio as the installed one."""
+    action = yaml.safe_load((ROOT / "action.yml").read_text())
+    step = next(s for s in action["runs"]["steps"] if s["name"] == "kfio check")
+    venv_bin = tmp_path / "runner" / "kfio-venv" / "bin"
+    venv_bin.mkdir(parents=True)
+    kfio = shutil.which("kfio", path=str(Path(sys.executable).parent)) or shutil.which("kfio")
+    assert kfio is not None
+    (venv_bin / "kfio").symlink_to(kfio)
+    summary = tmp_path / "summary.md"
+    summary.write_text("earlier step\n")
+    env = {
+        **os.environ,
+        "RUNNER_TEMP": str(tmp_path / "runner"),
+        "GITHUB_STEP_SUMMARY": str(summary),
+        "KFIO_CHECK_FILE": name,
+        "KFIO_CHECK_JUNIT": str(tmp_path / "out.xml"),
+        "KFIO_CHECK_BUDGET": "300",
+    }
+    done = subprocess.run(
+        ["bash", "-c", step["run"]], cwd=EXAMPLE, env=env, capture_output=True, text=True, timeout=600
+    )
+    assert done.returncode == code, done.stderr
+    assert (tmp_path / "out.xml").read_text().startswith("<?xml")
+    text = summary.read_text()
+    assert text.startswith("earlier step\n### kfio check: `" + name + "`")  # appended, not overwritten
+    assert ("**FAIL**" in text) == bool(code)
+
+
 @pytest.mark.slow
 def test_pre_commit_try_repo_runs_the_hook(tmp_path):
     pre_commit = shutil.which("pre-commit", path=str(Path(sys.executable).parent)) or shutil.which("pre-commit")
