@@ -46,7 +46,7 @@ def _check_components() -> dict[str, dict[str, Any]]:
     from kfio.check._requirements import COMMAND_OF, OUTAGE_KEYS, VERDICTS
     from kfio.check._spec import _ENTRY_KEYS, _OPTION_KEYS, _TOP_KEYS
 
-    requirements = {
+    requirements: dict[str, Any] = {
         "verdict": {"enum": list(VERDICTS), "description": "the exact verdict the entry must have"},
         "margin": _exact(
             "m in [0, 1): the worst rate max_k |alpha_k|^2 sigma_k must be at most 1 - m", minimum=0, exclusiveMaximum=1
@@ -79,7 +79,7 @@ def _check_components() -> dict[str, dict[str, Any]]:
     }
     assert set(requirements) == set(COMMAND_OF) and set(requirements["outage"]["properties"]) == set(OUTAGE_KEYS)
     budget = _exact("seconds, in (0, 86400]", exclusiveMinimum=0, maximum=86400)
-    entry = {
+    entry: dict[str, Any] = {
         "type": "object",
         "description": "One plant and channel and the requirements on them.",
         "properties": {
@@ -104,7 +104,7 @@ def _check_components() -> dict[str, dict[str, Any]]:
         "additionalProperties": False,
     }
     assert set(entry["properties"]) == _ENTRY_KEYS
-    check = {
+    check: dict[str, Any] = {
         "type": "object",
         "description": "A kfio check file (kfio check FILE; docs/check.md). The validator also reads each plant "
         "and channel file as a request and names the field of any mistake.",

@@ -230,8 +230,8 @@ def parse_check(tree: Any, base: str | Path = ".", source: str = "<check>") -> C
             raise InvalidInput(f"{where}/{owner}", f"{exc.field}: {exc.rule}") from None
         requirements = parse_requirements(entry["requirements"], f"{where}/requirements")
         if any(r.command in ("bounds", "simulate") for r in requirements) and not {"Q", "R"} <= set(system):
-            need = [r.key for r in requirements if r.command != "analyze"]
-            raise InvalidInput(f"{where}/plant", f"the requirements {need} need Q and R in the plant's system")
+            keys = [r.key for r in requirements if r.command != "analyze"]
+            raise InvalidInput(f"{where}/plant", f"the requirements {keys} need Q and R in the plant's system")
         entry_ = CheckEntry(name=name, request=request, requirements=requirements)
         _validate_options(entry_, where)
         entries.append(entry_)
