@@ -62,13 +62,12 @@ from ._setup import (
     parse_options,
     sim_system,
 )
-from ._stationary import StationaryReport, parse_thresholds, stationary_report, verdict_headline
+from ._stationary import Z95, StationaryReport, parse_thresholds, stationary_report, verdict_headline
 
 #: Seconds the simulation may spend on Theorem 1's report (tail exponent, growth rate) before going without it.
 EXACT_ANALYSIS_S = 5.0
 
 #: Two-sided 95% quantile of the standard normal distribution.
-Z95 = 1.959963984540054
 
 
 @dataclass(frozen=True, eq=False)

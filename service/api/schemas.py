@@ -1,7 +1,7 @@
 """Hand-written JSON Schemas of the HTTP contract, with examples from the seeds.
 
 The routes read the raw body themselves (numbers must stay exact, so pydantic
-never sees them); these schemas document what :func:`analyzer.parse_request`
+never sees them); these schemas document what :func:`kfio.parse_request`
 accepts.  The validator stays the single source of truth: a body that passes
 the schema can still be refused with a 422 naming the field (``A`` not
 square, ``Q`` not semidefinite, ...).
