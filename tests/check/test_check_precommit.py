@@ -5,6 +5,8 @@ from a committed copy, so the test commits a temporary copy of the package
 and runs the hook in a temporary copy of examples/check/ (a design team's
 repository).  The install is offline: the hook's virtualenv sees this
 interpreter's packages and pip installs kfio alone, without its dependencies.
+A real user's hook environment installs kfio with its dependencies from the
+package index instead.
 """
 
 from __future__ import annotations
@@ -93,15 +95,19 @@ def test_pre_commit_try_repo_runs_the_hook(tmp_path):
     files.update({ROOT / name: Path(name) for name in ("analyzer", "service")})
     hook_repo = _repo(files, tmp_path / "kfio")
     design = _repo({EXAMPLE: Path(".")}, tmp_path / "design")
+    # The hook's environment sees kfio's dependencies where this interpreter has them (its own
+    # site-packages through PYTHONPATH, which does not run their .pth files, so the editable kfio of
+    # a checkout stays out; the base interpreter's as system site packages), so pip installs kfio alone.
+    sites = [p for p in sys.path if p.endswith(("site-packages", "dist-packages")) and os.path.isdir(p)]
     env = {
         **os.environ,
         "PRE_COMMIT_HOME": str(tmp_path / "cache"),
-        "VIRTUALENV_SYSTEM_SITE_PACKAGES": "1",  # the hook's environment sees kfio's dependencies ...
-        "PIP_NO_DEPS": "1",  # ... so pip installs kfio alone
+        "PYTHONPATH": os.pathsep.join(sites),
+        "VIRTUALENV_SYSTEM_SITE_PACKAGES": "1",
+        "PIP_NO_DEPS": "1",
         "PIP_NO_BUILD_ISOLATION": "0",  # pip reads this variable inverted: 0 turns build isolation off
         "PIP_NO_INDEX": "1",
     }
-    env.pop("PYTHONPATH", None)
 
     def try_repo() -> subprocess.CompletedProcess[str]:
         return subprocess.run(
