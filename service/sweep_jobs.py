@@ -13,7 +13,7 @@ import dataclasses
 from typing import Any, Mapping
 
 from kfio import Budget
-from kfio.errors import BudgetExceeded, LimitExceeded
+from kfio.errors import BudgetExceeded
 
 from .settings import Settings
 
@@ -24,14 +24,14 @@ STAGE = "sweep of {total} points"
 def sweep_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[str, Any]) -> tuple[bytes, str]:
     """Run the sweep in ``body`` and answer its table as JSON (:meth:`kfio.sweep.SweepResult.to_dict`)."""
     from kfio.sweep import load_sweep, run_sweep
+    from kfio.sweep._spec import check_points
 
     from .io import dump_json
 
-    spec = load_sweep(body)
-    if spec.size > settings.max_sweep_points:
-        raise LimitExceeded(
-            "/axes", f"the sweep has {spec.size} points; this service runs at most {settings.max_sweep_points}"
-        )
+    spec = load_sweep(body, settings.max_sweep_points)
+    limits = settings.limits()
+    # Here, in the worker, under the job's budget and memory limit: a bad point fails the job (422).
+    check_points(spec, limits, tick=lambda: budget.tick("validating the sweep's points", 0))
     stage = STAGE.format(total=spec.size)
     last = [0]
 
@@ -51,6 +51,8 @@ def sweep_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[s
         engine="dask" if settings.dask_scheduler else "serial",
         scheduler=settings.dask_scheduler,
         progress=progress,
+        limits=limits,
+        validated=True,
     )
     return dump_json(result.to_dict()).encode("utf-8"), "application/json"
 
