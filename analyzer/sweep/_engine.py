@@ -28,7 +28,7 @@ from .._reporting import Report, ReportPart
 from ..errors import InvalidInput
 from ..model import DEFAULT_LIMITS, Limits, fraction_text
 from ._evaluate import evaluate_chunk
-from ._rows import FIELDS, error_row
+from ._rows import FIELDS, coordinate_column, error_row
 from ._spec import Axis, RationalRange, SweepSpec, points, request_text, validate_points
 
 #: ``progress(done, total)`` after every finished chunk.
@@ -81,7 +81,9 @@ class SweepResult(Report):
 
     @property
     def columns(self) -> list[str]:
-        return ["index", *self.spec.coordinate_names, *FIELDS[self.spec.command], "error"]
+        """``index``, ``axis:<name>`` per axis, the command's fields (:data:`FIELDS`), ``error``."""
+        coordinates = [coordinate_column(name) for name in self.spec.coordinate_names]
+        return ["index", *coordinates, *FIELDS[self.spec.command], "error"]
 
     def records(self) -> list[dict[str, Any]]:
         cols = self.columns

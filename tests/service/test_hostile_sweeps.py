@@ -156,3 +156,65 @@ def test_kfio_sweep_refuses_huge_grids_with_exit_2_before_building(tmp_path, cap
     err = capsys.readouterr().err
     assert "/axes" in err and "more than 10^" in err and "Traceback" not in err
     assert built == []
+
+
+COLLIDING = {
+    "command": "analyze",
+    "base": BASE,
+    "axes": [
+        {"pointer": "/channel/arrival_probability", "name": "index", "values": ["3/10", "9/10"]},
+        {"pointer": "/system/Q/0/0", "name": "verdict", "values": [20]},
+        {"pointer": "/system/R/0/0", "name": "error", "values": ["5/2"]},
+    ],
+}
+
+
+def _check_table(columns: list[str], records: list[dict[str, Any]]) -> None:
+    assert len(set(columns)) == len(columns)
+    assert columns[:4] == ["index", "axis:index", "axis:verdict", "axis:error"]
+    assert [r["index"] for r in records] == [0, 1]
+    assert [r["axis:index"] for r in records] == ["3/10", "9/10"]
+    assert [r["axis:verdict"] for r in records] == [20, 20] and [r["axis:error"] for r in records] == ["5/2"] * 2
+    assert [r["verdict"] for r in records] == ["unstable", "stable"]  # lambda_c = 9/25 (Sinopoli et al. 2004)
+    assert [r["error"] for r in records] == [None, None]
+
+
+def test_axes_named_like_result_columns_keep_their_own_columns_in_every_format(tmp_path, capsys):
+    import csv
+
+    import pyarrow.parquet as pq
+
+    from kfio.sweep import run_sweep, write_table
+
+    result = run_sweep(parse_sweep(COLLIDING), engine="serial")
+    _check_table(result.columns, result.records())
+    for name in ("t.csv", "t.jsonl", "t.parquet"):
+        write_table(tmp_path / name, result.columns, result.records())
+    with open(tmp_path / "t.csv", newline="") as fh:
+        reader = csv.reader(fh)
+        header = next(reader)
+        assert header == result.columns and len(set(header)) == len(header)
+        assert [row[1] for row in reader] == ["3/10", "9/10"]
+    lines = [json.loads(line) for line in (tmp_path / "t.jsonl").read_text().splitlines()]
+    _check_table(list(lines[0]), lines)
+    table = pq.read_table(tmp_path / "t.parquet")
+    assert table.column_names == result.columns
+    assert table.column("axis:index").to_pylist() == ["3/10", "9/10"] and table.column("index").to_pylist() == [0, 1]
+    # the CLI streams the same rows
+    path = tmp_path / "sweep.json"
+    path.write_text(json.dumps(COLLIDING))
+    assert main(["sweep", str(path), "--serial"]) == 0
+    streamed = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    _check_table(list(streamed[0]), streamed)
+
+
+def test_http_table_keeps_axes_named_like_result_columns_apart(client):
+    r = post_sweep(client, COLLIDING)
+    assert r.status_code == 202, r.text
+    location = r.headers["location"]
+    deadline = time.monotonic() + 120
+    while (doc := client.get(location).json())["status"] not in ("done", "failed", "cancelled"):
+        assert time.monotonic() < deadline, doc
+        time.sleep(0.05)
+    assert doc["status"] == "done", doc
+    _check_table(doc["result"]["columns"], doc["result"]["rows"])

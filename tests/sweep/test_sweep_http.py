@@ -56,4 +56,4 @@ def test_sweep_job_gives_the_cli_table_and_a_bad_point_fails_its_job_naming_it()
         assert table["points"] == 25 and table["errors"] == 0
         expected = run_sweep(load_sweep(json.dumps(SWEEP)), engine="serial").records()
         assert table["rows"] == expected
-        assert table["columns"][:2] == ["index", "/channel/arrival_probability"]
+        assert table["columns"][:2] == ["index", "axis:/channel/arrival_probability"]
