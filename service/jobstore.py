@@ -266,10 +266,12 @@ class JobStore:
 
     # -- the interface ----------------------------------------------------
 
-    def submit(self, kind: str, body: bytes, params: Mapping[str, Any] | None = None) -> Job:
+    def submit(self, kind: str, body: bytes, params: Mapping[str, Any] | None = None, tree: Any = None) -> Job:
         """Queue a job of ``kind`` on ``body``.
 
-        The body must be JSON (checked here, 422 otherwise); the request itself
+        The body must be JSON (checked here, 422 otherwise) unless the caller
+        has read it already and passes its ``tree`` (a sweep may be JSON Lines:
+        its caller passes ``{"options": ...}``); the request itself
         is validated by the job, whose problem then says what is wrong.  The
         budget is ``job_time_budget_s``, or less if the request asks for less
         with ``options.time_budget_s``; it counts from when the job starts running.
@@ -283,7 +285,8 @@ class JobStore:
         """
         if kind not in self.kinds:
             raise ProblemError(Problem(404, "unknown-job-kind", "Unknown kind of job", f"no job kind {kind!r}"))
-        tree = load_json(body)
+        if tree is None:
+            tree = load_json(body)
         if self._queued >= self.settings.max_jobs:
             raise ProblemError(
                 Problem(

@@ -59,8 +59,8 @@ def get_jobstore(request: Request) -> JobStore:
 JobStoreDep = Annotated[JobStore, Depends(get_jobstore)]
 
 
-async def validated(check: Any, *args: Any) -> None:
-    """Run ``check(*args)`` (a validator) in a thread, off the event loop, before a job is queued.
+async def validated(check: Any, *args: Any) -> Any:
+    """Run ``check(*args)`` (a validator) in a thread, off the event loop, before a job is queued; its value.
 
     A bad request is a 422 naming the field at once, as on the synchronous
     endpoint, instead of a job that fails later.
@@ -70,7 +70,7 @@ async def validated(check: Any, *args: Any) -> None:
     from ..problems import problem_from_exception
 
     try:
-        await asyncio.to_thread(check, *args)
+        return await asyncio.to_thread(check, *args)
     except ProblemError:
         raise
     except Exception as exc:  # noqa: BLE001 - InvalidInput and friends become their problem document

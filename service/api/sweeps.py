@@ -10,12 +10,17 @@ points done), and its result is the table as JSON.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from fastapi import APIRouter
 from fastapi.responses import Response
 
 from .deps import BodyDep
 from .jobs import _STATUS_RESPONSE, JobStoreDep, validated
 from .schemas import problem_responses
+
+if TYPE_CHECKING:
+    from kfio.sweep import SweepSpec
 
 router = APIRouter(prefix="/v1/sweeps", tags=["sweeps"])
 
@@ -68,7 +73,7 @@ SWEEP_SCHEMA = {
 }
 
 
-def _check_shape(body: bytes, max_points: int) -> int:
+def _check_shape(body: bytes, max_points: int) -> SweepSpec:
     """The sweep's shape and size: O(body) work, safe in the server process.
 
     The point count comes from the axes' sizes before anything is built
@@ -77,7 +82,7 @@ def _check_shape(body: bytes, max_points: int) -> int:
     """
     from kfio.sweep import load_sweep
 
-    return load_sweep(body, max_points).size
+    return load_sweep(body, max_points)
 
 
 @router.post(
@@ -120,8 +125,10 @@ def _check_shape(body: bytes, max_points: int) -> int:
 )
 async def submit_sweep(body: BodyDep, store: JobStoreDep) -> Response:
     settings = store.settings
-    await validated(_check_shape, body, settings.max_sweep_points)
-    job = store.submit("sweep", body)
+    spec = await validated(_check_shape, body, settings.max_sweep_points)
+    # the body may be JSON Lines of requests (as for `kfio sweep`): the store is given the options, not the text
+    options = {} if spec.time_budget_s is None else {"time_budget_s": repr(spec.time_budget_s)}
+    job = store.submit("sweep", body, tree={"options": options})
     return Response(
         store.document(job), status_code=202, media_type="application/json", headers={"Location": f"/v1/jobs/{job.id}"}
     )

@@ -218,3 +218,30 @@ def test_http_table_keeps_axes_named_like_result_columns_apart(client):
         time.sleep(0.05)
     assert doc["status"] == "done", doc
     _check_table(doc["result"]["columns"], doc["result"]["rows"])
+
+
+def _wait(client: TestClient, location: str) -> dict[str, Any]:
+    deadline = time.monotonic() + 120
+    while (doc := client.get(location).json())["status"] not in ("done", "failed", "cancelled"):
+        assert time.monotonic() < deadline, doc
+        time.sleep(0.05)
+    return doc
+
+
+def test_json_lines_of_requests_are_a_sweep_over_http_as_for_the_cli(client, tmp_path, capsys):
+    """Issue 22, item 10: the job store used to re-parse the body as one JSON document and refuse it."""
+    variants = [{**BASE, "system": {**BASE["system"], "A": [[a, 0], [1, 1.1]]}} for a in (1.25, 2)]
+    text = "\n".join(json.dumps(v) for v in variants) + "\n"
+    r = client.post("/v1/sweeps", content=text, headers={"content-type": "application/json"})
+    assert r.status_code == 202, r.text
+    doc = _wait(client, r.headers["location"])
+    assert doc["status"] == "done", doc
+    rows = doc["result"]["rows"]
+    path = tmp_path / "variants.jsonl"
+    path.write_text(text)
+    assert main(["sweep", str(path), "--serial"]) == 0
+    assert rows == [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    # brute force: each row is the single request's verdict
+    for row, variant in zip(rows, variants):
+        single = client.post("/v1/analyze", json=variant).json()
+        assert row["verdict"] == single["verdict"]
