@@ -420,6 +420,6 @@ def _iso(t: float | None) -> str | None:
 BUILTIN_KINDS = (
     worker_kind("analyze"),
     worker_kind("bounds"),
-    worker_kind("simulate", fraction=simulation_fraction),
+    worker_kind("simulate", "simulate-job", fraction=simulation_fraction),
     worker_kind("sweep", fraction=sweep_fraction),
 )

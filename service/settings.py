@@ -14,11 +14,15 @@ from __future__ import annotations
 
 import os
 from functools import lru_cache
+from typing import TYPE_CHECKING
 
 from pydantic import Field
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
 from kfio.model._limits import Limits
+
+if TYPE_CHECKING:
+    from kfio.simulation._setup import SimulationLimits
 
 from .watchdog import DEFAULT_MEMORY_MB
 
@@ -73,6 +77,9 @@ class Settings(BaseSettings):
         runs its sweeps on; without it a sweep runs in its job-lane worker.
     max_sweep_points:
         Points one ``POST /v1/sweeps`` may have.
+    job_max_trajectory_steps:
+        Cap on a simulation job's ``steps * trajectories`` (a synchronous
+        request has :class:`kfio.SimulationLimits`' 10^6: a job may run an hour).
     """
 
     model_config = SettingsConfigDict(env_prefix="KFIO_", frozen=True, extra="ignore")
@@ -99,10 +106,19 @@ class Settings(BaseSettings):
     job_retention: int = Field(64, ge=1)
     dask_scheduler: str | None = Field(None, pattern=r"^(tcp|tls|inproc)://[^\s]+$")
     max_sweep_points: int = Field(100_000, ge=1, le=1_000_000)
+    job_max_trajectory_steps: int = Field(100_000_000, ge=1, le=10_000_000_000)
 
     def memory_bytes(self) -> int | None:
         """:attr:`memory_mb` in bytes, ``None`` for no limit."""
         return self.memory_mb << 20 if self.memory_mb else None
+
+    def job_simulation_limits(self) -> SimulationLimits:
+        """The simulation limits of a job: :attr:`job_max_trajectory_steps` work, the rest as a request's."""
+        from dataclasses import replace
+
+        from kfio.simulation._setup import DEFAULT_SIMULATION_LIMITS
+
+        return replace(DEFAULT_SIMULATION_LIMITS, max_trajectory_steps=self.job_max_trajectory_steps)
 
     def limits(self) -> Limits:
         """The request size limits of this deployment."""

@@ -82,9 +82,9 @@ async def validated(check: Any, *args: Any) -> Any:
 
 def _submit_route(kind: str) -> None:
     async def submit(body: BodyDep, store: JobStoreDep) -> Response:
-        from kfio import load_request
+        from ..jobs import check_job_request
 
-        await validated(load_request, body, store.settings.limits())
+        await validated(check_job_request, kind, body, store.settings)
         job = store.submit(kind, body)
         return Response(
             store.document(job),
@@ -104,8 +104,10 @@ def _submit_route(kind: str) -> None:
             f"Same body as `POST /v1/{kind}`.  Answers 202 with `Location: /v1/jobs/{{id}}` at once; poll that URL. "
             "The job runs in a separate lane of worker processes, with the deployment's job budget "
             "(`KFIO_JOB_TIME_BUDGET_S`, an hour by default) or less if `options.time_budget_s` asks for less.  "
-            "The request is validated before it is queued (422 naming the field); option values that only the "
-            "computation checks end the job `failed` with a 422 problem.  "
+            "The request is validated and sized before it is queued (422 naming the field), with the job lane's "
+            "limits (a simulation job may do `KFIO_JOB_MAX_TRAJECTORY_STEPS` trajectory-steps, 10^8 by default, "
+            "where a request may do 10^6); option values that only the computation checks end the job `failed` "
+            "with a 422 problem.  "
             "Jobs are kept in memory: a restart forgets them."
         ),
         response_class=Response,
