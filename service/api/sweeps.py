@@ -104,7 +104,7 @@ def _check_shape(body: bytes, max_points: int) -> SweepSpec:
     response_class=Response,
     responses={
         202: {"description": "The sweep was queued", **_STATUS_RESPONSE},
-        **problem_responses(413, 422, 429, 503),
+        **problem_responses(413, 422, 429, 503),  # 503 server-misconfigured: KFIO_DASK_SCHEDULER does not work
     },
     openapi_extra={
         "requestBody": {
@@ -125,6 +125,12 @@ def _check_shape(body: bytes, max_points: int) -> SweepSpec:
 )
 async def submit_sweep(body: BodyDep, store: JobStoreDep) -> Response:
     settings = store.settings
+    if settings.dask_scheduler:
+        from ..sweep_jobs import dask_missing, misconfigured
+
+        missing = dask_missing()
+        if missing is not None:
+            raise misconfigured("KFIO_DASK_SCHEDULER", missing)
     spec = await validated(_check_shape, body, settings.max_sweep_points)
     # the body may be JSON Lines of requests (as for `kfio sweep`): the store is given the options, not the text
     options = {} if spec.time_budget_s is None else {"time_budget_s": repr(spec.time_budget_s)}
