@@ -72,6 +72,9 @@ class Settings(BaseSettings):
         answers 429.
     job_retention:
         Finished jobs kept for polling (the oldest are forgotten first).
+    job_retention_bytes:
+        Bytes the kept jobs' results may hold (the first finished are forgotten
+        first; the newest is kept whatever its size).
     dask_scheduler:
         Address of a Dask scheduler (``tcp://HOST:PORT``) that ``POST /v1/sweeps``
         runs its sweeps on; without it a sweep runs in its job-lane worker.
@@ -104,6 +107,7 @@ class Settings(BaseSettings):
     job_time_budget_s: float = Field(3600.0, gt=0, le=86400)
     max_jobs: int = Field(16, ge=0)
     job_retention: int = Field(64, ge=1)
+    job_retention_bytes: int = Field(256 << 20, ge=0)
     dask_scheduler: str | None = Field(None, pattern=r"^(tcp|tls|inproc)://[^\s]+$")
     max_sweep_points: int = Field(100_000, ge=1, le=1_000_000)
     job_max_trajectory_steps: int = Field(100_000_000, ge=1, le=10_000_000_000)

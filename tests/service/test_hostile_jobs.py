@@ -9,6 +9,7 @@ work cap (``KFIO_JOB_MAX_TRAJECTORY_STEPS``, 10^8), still checked at submit.
 from __future__ import annotations
 
 import json
+import shutil
 import time
 from collections.abc import Iterator
 from typing import Any
@@ -79,3 +80,46 @@ def test_a_simulation_job_without_a_count_equals_its_synchronous_twin(client):
         time.sleep(0.1)
     assert doc["status"] == "done", doc
     assert client.get(location + "/result").content == client.post("/v1/simulate", content=body, headers=JSON).content
+
+
+def test_kept_results_are_bounded_by_bytes_the_first_finished_forgotten_first():
+    """Issue 22, item 14: results were kept by count only (64 sweeps of 100,000 points held about 2 GiB)."""
+    from kfio.service.jobstore import Job, JobStore
+
+    store = JobStore(Settings(job_workers=1, job_retention=10, job_retention_bytes=2500))  # its lane is never started
+    jobs = []
+    for i, size in enumerate([1000, 1000, 1000, 400]):
+        job = Job(f"j{i}", "analyze", b"", {}, 1.0, status="done", finished=100.0 + i, content=b"x" * size)
+        jobs.append(job)
+    running = Job("r", "sweep", b"{}", {}, 1.0, status="running")
+    for job in [jobs[2], jobs[0], running, jobs[3], jobs[1]]:  # submission order differs from finishing order
+        store._jobs[job.id] = job
+    store._evict()
+    # 3400 bytes held: j0 (finished first) goes, leaving 2400 <= 2500; the running job is never touched
+    assert set(store._jobs) == {"j1", "j2", "j3", "r"}
+    store._jobs["big"] = Job("big", "sweep", b"", {}, 1.0, status="done", finished=200.0, content=b"y" * 9999)
+    store._evict()
+    assert set(store._jobs) == {"big", "r"}  # the newest is kept whatever its size
+    assert sum(len(j.content or b"") for j in store._jobs.values()) == 9999
+    shutil.rmtree(store._dir)
+
+
+def test_a_finished_job_past_the_byte_bound_makes_room_over_http():
+    settings = Settings(workers=1, job_workers=1, max_jobs=4, time_budget_s=30, job_retention_bytes=1)
+    with TestClient(create_app(settings)) as c:
+        deadline = time.monotonic() + 60
+        while c.get("/readyz").status_code != 200:
+            assert time.monotonic() < deadline
+            time.sleep(0.05)
+        locations = []
+        for q in (20, 21):
+            body = {**SEED_2X2, "system": {**SEED_2X2["system"], "Q": [[q, 0], [0, q]]}}
+            r = c.post("/v1/jobs/analyze", content=json.dumps(body), headers=JSON)
+            assert r.status_code == 202, r.text
+            locations.append(r.headers["location"])
+            deadline = time.monotonic() + 120
+            while c.get(locations[-1]).json()["status"] not in ("done", "failed", "cancelled"):
+                assert time.monotonic() < deadline
+                time.sleep(0.05)
+        assert c.get(locations[0]).status_code == 404  # forgotten when the second finished
+        assert c.get(locations[1]).json()["status"] == "done"
