@@ -123,6 +123,14 @@ def test_http_refuses_10_to_the_4305_points_with_422_not_500(client):
     assert "10^4304" in r.json()["detail"] and "sys.set_int_max_str_digits" not in r.text
 
 
+def test_http_refuses_2_to_the_14300_points_of_listed_values_with_422_not_500(client):
+    from support.hostile import values_sweep
+
+    r = client.post("/v1/sweeps", content=values_sweep(14_300), headers={"content-type": "application/json"})
+    assert r.status_code == 422 and r.headers["content-type"] == PROBLEM, r.text
+    assert "more than 10^4304 points" in r.json()["detail"]  # 2^14300 = 1.1 * 10^4304
+
+
 def test_http_counts_points_against_the_deployments_limit(client):
     r = post_sweep(client, wide(2, 1000))  # 10^6 points; this deployment's default is 10^5
     assert r.status_code == 422 and "at most 100000" in r.json()["detail"], r.text
