@@ -125,6 +125,12 @@ def check_job_request(kind: str, body: bytes, settings: Settings) -> None:
         parse_options(request, job_simulation_limits(request, settings))
 
 
+def check_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[str, Any]) -> JobOutput:
+    """:func:`check_job_request` for the job kind ``params["kind"]``, in a worker of the synchronous lane."""
+    check_job_request(str(params.get("kind")), body, settings)
+    return b"", JSON
+
+
 def _plot_job(name: str) -> JobFn:
     def job(body: bytes, settings: Settings, budget: Budget, params: Mapping[str, Any]) -> JobOutput:
         from . import plots
@@ -148,6 +154,7 @@ JOBS: dict[str, JobFn] = {
     "bounds": bounds_job,
     "simulate": simulate_job,
     "simulate-job": simulate_long_job,
+    "check-job": check_job,
     "plot-phase-transition": _plot_job("phase_transition"),
     "plot-region": _plot_job("region"),
     "plot-simulation": _plot_job("simulation"),

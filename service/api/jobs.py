@@ -14,9 +14,12 @@ from typing import Annotated, Any
 from fastapi import APIRouter, Depends, Path, Request
 from fastapi.responses import Response
 
+from kfio import load_json
+
+from ..dispatch import INLINE_PARSE_BYTES, Dispatcher
 from ..jobstore import JobStore
-from ..problems import Problem, ProblemError
-from .deps import BodyDep
+from ..problems import Problem, ProblemError, problem_from_exception
+from .deps import BodyDep, DispatcherDep
 from .schemas import REQUEST_EXAMPLES, json_body, problem_responses
 
 router = APIRouter(prefix="/v1/jobs", tags=["jobs"])
@@ -80,12 +83,57 @@ async def validated(check: Any, *args: Any) -> Any:
         raise ProblemError(problem) from None
 
 
-def _submit_route(kind: str) -> None:
-    async def submit(body: BodyDep, store: JobStoreDep) -> Response:
-        from ..jobs import check_job_request
+#: Seconds a job's submit-time check may take in the synchronous lane, waiting for a worker included.
+CHECK_BUDGET_S = 5.0
 
-        await validated(check_job_request, kind, body, store.settings)
-        job = store.submit(kind, body)
+
+async def checked_in_worker(dispatcher: Dispatcher, kind: str, body: bytes) -> None:
+    """Validate and size a job's request before it is queued, as the synchronous lane validates a request.
+
+    The check (:func:`kfio.service.jobs.check_job_request`: exact validation,
+    whose cost grows with the matrices) runs in a worker of the synchronous
+    lane, within :data:`CHECK_BUDGET_S` (waiting included), never in the server
+    process; only when that lane stays full does it run in the dispatcher's
+    parse threads, as the synchronous endpoints do before they answer 503.  A
+    check that outlasts its budget, or a worker that dies, leaves the job to
+    validate itself (it then fails with the 422 problem).
+
+    Raises
+    ------
+    ProblemError
+        The 422 problem (or 503 while shutting down) the synchronous twin would give.
+    """
+    from ..jobs import check_job_request
+    from ..pool import PoolBusy, PoolError, PoolShuttingDown
+
+    settings = dispatcher.settings
+    try:
+        budget = min(settings.time_budget_s, CHECK_BUDGET_S)
+        outcome = await dispatcher.pool.run(("check-job", body, settings, {"kind": kind}), budget)
+    except PoolShuttingDown as exc:
+        raise ProblemError(problem_from_exception(exc)) from None
+    except PoolBusy:
+        try:
+            await dispatcher._off_loop(check_job_request, kind, body, settings)
+        except Exception as exc:  # noqa: BLE001 - InvalidInput and friends become their problem document
+            problem = problem_from_exception(exc)
+            if problem.status >= 500:
+                raise
+            raise ProblemError(problem) from None
+        return
+    except PoolError:
+        return  # past a request's budget, or the worker died: the job has its own budget and validates itself
+    if outcome[0] != "ok":
+        problem = Problem.from_dict(outcome[1])
+        if problem.status == 422:
+            raise ProblemError(problem)
+
+
+def _submit_route(kind: str) -> None:
+    async def submit(body: BodyDep, store: JobStoreDep, dispatcher: DispatcherDep) -> Response:
+        await checked_in_worker(dispatcher, kind, body)
+        tree = await dispatcher._off_loop(load_json, body) if len(body) > INLINE_PARSE_BYTES else None
+        job = store.submit(kind, body, tree=tree)
         return Response(
             store.document(job),
             status_code=202,

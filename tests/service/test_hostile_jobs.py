@@ -123,3 +123,18 @@ def test_a_finished_job_past_the_byte_bound_makes_room_over_http():
                 time.sleep(0.05)
         assert c.get(locations[0]).status_code == 404  # forgotten when the second finished
         assert c.get(locations[1]).json()["status"] == "done"
+
+
+def test_a_jobs_request_is_validated_in_a_worker_not_in_the_server(client, monkeypatch):
+    """Exact validation grows with the matrices: it runs in the synchronous lane's worker, as for a request."""
+    import kfio.service.jobs as server_side
+
+    def forbidden(*args: Any, **kwargs: Any) -> None:
+        raise AssertionError("a job's request was validated in the server process")
+
+    monkeypatch.setattr(server_side, "check_job_request", forbidden)
+    bad = {**SEED_2X2, "system": {**SEED_2X2["system"], "Q": [[20, 0], [0, -20]]}}
+    r = client.post("/v1/jobs/analyze", content=json.dumps(bad), headers=JSON)
+    assert r.status_code == 422 and r.json()["field"] == "/system/Q", r.text
+    r = client.post("/v1/jobs/simulate", content=json.dumps(simulation(10_000, 20_000)), headers=JSON)
+    assert r.status_code == 422 and r.json()["field"] == "/options/simulate/trajectories", r.text
