@@ -289,7 +289,7 @@ class WorkerPool:
         """Kill every worker (they hold no state worth a graceful stop)."""
         self._closed = True
         workers, self._all = list(self._all), set()
-        await self._in_thread(lambda: [w.kill() for w in workers])
+        await self._in_thread(_kill_all, workers)
         self._threads.shutdown(wait=False)
 
     @property
@@ -467,6 +467,11 @@ async def _readable(conn: Connection, timeout: float) -> None:
         loop.remove_reader(fd)
         if not os.get_blocking(fd):  # some event loops (uvloop) leave the fd non-blocking: recv() needs it blocking
             os.set_blocking(fd, True)
+
+
+def _kill_all(workers: list[_Worker]) -> None:
+    for worker in workers:
+        worker.kill()
 
 
 def _log_task_error(task: asyncio.Task[None]) -> None:
