@@ -31,7 +31,7 @@ import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from multiprocessing.connection import Connection
-from typing import Any, Callable
+from typing import Any, Callable, cast
 
 from .threads import one_thread_per_process
 from .watchdog import limit_memory
@@ -182,7 +182,12 @@ class WorkerPool:
         self.start_timeout_s = start_timeout_s
         self.memory_bytes = memory_bytes
         self.retire = retire
-        self._ctx = multiprocessing.get_context(start_method)
+        # typeshed's BaseContext has no Process; every concrete start method's context does
+        self._ctx = cast(
+            "multiprocessing.context.ForkContext | multiprocessing.context.SpawnContext"
+            " | multiprocessing.context.ForkServerContext",
+            multiprocessing.get_context(start_method),
+        )
         if start_method == "forkserver" and preload:
             self._ctx.set_forkserver_preload(list(preload))
         self._idle: asyncio.Queue[_Worker] | None = None
