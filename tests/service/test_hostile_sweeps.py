@@ -253,3 +253,17 @@ def test_json_lines_of_requests_are_a_sweep_over_http_as_for_the_cli(client, tmp
     for row, variant in zip(rows, variants):
         single = client.post("/v1/analyze", json=variant).json()
         assert row["verdict"] == single["verdict"]
+
+
+def test_point_validation_checks_in_with_its_budget_after_every_point_and_stops_when_it_is_spent():
+    from kfio import Budget
+    from kfio.errors import BudgetExceeded
+    from kfio.sweep._spec import check_points
+
+    spec = parse_sweep(wide(1, 50))
+    ticks: list[int] = []
+    assert check_points(spec, tick=lambda: ticks.append(1)) == 50 and len(ticks) == 50
+    budget = Budget(max_steps=10)
+    with pytest.raises(BudgetExceeded):
+        check_points(spec, tick=lambda: budget.tick("validating the sweep's points"))
+    assert budget.steps == 11  # stopped at the first check-in past the budget, not at the end
