@@ -14,11 +14,15 @@ from __future__ import annotations
 
 import os
 from functools import lru_cache
+from typing import TYPE_CHECKING
 
 from pydantic import Field
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
 from kfio.model._limits import Limits
+
+if TYPE_CHECKING:
+    from kfio.simulation._setup import SimulationLimits
 
 from .watchdog import DEFAULT_MEMORY_MB
 
@@ -68,11 +72,17 @@ class Settings(BaseSettings):
         answers 429.
     job_retention:
         Finished jobs kept for polling (the oldest are forgotten first).
+    job_retention_bytes:
+        Bytes the kept jobs' results may hold (the first finished are forgotten
+        first; the newest is kept whatever its size).
     dask_scheduler:
         Address of a Dask scheduler (``tcp://HOST:PORT``) that ``POST /v1/sweeps``
         runs its sweeps on; without it a sweep runs in its job-lane worker.
     max_sweep_points:
         Points one ``POST /v1/sweeps`` may have.
+    job_max_trajectory_steps:
+        Cap on a simulation job's ``steps * trajectories`` (a synchronous
+        request has :class:`kfio.SimulationLimits`' 10^6: a job may run an hour).
     """
 
     model_config = SettingsConfigDict(env_prefix="KFIO_", frozen=True, extra="ignore")
@@ -97,12 +107,22 @@ class Settings(BaseSettings):
     job_time_budget_s: float = Field(3600.0, gt=0, le=86400)
     max_jobs: int = Field(16, ge=0)
     job_retention: int = Field(64, ge=1)
+    job_retention_bytes: int = Field(256 << 20, ge=0)
     dask_scheduler: str | None = Field(None, pattern=r"^(tcp|tls|inproc)://[^\s]+$")
     max_sweep_points: int = Field(100_000, ge=1, le=1_000_000)
+    job_max_trajectory_steps: int = Field(100_000_000, ge=1, le=10_000_000_000)
 
     def memory_bytes(self) -> int | None:
         """:attr:`memory_mb` in bytes, ``None`` for no limit."""
         return self.memory_mb << 20 if self.memory_mb else None
+
+    def job_simulation_limits(self) -> SimulationLimits:
+        """The simulation limits of a job: :attr:`job_max_trajectory_steps` work, the rest as a request's."""
+        from dataclasses import replace
+
+        from kfio.simulation._setup import DEFAULT_SIMULATION_LIMITS
+
+        return replace(DEFAULT_SIMULATION_LIMITS, max_trajectory_steps=self.job_max_trajectory_steps)
 
     def limits(self) -> Limits:
         """The request size limits of this deployment."""

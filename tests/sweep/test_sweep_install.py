@@ -40,7 +40,7 @@ def test_documented_example_runs_and_turns_stable_past_the_closed_form(tmp_path,
     spectral = max(abs(Fraction(str(A[i][i]))) for i in range(len(A)))
     critical = 1 - 1 / spectral**2
     for row in rows:
-        p = Fraction(row["arrival_probability"])
+        p = Fraction(row["axis:arrival_probability"])  # coordinates are axis:<name> columns
         assert row["verdict"] == ("stable" if p > critical else "unstable" if p < critical else "boundary")
         assert Fraction(row["critical_arrival_probability_exact"]) == critical
 
