@@ -419,4 +419,5 @@ BUILTIN_KINDS = (
     worker_kind("bounds"),
     worker_kind("simulate", fraction=simulation_fraction),
     worker_kind("sweep", fraction=sweep_fraction),
+    worker_kind("loop"),
 )

@@ -28,6 +28,7 @@ import flint
 
 from ..errors import NumericalFailure
 from ..model._types import MarkovChannel
+from ._algebraic import root_text
 from ._mjls import Mjls
 from ._operator import operator_matrix
 from ._verdict import decide
@@ -73,18 +74,7 @@ def parameter_of(pointer: str, ch: MarkovChannel) -> tuple[str, Callable[[Fracti
 
 
 def _text(f: flint.fmpz_poly, ball: flint.arb) -> str | None:
-    c = [int(x) for x in f.coeffs()]
-    if len(c) == 2:
-        r = Fraction(-c[0], c[1])
-        return str(r.numerator) if r.denominator == 1 else f"{r.numerator}/{r.denominator}"
-    if len(c) == 3:
-        import sympy
-
-        x = sympy.Symbol("x")
-        roots = sympy.solve(c[2] * x**2 + c[1] * x + c[0], x)
-        mid = float(ball.mid())
-        return str(sympy.nsimplify(min(roots, key=lambda t: abs(float(t) - mid))))
-    return None
+    return root_text(f, float(ball.mid()))
 
 
 def _between(a: flint.arb, b: flint.arb) -> Fraction:

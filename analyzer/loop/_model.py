@@ -100,7 +100,7 @@ def _zeros(r: int, c: int) -> Matrix:
 
 
 def _shaped(obj: Any, where: str, name: str, rows: int, cols: int, limits: Limits) -> Matrix:
-    m = parse_matrix(obj, where, name, limits, max(rows, 1), max(cols, 1))
+    m = parse_matrix(obj, where, name, limits, max(rows, limits.max_states), max(cols, limits.max_states))
     if len(m) != rows or len(m[0]) != cols:
         raise InvalidInput(where, f"{name} must be {rows}x{cols}; got {len(m)}x{len(m[0])}")
     return m

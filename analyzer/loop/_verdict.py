@@ -31,6 +31,7 @@ import numpy as np
 
 from ..errors import NumericalFailure
 from ..model._request import is_psd
+from ._algebraic import root_text
 from ._mjls import Mjls
 from ._operator import (
     apply_exact,
@@ -108,22 +109,7 @@ def _largest_real_root(poly: flint.fmpq_poly) -> tuple[int, str | None]:
 
 
 def _root_text(f: flint.fmpz_poly | None, ball: flint.arb) -> str | None:
-    """A rational or quadratic root of the integer polynomial ``f`` near ``ball``, as exact text."""
-    if f is None:
-        return None
-    c = [int(x) for x in f.coeffs()]
-    if len(c) == 2:
-        r = Fraction(-c[0], c[1])
-        return str(r.numerator) if r.denominator == 1 else f"{r.numerator}/{r.denominator}"
-    if len(c) == 3:
-        import sympy
-
-        x = sympy.Symbol("x")
-        roots = sympy.solve(c[2] * x**2 + c[1] * x + c[0], x)
-        mid = float(ball.mid())
-        r = min(roots, key=lambda t: abs(float(t) - mid))
-        return str(sympy.nsimplify(r))
-    return None
+    return root_text(f, float(ball.mid()))
 
 
 def exact_radius(sys: Mjls, T: flint.fmpq_mat | None = None) -> tuple[int, str | None]:
