@@ -39,7 +39,13 @@ MAX_CRITICAL_SIZE = 160
 
 @dataclass(frozen=True)
 class Critical:
-    """The critical value of one parameter and the exact labels of the intervals of ``(0, 1)``."""
+    """The critical value of one parameter and the exact labels of the intervals of ``(0, 1)``.
+
+    ``polynomial`` (integer coefficients, constant first) is the irreducible
+    polynomial over Q of which the critical value is a root, ``enclosure`` a
+    certified interval around it holding no other root: together an exact
+    description, also when ``exact`` (a rational or quadratic text) is ``None``.
+    """
 
     link: str
     parameter: str
@@ -47,6 +53,8 @@ class Critical:
     exact: str | None
     intervals: tuple[tuple[float, float, str], ...]
     note: str
+    polynomial: tuple[str, ...] | None = None
+    enclosure: tuple[float, float] | None = None
 
     def as_dict(self) -> dict[str, object]:
         return {
@@ -54,6 +62,8 @@ class Critical:
             "parameter": self.parameter,
             "value": self.value,
             "value_exact": self.exact,
+            "value_minimal_polynomial": list(self.polynomial) if self.polynomial is not None else None,
+            "value_enclosure": list(self.enclosure) if self.enclosure is not None else None,
             "intervals": [{"from": a, "to": b, "verdict": v} for a, b, v in self.intervals],
             "note": self.note,
         }
@@ -162,10 +172,10 @@ def critical_value(label: str, pointer: str, ch: MarkovChannel, build: Callable[
     if poly is None:
         return Critical(label, parameter, None, None, (), "not computed: I - T(x) is singular at every base point")
     roots = roots_in_unit(poly)
-    edges: list[tuple[Fraction, float, str | None, flint.arb | None]] = [(Fraction(0), 0.0, "0", None)]
+    edges: list[tuple[flint.fmpz_poly | None, float, str | None, flint.arb | None]] = [(None, 0.0, "0", None)]
     for r, f in roots:
-        edges.append((Fraction(0), float(r.mid()), _text(f, r), r))
-    edges.append((Fraction(1), 1.0, "1", None))
+        edges.append((f, float(r.mid()), _text(f, r), r))
+    edges.append((None, 1.0, "1", None))
     labels = []
     for k in range(len(edges) - 1):
         a, b = edges[k], edges[k + 1]
@@ -187,7 +197,10 @@ def critical_value(label: str, pointer: str, ch: MarkovChannel, build: Callable[
         k -= 1
     left = edges[k]
     note = "exact: a root of det(I - T(x)), the stable side decided exactly"
-    return Critical(label, parameter, left[1], left[2], intervals, note)
+    poly = tuple(str(int(c)) for c in left[0].coeffs()) if left[0] is not None else None
+    ball = left[3]
+    box = (float(_exact(ball.lower())), float(_exact(ball.upper()))) if ball is not None else None
+    return Critical(label, parameter, left[1], left[2], intervals, note, poly, box)
 
 
 __all__ = ["Critical", "MAX_CRITICAL_SIZE", "critical_value", "det_polynomial", "parameter_of", "roots_in_unit"]

@@ -139,11 +139,10 @@ def _estimator_alone(req: LoopRequest, with_critical: bool) -> dict[str, Any]:
         lk = links[0][0]
         crit = critical_value(lk.label, lk.pointer, lk.channel, lambda ch: estimator_mjls(req, {lk.pointer: ch}))
     opt, opt_exact, why = _optimal_filter_critical(req)
-    mine = (
-        crit.exact
-        if crit is not None and crit.exact is not None
-        else (f"{crit.value:.4g}" if crit is not None and crit.value is not None else None)
-    )
+    mine = None
+    if crit is not None and crit.value is not None:
+        short = crit.exact is not None and len(crit.exact) <= 24
+        mine = crit.exact if short else f"{crit.value:.4g}"
     statement = None
     if (
         opt_exact is not None
