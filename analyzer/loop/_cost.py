@@ -2,8 +2,8 @@
 
 When ``rho(T) < 1`` the mode-wise second moments converge to the unique
 solution of ``Y_j = sum_i p_ij (M_i Y_i M_i' + pi_i G_i Sigma G_i')``
-(Costa, Fragoso and Marques 2005, Prop. 3.37), and the average stage cost
-``lim E[x' W x + a' U a]`` (Schenato et al. 2007, eq. (5), with the applied
+(Costa, Fragoso and Marques 2005, Ch. 3), and the average stage cost
+``lim E[x' W x + a' U a]`` (Schenato, Sinopoli, Franceschetti, Poolla and Sastry 2007, with the applied
 input ``a``) is
 
     J = sum_i [ tr(W Y_i^xx) + sum_b w_b ( tr(U F_b Y_i F_b') + pi_i tr(U E_b Sigma E_b') ) ]

@@ -4,7 +4,7 @@ For a Bernoulli link with arrival probability ``x`` (or a Gilbert-Elliott
 link's recovery rate ``x``) every transition probability of the joint chain
 is affine in ``x``, so the second-moment operator is ``T(x) = T(x0) + (x - x0) T1``.
 ``rho(T(x))`` is continuous in ``x`` and is an eigenvalue of ``T(x)`` (a
-positive map: Costa, Fragoso and Marques 2005, Prop. 3.6), so it can cross 1
+positive map: Costa, Fragoso and Marques 2005, Ch. 3), so it can cross 1
 only at a root of ``f(x) = det(I - T(x))``.  With ``A0 = I - T(x0)``
 invertible, ``f(x) = det(A0) det(I - (x - x0) A0^(-1) T1)``: the reversed
 characteristic polynomial of ``A0^(-1) T1`` (FLINT), shifted.  Its real

@@ -1,6 +1,6 @@
 """The second-moment operator of a Markov jump linear system, on half-vectorized symmetric matrices.
 
-With ``Y_i = E[z z' 1{theta = i}]`` (Costa, Fragoso and Marques 2005, Sec. 3.3),
+With ``Y_i = E[z z' 1{theta = i}]`` (Costa, Fragoso and Marques 2005, Ch. 3),
 
     Y_j[t+1] = sum_i p_ij (M_i Y_i[t] M_i' + pi_i[t] G_i Sigma G_i'),
 

@@ -194,7 +194,7 @@ def analyze_loop(req: LoopRequest, *, critical: bool = True) -> LoopReport:
     if req.protocol == "udp":
         notes.append(
             "UDP-like: the estimator does not know whether the actuator packet arrived and uses the link's "
-            "long-run arrival rate; the verdict is exact for these fixed gains (Schenato et al. 2007, Sec. VI)"
+            "long-run arrival rate; the verdict is exact for these fixed gains (Schenato, Sinopoli, Franceschetti, Poolla and Sastry 2007, Sec. VI)"
         )
     return LoopReport(
         verdict=dec.verdict,

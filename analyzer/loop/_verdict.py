@@ -2,7 +2,7 @@
 
 ``T`` (:mod:`kfio.loop._operator`) is a positive map on ``N`` symmetric
 matrices, so ``rho(T)`` is one of its eigenvalues (Krein-Rutman; Costa,
-Fragoso and Marques 2005, Prop. 3.6 and Thm 3.9) and:
+Fragoso and Marques 2005, Ch. 3 and Thm 3.9) and:
 
 * ``rho(T) < 1`` iff the coupled Lyapunov equation ``Y - T(Y) = I`` has a
   solution with every ``Y_i`` positive definite (Thm 3.9).  Solving it

@@ -6,7 +6,7 @@
   kfio's reduced operator must give the same rationals.
 * An independent float implementation of the second-moment operator: the full joint chain
   (no averaging of i.i.d. links), ``sum p_ij (M_i kron M_i)`` on ``vec``, and numpy's
-  eigenvalues (Costa, Fragoso and Marques 2005, Sec. 3.3).
+  eigenvalues (Costa, Fragoso and Marques 2005, Ch. 3).
 """
 
 from __future__ import annotations
