@@ -65,7 +65,7 @@ class LoopReport(Report):
     spectral_radius_exact: str | None
     operator_size: int
     modes: int
-    cost: Fraction | None
+    stationary_cost: Fraction | None
     critical: tuple[Critical, ...]
     sensor_critical: Critical | None
     actuator_critical: Critical | None
@@ -75,11 +75,38 @@ class LoopReport(Report):
 
     _repr_fields = ("verdict", "spectral_radius", "cost")
 
+    @property
+    def cost(self) -> float | None:
+        """The stationary cost in float64 (``None`` when unbounded); exactly: :attr:`stationary_cost`."""
+        return None if self.stationary_cost is None else float(self.stationary_cost)
+
+    @property
+    def cost_exact(self) -> str | None:
+        """The stationary cost as exact fraction text (``None`` when unbounded or longer than 2000 characters)."""
+        return _text(self.stationary_cost)
+
+    @property
+    def critical_sensor_arrival_probability(self) -> float | None:
+        """Critical arrival probability of the (one, Bernoulli) sensor link, the rest fixed."""
+        return self.sensor_critical.value if self.sensor_critical else None
+
+    @property
+    def critical_sensor_arrival_probability_exact(self) -> str | None:
+        return self.sensor_critical.exact if self.sensor_critical else None
+
+    @property
+    def critical_actuator_arrival_probability(self) -> float | None:
+        """Critical arrival probability of the (Bernoulli) actuator link, the rest fixed."""
+        return self.actuator_critical.value if self.actuator_critical else None
+
+    @property
+    def critical_actuator_arrival_probability_exact(self) -> str | None:
+        return self.actuator_critical.exact if self.actuator_critical else None
+
 
 def loop_report_view(r: LoopReport) -> dict[str, Any]:
     """The JSON fields of a :class:`LoopReport` (encoded by :func:`kfio._json.encode`)."""
     req = r.request
-    sc, ac = r.sensor_critical, r.actuator_critical
     return {
         "verdict": r.verdict,
         "theorem": THEOREM,
@@ -91,12 +118,12 @@ def loop_report_view(r: LoopReport) -> dict[str, Any]:
         "spectral_radius_exact": r.spectral_radius_exact,
         "operator_size": r.operator_size,
         "modes": r.modes,
-        "cost": None if r.cost is None else float(r.cost),
-        "cost_exact": _text(r.cost),
-        "critical_sensor_arrival_probability": sc.value if sc else None,
-        "critical_sensor_arrival_probability_exact": sc.exact if sc else None,
-        "critical_actuator_arrival_probability": ac.value if ac else None,
-        "critical_actuator_arrival_probability_exact": ac.exact if ac else None,
+        "cost": r.cost,
+        "cost_exact": r.cost_exact,
+        "critical_sensor_arrival_probability": r.critical_sensor_arrival_probability,
+        "critical_sensor_arrival_probability_exact": r.critical_sensor_arrival_probability_exact,
+        "critical_actuator_arrival_probability": r.critical_actuator_arrival_probability,
+        "critical_actuator_arrival_probability_exact": r.critical_actuator_arrival_probability_exact,
         "critical_values": [c.as_dict() for c in r.critical],
         "estimator_alone": r.estimator_alone,
         "loop": {
@@ -205,7 +232,7 @@ def analyze_loop(req: LoopRequest, *, critical: bool = True) -> LoopReport:
         spectral_radius_exact=dec.spectral_radius_exact,
         operator_size=dec.size,
         modes=sys.modes,
-        cost=cost,
+        stationary_cost=cost,
         critical=tuple(crits),
         sensor_critical=sensor_c,
         actuator_critical=actuator_c,
