@@ -177,7 +177,8 @@ def _estimator_alone(req: LoopRequest, with_critical: bool) -> dict[str, Any]:
         and crit is not None
         and crit.parameter.endswith("arrival_probability")
     ):
-        statement = f"the optimal time-varying filter needs {opt_exact}; your steady-state gain needs {mine}"
+        theirs = opt_exact if len(opt_exact) <= 24 or opt is None else f"{opt:.4g}"
+        statement = f"the optimal time-varying filter needs {theirs}; your steady-state gain needs {mine}"
     return {
         "verdict": dec.verdict,
         "spectral_radius": dec.spectral_radius,
