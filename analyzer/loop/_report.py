@@ -199,8 +199,29 @@ def _estimator_alone(req: LoopRequest, with_critical: bool) -> dict[str, Any]:
     }
 
 
+#: Largest second-moment operator (``modes * d (d + 1) / 2``) a loop request may need: beyond it even
+#: the float margin (a dense eigenvalue problem) would not fit a worker's memory and time.
+MAX_OPERATOR_SIZE = 3000
+
+
 def analyze_loop(req: LoopRequest, *, critical: bool = True) -> LoopReport:
     """The whole report for a validated loop request (module docstring of :mod:`kfio.loop`)."""
+    from ..errors import LimitExceeded
+    from ._mjls import loop_state_size, sensor_links
+
+    d = loop_state_size(req)
+    modes = 1
+    for lk in [lk for lk, _ in sensor_links(req)] + [None]:
+        ch = lk.channel if lk is not None else req.actuator
+        modes *= 1 if ch.order == 0 else ch.n_histories
+    size = modes * d * (d + 1) // 2
+    if size > MAX_OPERATOR_SIZE:
+        raise LimitExceeded(
+            "/system/A",
+            f"the loop's second-moment operator would have size {size} ({modes} channel modes x {d * (d + 1) // 2} "
+            f"coordinates of a {d}x{d} symmetric matrix); the limit is {MAX_OPERATOR_SIZE}: use fewer states or "
+            "channels of lower order",
+        )
     sys = loop_mjls(req)
     dec = decide(sys)
     cost = stationary_cost(sys, dec.moments) if dec.moments is not None else None

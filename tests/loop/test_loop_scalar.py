@@ -102,3 +102,29 @@ def test_no_fixed_control_gain_beats_one_minus_inverse_a_squared(L):
     nu_c = (1 - a**2) / ((a - b * L) ** 2 - a**2)  # nu (a - b L)^2 + (1 - nu) a^2 = 1
     assert rep.actuator_critical.exact == _text(nu_c)
     assert nu_c > 1 - 1 / a**2
+
+
+def test_the_cheap_rounded_certificate_verifies_stable_loops_only():
+    from kfio.loop._mjls import loop_mjls
+    from kfio.loop._verdict import rounded_certificate
+
+    stable = _request(F(5, 4), F(1), F(1), F(1), F(1), F(1, 2), F(3, 5), F(4, 5), F(9, 10))
+    unstable = _request(F(5, 4), F(1), F(1), F(1), F(1), F(1, 2), F(3, 5), F(1, 2), F(9, 10))
+    assert decide(loop_mjls(stable)).verdict == "stable" and rounded_certificate(loop_mjls(stable))
+    assert decide(loop_mjls(unstable)).verdict == "unstable" and not rounded_certificate(loop_mjls(unstable))
+
+
+def test_an_operator_too_large_is_refused_naming_the_field():
+    from kfio.errors import LimitExceeded
+
+    n = 12
+    eye = [["1" if i == j else "0" for j in range(n)] for i in range(n)]
+    body = {
+        "system": {"A": eye, "B": [["1"]] * n, "C": [["1"] * n], "Q": eye, "R": [["1"]]},
+        "channel": {"model": "markov", "order": 3, "arrival_probability": {format(h, "03b"): "1/2" for h in range(8)}},
+        "actuator_channel": {"model": "gilbert_elliott", "failure_rate": "1/2", "recovery_rate": "1/2"},
+        "controller": {"gains": {"K": [["0"]] * n, "L": [["0"] * n]}},
+    }
+    with pytest.raises(LimitExceeded) as err:
+        kfio.loop._report.analyze_loop(parse_loop_request(body))
+    assert err.value.field == "/system/A" and "limit is 3000" in err.value.rule
