@@ -302,7 +302,11 @@ def loop_mjls(req: LoopRequest, overrides: dict[str, MarkovChannel] | None = Non
     act_ch = overrides.get("/actuator_channel", req.actuator)
     links.append(link_of("actuator", "/actuator_channel", act_ch))
     rows_of = [rows for _, rows in sensors]
-    nubar = mean_arrival(links[-1]) if req.protocol == "udp" else Fraction(1)
+    # nubar is part of the estimator's design: the rate of the request's actuator link, also when a
+    # critical value varies the link (so the operator stays affine in the link's parameter)
+    nubar = (
+        mean_arrival(link_of("actuator", "/actuator_channel", req.actuator)) if req.protocol == "udp" else Fraction(1)
+    )
     modes, P, pi = _reduced(links)
     cache: dict[tuple[tuple[int, ...], int], tuple[flint.fmpq_mat, ...]] = {}
     branches = []

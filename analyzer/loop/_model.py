@@ -8,7 +8,7 @@ fields (Schenato, Sinopoli, Franceschetti, Poolla and Sastry 2007, Sec. II)::
      "actuator_channel": <bernoulli | gilbert_elliott | markov>,
      "controller": {"gains": {"K": ..., "L": ...}, "form": "predictor" | "filter"},
      "cost": {"W": ..., "U": ...},
-     "options": {"loop": {"protocol": "tcp" | "udp", "on_loss": "zero" | "hold"}}}
+     "options": {"loop": {"protocol": "tcp" | "udp", "on_loss": "zero" | "hold", "region": 11}}}
 
 The plant is ``x[t+1] = A x[t] + B a[t] + w[t]`` where ``a[t]`` is the input
 the actuator applies: ``u[t]`` when the actuator packet arrives, else ``0``
@@ -46,7 +46,7 @@ from ..model._request import (
 from ..model._types import Channel, MarkovChannel, Matrix, System
 
 _TOP_KEYS = {"system", "channel", "actuator_channel", "controller", "cost", "options"}
-_LOOP_OPTIONS = {"protocol", "on_loss"}
+_LOOP_OPTIONS = {"protocol", "on_loss", "region"}
 PROTOCOLS = ("tcp", "udp")
 ON_LOSS = ("zero", "hold")
 FORMS = ("predictor", "filter")
@@ -73,6 +73,7 @@ class LoopRequest:
     on_loss: str = "zero"
     controller: str = "gains"
     time_budget_s: float | None = None
+    region: int | None = None
 
     @property
     def n(self) -> int:
@@ -167,7 +168,7 @@ def parse_loop_request(obj: Any, limits: Limits = DEFAULT_LIMITS) -> LoopRequest
     if "cost" in obj:
         W, U = _weights(obj["cost"], "/cost", n, m, limits)
 
-    protocol, on_loss, budget = "tcp", "zero", None
+    protocol, on_loss, budget, region = "tcp", "zero", None, None
     if "options" in obj:
         opts = _check_keys(obj["options"], "/options", {"loop", "time_budget_s"}, set())
         if "time_budget_s" in opts:
@@ -185,7 +186,18 @@ def parse_loop_request(obj: Any, limits: Limits = DEFAULT_LIMITS) -> LoopRequest
             on_loss = lo.get("on_loss", "zero")
             if on_loss not in ON_LOSS:
                 raise InvalidInput("/options/loop/on_loss", f"on_loss must be 'zero' or 'hold'; got {on_loss!r}")
-    req = LoopRequest(system, B, channel, actuator, K or (), L or (), form, W, U, protocol, on_loss, source, budget)
+            if "region" in lo:
+                from ._region import MAX_REGION_POINTS
+
+                region = lo["region"]
+                if isinstance(region, bool) or not isinstance(region, int) or not 2 <= region <= MAX_REGION_POINTS:
+                    raise InvalidInput(
+                        "/options/loop/region",
+                        f"region must be an integer number of points in [2, {MAX_REGION_POINTS}]",
+                    )
+    req = LoopRequest(
+        system, B, channel, actuator, K or (), L or (), form, W, U, protocol, on_loss, source, budget, region
+    )
     if source == "lqg":
         from ._lqg import with_lqg_gains
 

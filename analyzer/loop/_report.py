@@ -18,6 +18,7 @@ from ._cost import stationary_cost
 from ._critical import Critical, critical_value
 from ._mjls import estimator_mjls, loop_mjls, sensor_links
 from ._model import LoopRequest
+from ._region import region
 from ._verdict import decide
 
 #: Exact fraction texts longer than this are left out of the report (the float stays).
@@ -55,6 +56,9 @@ class LoopReport(Report):
         Critical value of each link alone (:class:`kfio.loop._critical.Critical`).
     estimator_alone:
         The fixed estimator gain without control, beside the optimal filter's critical value.
+    region:
+        With ``options.loop.region``: the exact boundary of the stable region in the
+        (sensor, actuator) arrival-probability plane (:mod:`kfio.loop._region`).
     """
 
     verdict: str
@@ -71,6 +75,7 @@ class LoopReport(Report):
     actuator_critical: Critical | None
     estimator_alone: dict[str, Any]
     request: LoopRequest
+    region: dict[str, Any] | None
     notes: tuple[str, ...] = field(default=())
 
     _repr_fields = ("verdict", "spectral_radius", "cost")
@@ -126,6 +131,7 @@ def loop_report_view(r: LoopReport) -> dict[str, Any]:
         "critical_actuator_arrival_probability_exact": r.critical_actuator_arrival_probability_exact,
         "critical_values": [c.as_dict() for c in r.critical],
         "estimator_alone": r.estimator_alone,
+        "region": r.region,
         "loop": {
             "protocol": req.protocol,
             "on_loss": req.on_loss,
@@ -260,6 +266,7 @@ def analyze_loop(req: LoopRequest, *, critical: bool = True) -> LoopReport:
         actuator_critical=actuator_c,
         estimator_alone=_estimator_alone(req, critical),
         request=req,
+        region=region(req, req.region) if req.region is not None else None,
         notes=tuple(notes),
     )
 

@@ -90,6 +90,14 @@ LOOP_COMPONENTS: dict[str, dict[str, Any]] = {
                         "properties": {
                             "protocol": {"enum": ["tcp", "udp"]},
                             "on_loss": {"enum": ["zero", "hold"]},
+                            "region": {
+                                "type": "integer",
+                                "minimum": 2,
+                                "maximum": 41,
+                                "description": "add the exact boundary of the stable region in the (sensor, "
+                                "actuator) arrival-probability plane at this many sensor probabilities "
+                                "(Bernoulli links on both sides)",
+                            },
                         },
                         "additionalProperties": False,
                     },
@@ -124,6 +132,7 @@ LOOP_COMPONENTS: dict[str, dict[str, Any]] = {
             "critical_actuator_arrival_probability_exact": {"type": ["string", "null"]},
             "critical_values": {"type": "array", "items": {"type": "object"}},
             "estimator_alone": {"type": "object"},
+            "region": {"type": ["object", "null"]},
             "loop": {"type": "object"},
         },
         "required": ["kfio_version", "verdict", "spectral_radius", "cost", "certified"],
