@@ -24,12 +24,12 @@ from __future__ import annotations
 import dataclasses
 from decimal import Decimal
 from fractions import Fraction
+from typing import Any
 
 import numpy as np
 
 from ..errors import InvalidInput
 from ..model._types import PerSensorChannel, to_float
-from ._model import LoopRequest
 
 #: Value iterations before a MARE is declared divergent.
 MAX_ITERATIONS = 20000
@@ -54,8 +54,11 @@ def _exact(m: np.ndarray) -> tuple[tuple[Fraction, ...], ...]:
     return tuple(tuple(Fraction(Decimal(repr(float(x)))) for x in row) for row in m)
 
 
-def with_lqg_gains(req: LoopRequest) -> LoopRequest:
-    """``req`` with the stationary TCP-like LQG gains ``K`` (predictor form) and ``L`` (module docstring)."""
+def with_lqg_gains(req: Any) -> Any:
+    """``req`` (a :class:`kfio.loop._model.LoopRequest`) with the stationary TCP-like gains ``K`` and ``L``.
+
+    ``K`` is in predictor form; see the module docstring for both equations.
+    """
     if req.protocol != "tcp":
         raise InvalidInput(
             "/controller/lqg",

@@ -50,6 +50,8 @@ _LOOP_OPTIONS = {"protocol", "on_loss", "region"}
 PROTOCOLS = ("tcp", "udp")
 ON_LOSS = ("zero", "hold")
 FORMS = ("predictor", "filter")
+#: Largest grid of ``options.loop.region``.
+MAX_REGION_POINTS = 41
 
 
 @dataclass(frozen=True)
@@ -187,8 +189,6 @@ def parse_loop_request(obj: Any, limits: Limits = DEFAULT_LIMITS) -> LoopRequest
             if on_loss not in ON_LOSS:
                 raise InvalidInput("/options/loop/on_loss", f"on_loss must be 'zero' or 'hold'; got {on_loss!r}")
             if "region" in lo:
-                from ._region import MAX_REGION_POINTS
-
                 region = lo["region"]
                 if isinstance(region, bool) or not isinstance(region, int) or not 2 <= region <= MAX_REGION_POINTS:
                     raise InvalidInput(

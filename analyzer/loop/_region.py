@@ -16,10 +16,7 @@ from typing import Any
 from ..model._types import MarkovChannel, PerSensorChannel
 from ._critical import critical_value
 from ._mjls import loop_mjls
-from ._model import LoopRequest
-
-#: Largest grid of ``options.loop.region``.
-MAX_REGION_POINTS = 41
+from ._model import MAX_REGION_POINTS, LoopRequest
 
 
 def _bernoulli(x: Fraction) -> MarkovChannel:

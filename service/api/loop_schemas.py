@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from ..._version import __version__
 from .schemas import COMPONENTS, _ref
 
 LOOP_EXAMPLE: dict[str, Any] = {
@@ -136,6 +137,22 @@ LOOP_COMPONENTS: dict[str, dict[str, Any]] = {
             "loop": {"type": "object"},
         },
         "required": ["kfio_version", "verdict", "spectral_radius", "cost", "certified"],
+        "examples": [
+            {  # kfio loop --json examples/loop_scalar.json (abridged)
+                "kfio_version": __version__,
+                "verdict": "stable",
+                "exact": True,
+                "certified": True,
+                "spectral_radius": 0.7625,
+                "spectral_radius_exact": "61/80",
+                "cost": 18.339837542615296,
+                "cost_exact": "256154510/13967109",
+                "critical_sensor_arrival_probability": 0.5625,
+                "critical_sensor_arrival_probability_exact": "9/16",
+                "critical_actuator_arrival_probability": 0.4934210526315789,
+                "critical_actuator_arrival_probability_exact": "75/152",
+            }
+        ],
     },
 }
 
