@@ -10,6 +10,10 @@ See ``docs/loop.md``.
 
 from __future__ import annotations
 
+import sys
+import types
+from typing import Any
+
 from ._model import LoopRequest, load_loop_request, parse_loop_request
 from ._report import LoopReport, analyze_loop, loop, loop_request
 
@@ -24,11 +28,11 @@ __all__ = [
 ]
 
 
-class _CallableModule(__import__("types").ModuleType):
+class _CallableModule(types.ModuleType):
     """``kfio.loop`` is both this package and the function :func:`loop`: calling the package calls it."""
 
-    def __call__(self, *args, **kwargs):  # type: ignore[no-untyped-def]
+    def __call__(self, *args: Any, **kwargs: Any) -> LoopReport:
         return loop(*args, **kwargs)
 
 
-__import__("sys").modules[__name__].__class__ = _CallableModule
+sys.modules[__name__].__class__ = _CallableModule

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Callable
+from typing import Any, Callable
 
 import flint
 
@@ -100,7 +100,7 @@ def _exact(x: flint.arb) -> Fraction:
 
 def roots_in_unit(poly: flint.fmpq_poly) -> list[tuple[flint.arb, flint.fmpz_poly]]:
     """Real roots of ``poly`` strictly inside ``(0, 1)``: certified isolating balls, ascending, with their factor."""
-    out = []
+    out: list[tuple[flint.arb, flint.fmpz_poly]] = []
     if poly.degree() < 1:
         return out
     _, factors = poly.numer().factor()
@@ -112,7 +112,8 @@ def roots_in_unit(poly: flint.fmpq_poly) -> list[tuple[flint.arb, flint.fmpz_pol
                 continue  # roots 0 and 1 are the ends of the range, not inside it
             flint.ctx.prec = 128
             while True:
-                balls = [z.real for z, _m in f.complex_roots() if z.imag.is_exact() and z.imag.is_zero()]
+                found: list[Any] = f.complex_roots()
+                balls = [z.real for z, _m in found if z.imag.is_exact() and z.imag.is_zero()]
                 if all(r > zero or r < zero for r in balls) and all(r > one or r < one for r in balls):
                     break
                 if flint.ctx.prec > 1 << 14:
@@ -197,10 +198,10 @@ def critical_value(label: str, pointer: str, ch: MarkovChannel, build: Callable[
         k -= 1
     left = edges[k]
     note = "exact: a root of det(I - T(x)), the stable side decided exactly"
-    poly = tuple(str(int(c)) for c in left[0].coeffs()) if left[0] is not None else None
+    minimal = tuple(str(int(c)) for c in left[0].coeffs()) if left[0] is not None else None
     ball = left[3]
     box = (float(_exact(ball.lower())), float(_exact(ball.upper()))) if ball is not None else None
-    return Critical(label, parameter, left[1], left[2], intervals, note, poly, box)
+    return Critical(label, parameter, left[1], left[2], intervals, note, minimal, box)
 
 
 __all__ = ["Critical", "MAX_CRITICAL_SIZE", "critical_value", "det_polynomial", "parameter_of", "roots_in_unit"]

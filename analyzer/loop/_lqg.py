@@ -44,7 +44,7 @@ def mare_fixed_point(A: np.ndarray, B: np.ndarray, W: np.ndarray, U: np.ndarray,
         S_next = (S_next + S_next.T) / 2
         if not np.all(np.isfinite(S_next)) or np.linalg.norm(S_next) > 1e12:
             return None
-        if np.linalg.norm(S_next - S) <= 1e-13 * max(1.0, np.linalg.norm(S_next)):
+        if np.linalg.norm(S_next - S) <= 1e-13 * max(1.0, float(np.linalg.norm(S_next))):
             return S_next
         S = S_next
     return None

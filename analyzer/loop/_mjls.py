@@ -284,6 +284,7 @@ def loop_maps(req: LoopRequest, gamma: Sequence[int], nu: int, nubar: Fraction) 
 def _noise(req: LoopRequest) -> flint.fmpq_mat:
     n, p = req.n, req.p
     S = flint.fmpq_mat(n + p, n + p)
+    assert req.system.Q is not None and req.system.R is not None  # required by the loop validator
     Q, R = qmat(req.system.Q), qmat(req.system.R)
     for i in range(n):
         for j in range(n):

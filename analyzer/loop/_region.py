@@ -15,7 +15,7 @@ from typing import Any
 
 from ..model._types import MarkovChannel, PerSensorChannel
 from ._critical import critical_value
-from ._mjls import loop_mjls
+from ._mjls import Mjls, loop_mjls
 from ._model import MAX_REGION_POINTS, LoopRequest
 
 
@@ -34,12 +34,11 @@ def region(req: LoopRequest, points: int) -> dict[str, Any] | None:
     rows = []
     for i in range(points):
         lam = Fraction(2 * i + 1, 2 * points)
-        c = critical_value(
-            "actuator",
-            "/actuator_channel",
-            req.actuator,
-            lambda ch, lam=lam: loop_mjls(req, {"/channel": _bernoulli(lam), "/actuator_channel": ch}),
-        )
+
+        def build(ch: MarkovChannel, lam: Fraction = lam) -> Mjls:
+            return loop_mjls(req, {"/channel": _bernoulli(lam), "/actuator_channel": ch})
+
+        c = critical_value("actuator", "/actuator_channel", req.actuator, build)
         rows.append(
             {
                 "sensor_arrival_probability": float(lam),

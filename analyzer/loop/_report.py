@@ -16,7 +16,7 @@ from ..model._exact import fraction_text
 from ..model._types import MarkovChannel, PerSensorChannel, Request
 from ._cost import stationary_cost
 from ._critical import Critical, critical_value
-from ._mjls import estimator_mjls, loop_mjls, sensor_links
+from ._mjls import Mjls, estimator_mjls, loop_mjls, sensor_links
 from ._model import LoopRequest
 from ._region import region
 from ._verdict import decide
@@ -236,8 +236,11 @@ def analyze_loop(req: LoopRequest, *, critical: bool = True) -> LoopReport:
     notes = []
     if critical:
         for lk, _rows in sensor_links(req):
-            c = critical_value(lk.label, lk.pointer, lk.channel, lambda ch, p=lk.pointer: loop_mjls(req, {p: ch}))
-            crits.append(c)
+
+            def build(ch: MarkovChannel, p: str = lk.pointer) -> Mjls:
+                return loop_mjls(req, {p: ch})
+
+            crits.append(critical_value(lk.label, lk.pointer, lk.channel, build))
         ac = critical_value(
             "actuator", "/actuator_channel", req.actuator, lambda ch: loop_mjls(req, {"/actuator_channel": ch})
         )

@@ -25,6 +25,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from fractions import Fraction
+from typing import Any
 
 import flint
 import numpy as np
@@ -115,7 +116,8 @@ def _largest_real_root(poly: flint.fmpq_poly) -> tuple[int, str | None]:
     for f, _ in factors:
         if f.degree() < 1:
             continue
-        for z, _mult in f.complex_roots():
+        roots: list[Any] = f.complex_roots()
+        for z, _mult in roots:
             if z.imag.is_exact() and z.imag.is_zero():
                 if best is None or z.real > best:
                     best, best_factor = z.real, f
@@ -186,7 +188,7 @@ def decide(sys: Mjls) -> Decision:
         rhs[i, 1] = noise[i, 0]
     rho_text = None
     try:
-        sol = (identity - T).solve(rhs, algorithm="dixon")
+        sol = (identity - T).solve(rhs, algorithm="dixon")  # type: ignore[call-arg]
     except ZeroDivisionError:
         sign, rho_text = exact_radius(sys, T)
         verdict = "boundary" if sign == 0 else ("unstable" if sign > 0 else "stable")
