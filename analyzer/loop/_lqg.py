@@ -93,3 +93,31 @@ def with_lqg_gains(req: Any) -> Any:
 
 
 __all__ = ["mare_fixed_point", "with_lqg_gains"]
+
+
+def control_critical(req: Any) -> dict[str, Any]:
+    """The TCP-like control MARE's critical actuator probability: ``nu_c >= 1 - 1/rho(A)^2``, equality for square invertible ``B``.
+
+    Schenato, Sinopoli, Franceschetti, Poolla and Sastry 2007, Sec. V (the dual of the estimation
+    bound of Sinopoli et al. 2004, Theorem 3).  Exact text for a scalar plant (``1 - 1/a^2``).
+    """
+    A, B = to_float(req.system.A), to_float(req.B)
+    rho = float(np.max(np.abs(np.linalg.eigvals(A))))
+    lower = max(0.0, 1.0 - 1.0 / rho**2) if rho > 0 else 0.0
+    exact = None
+    if len(req.system.A) == 1:
+        a = req.system.A[0][0]
+        x = max(Fraction(0), 1 - 1 / a**2) if a else Fraction(0)
+        exact = str(x.numerator) if x.denominator == 1 else f"{x.numerator}/{x.denominator}"
+    square = B.shape[0] == B.shape[1] and abs(np.linalg.det(B)) > 1e-12 * max(1.0, float(np.abs(B).max()) ** B.shape[0])
+    scalar = len(req.system.A) == 1 and req.B[0][0] != 0
+    equal = square or scalar
+    return {
+        "critical_actuator_arrival_probability_lower_bound": lower,
+        "critical_actuator_arrival_probability_lower_bound_exact": exact,
+        "bound_is_the_critical_value": bool(equal),
+        "statement": (
+            "the control modified Riccati equation converges iff the actuator arrival probability exceeds "
+            + ("1 - 1/rho(A)^2" if equal else "a critical value of at least 1 - 1/rho(A)^2")
+        ),
+    }

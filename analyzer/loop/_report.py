@@ -56,6 +56,9 @@ class LoopReport(Report):
         Critical value of each link alone (:class:`kfio.loop._critical.Critical`).
     estimator_alone:
         The fixed estimator gain without control, beside the optimal filter's critical value.
+    lqg:
+        With ``controller.lqg``: the control MARE's critical actuator probability (lower bound, exact for
+        square invertible ``B`` and scalar plants).
     region:
         With ``options.loop.region``: the exact boundary of the stable region in the
         (sensor, actuator) arrival-probability plane (:mod:`kfio.loop._region`).
@@ -76,6 +79,7 @@ class LoopReport(Report):
     estimator_alone: dict[str, Any]
     request: LoopRequest
     region: dict[str, Any] | None
+    lqg: dict[str, Any] | None = None
     notes: tuple[str, ...] = field(default=())
 
     _repr_fields = ("verdict", "spectral_radius", "cost")
@@ -132,6 +136,7 @@ def loop_report_view(r: LoopReport) -> dict[str, Any]:
         "critical_values": [c.as_dict() for c in r.critical],
         "estimator_alone": r.estimator_alone,
         "region": r.region,
+        "lqg": r.lqg,
         "loop": {
             "protocol": req.protocol,
             "on_loss": req.on_loss,
@@ -210,6 +215,15 @@ def _estimator_alone(req: LoopRequest, with_critical: bool) -> dict[str, Any]:
 MAX_OPERATOR_SIZE = 3000
 
 
+def _lqg_part(req: LoopRequest) -> dict[str, Any] | None:
+    """For LQG gains: the control MARE's critical actuator probability (Schenato, Sinopoli, Franceschetti, Poolla and Sastry 2007, Sec. V)."""
+    if req.controller != "lqg":
+        return None
+    from ._lqg import control_critical
+
+    return control_critical(req)
+
+
 def analyze_loop(req: LoopRequest, *, critical: bool = True) -> LoopReport:
     """The whole report for a validated loop request (module docstring of :mod:`kfio.loop`)."""
     from ..errors import LimitExceeded
@@ -270,6 +284,7 @@ def analyze_loop(req: LoopRequest, *, critical: bool = True) -> LoopReport:
         estimator_alone=_estimator_alone(req, critical),
         request=req,
         region=region(req, req.region) if req.region is not None else None,
+        lqg=_lqg_part(req),
         notes=tuple(notes),
     )
 

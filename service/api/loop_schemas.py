@@ -134,6 +134,11 @@ LOOP_COMPONENTS: dict[str, dict[str, Any]] = {
             "critical_values": {"type": "array", "items": {"type": "object"}},
             "estimator_alone": {"type": "object"},
             "region": {"type": ["object", "null"]},
+            "lqg": {
+                "type": ["object", "null"],
+                "description": "with controller.lqg: the control MARE's critical actuator probability, at least "
+                "1 - 1/rho(A)^2 and equal to it for square invertible B or a scalar plant",
+            },
             "loop": {"type": "object"},
         },
         "required": ["kfio_version", "verdict", "spectral_radius", "cost", "certified"],

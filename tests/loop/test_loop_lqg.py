@@ -54,3 +54,11 @@ def test_lqg_needs_tcp_and_bernoulli_links():
     assert err.value.field == "/controller/lqg"
     example = json.loads((ROOT / "examples" / "loop_scalar.json").read_text())
     assert example["controller"]["gains"]
+
+
+@pytest.mark.parametrize("a,expected", [("2", "3/4"), ("-1.25", "9/25"), ("0.5", "0")])
+def test_lqg_report_gives_the_scalar_critical_value_one_minus_inverse_a_squared(a, expected):
+    body = _body("0.95", a)
+    out = analyze_loop(parse_loop_request(body)).to_dict()["lqg"]
+    assert out["critical_actuator_arrival_probability_lower_bound_exact"] == expected
+    assert out["bound_is_the_critical_value"] is True
