@@ -115,3 +115,18 @@ def test_exit_codes_follow_the_verdict(capsys, tmp_path, nu, code):
     body["actuator_channel"]["arrival_probability"] = nu
     got, out, _ = _cli(capsys, tmp_path, body)
     assert got == code and out.startswith("verdict: " + ("stable" if code == 0 else "unstable"))
+
+
+def test_the_loop_report_and_request_validate_against_their_published_schemas(capsys, tmp_path):
+    import jsonschema
+
+    from kfio.service.schema_files import PACKAGE_DIR
+
+    def schema(name: str) -> jsonschema.Draft202012Validator:
+        return jsonschema.Draft202012Validator(json.loads((PACKAGE_DIR / f"{name}.json").read_text()))
+
+    body = json.loads((ROOT / "examples" / "loop_scalar.json").read_text())
+    assert schema("loop").is_valid(body)
+    assert not schema("loop").is_valid({**body, "controller": {"gains": {"K": [[1]]}}})  # L is required
+    code, out, _ = _cli(capsys, tmp_path, body, "--json")
+    assert code == 0 and list(schema("loop-report").iter_errors(json.loads(out))) == []
