@@ -149,6 +149,13 @@ def _sweep_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[
     return sweep_job(body, settings, budget, params)
 
 
+def _loop_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[str, Any]) -> JobOutput:
+    """``kfio loop``: the closed loop's exact verdict, cost and critical probabilities (:mod:`kfio.loop`)."""
+    from kfio.loop import analyze_loop, load_loop_request
+
+    return report_json(analyze_loop(load_loop_request(body, settings.limits())))
+
+
 JOBS: dict[str, JobFn] = {
     "analyze": analyze_job,
     "bounds": bounds_job,
@@ -160,6 +167,7 @@ JOBS: dict[str, JobFn] = {
     "plot-simulation": _plot_job("simulation"),
     "sweep": _sweep_job,
     "plot-ge-region": _plot_job("ge_region"),
+    "loop": _loop_job,
 }
 
 

@@ -440,4 +440,5 @@ BUILTIN_KINDS = (
     worker_kind("bounds"),
     worker_kind("simulate", "simulate-job", fraction=simulation_fraction),
     worker_kind("sweep", fraction=sweep_fraction),
+    worker_kind("loop"),
 )

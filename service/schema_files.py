@@ -188,9 +188,10 @@ def _ref(name: str) -> dict[str, str]:
 
 
 def _all_components() -> dict[str, dict[str, Any]]:
+    from .api.loop_schemas import LOOP_COMPONENTS
     from .api.sweeps import SWEEP_SCHEMA
 
-    return {**COMPONENTS, "Sweep": SWEEP_SCHEMA, **_check_components()}
+    return {**COMPONENTS, **LOOP_COMPONENTS, "Sweep": SWEEP_SCHEMA, **_check_components()}
 
 
 #: File name (without .json) -> (component, title).
@@ -204,6 +205,8 @@ DOCUMENTS: dict[str, tuple[str, str]] = {
     "check-report": ("CheckReport", "kfio check --json report"),
     "plant": ("PlantFile", "plant file of a kfio check file"),
     "channel": ("ChannelFile", "channel file of a kfio check file"),
+    "loop": ("LoopRequest", "kfio loop request (kfio loop FILE, POST /v1/loop)"),
+    "loop-report": ("LoopReport", "kfio loop --json report"),
 }
 
 

@@ -43,6 +43,8 @@ def _commands(example: Path) -> list[str]:
     name = example.name
     if name.startswith("simulate_"):
         return ["simulate"]
+    if name.startswith("loop_"):
+        return ["loop"]
     if name.startswith(("bounds_", "regions_")):
         return ["analyze", "bounds"]
     return ["analyze"]

@@ -41,6 +41,8 @@ def kind(path: Path) -> str:
     if path.name.startswith("kfio-check"):
         return "check"
     tree = load(path)
+    if "actuator_channel" in tree:
+        return "loop"
     return "sweep" if {"command", "axes", "requests"} & set(tree) else "request"
 
 
