@@ -60,18 +60,29 @@ _LAZY = {
     # reports and the request-level entry points
     "StabilityReport": ".stability._verdict",
     "BlockReport": ".stability._verdict",
-    "compute_bounds": ".mare",
     "BoundsReport": ".mare",
     "SimulationReport": ".simulation",
     "FiniteHorizonReport": ".simulation",
     "SimulationLimits": ".simulation",
     "DEFAULT_SIMULATION_LIMITS": ".simulation",
+    # typed use: the verdict enum, exact values as objects, the argument types
+    "Verdict": "._verdicts",
+    "ExactReal": "._exact_values",
+    "exact_value": "._exact_values",
+    "BudgetLike": "._typing",
+    "ChannelLike": "._typing",
+    "MatrixLike": "._typing",
+    "NumberLike": "._typing",
+    "SensorsLike": "._typing",
 }
 
 if TYPE_CHECKING:  # what the lazy names are, for type checkers and editors
     from ._api import analyze, bounds, build_request, expected_covariance, request_dict, simulate
     from ._budget import Budget
+    from ._exact_values import ExactReal, exact_value
     from ._system import System
+    from ._typing import BudgetLike, ChannelLike, MatrixLike, NumberLike, SensorsLike
+    from ._verdicts import Verdict
     from .errors import (
         AnalyzerError,
         AssumptionViolation,
@@ -80,7 +91,7 @@ if TYPE_CHECKING:  # what the lazy names are, for type checkers and editors
         LimitExceeded,
         NumericalFailure,
     )
-    from .mare import BoundsReport, compute_bounds
+    from .mare import BoundsReport
     from .model._channels import bernoulli, gilbert_elliott, markov, per_sensor
     from .model._exact import load_json, parse_number
     from .model._limits import DEFAULT_LIMITS, Limits
@@ -111,26 +122,33 @@ __all__ = [
     "BoundsReport",
     "Budget",
     "BudgetExceeded",
+    "BudgetLike",
+    "ChannelLike",
     "DEFAULT_LIMITS",
     "DEFAULT_SIMULATION_LIMITS",
+    "ExactReal",
     "FiniteHorizonReport",
     "InvalidInput",
     "LimitExceeded",
     "Limits",
     "MarkovChannel",
+    "MatrixLike",
+    "NumberLike",
     "NumericalFailure",
     "PerSensorChannel",
     "Request",
     "Sensor",
+    "SensorsLike",
     "SimulationLimits",
     "SimulationReport",
     "StabilityReport",
     "System",
+    "Verdict",
     "analyze",
     "bernoulli",
     "bounds",
     "build_request",
-    "compute_bounds",
+    "exact_value",
     "expected_covariance",
     "gilbert_elliott",
     "load_json",
