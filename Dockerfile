@@ -13,6 +13,9 @@
 ARG BASE_IMAGE=python:3.11-slim
 
 FROM ${BASE_IMAGE} AS builder
+# Behind a TLS-inspecting proxy, pip needs its CA bundle: scripts/container.sh mounts the
+# host's for the build and names it here (a build argument: nothing of it stays in the image).
+ARG PIP_CERT
 ENV PIP_NO_CACHE_DIR=1 \
     PIP_DISABLE_PIP_VERSION_CHECK=1
 WORKDIR /src
@@ -22,8 +25,10 @@ COPY service ./service
 RUN python -m venv /opt/kfio
 RUN /opt/kfio/bin/pip wheel --no-deps --wheel-dir /dist .
 RUN /opt/kfio/bin/pip install --constraint constraints.txt "$(ls /dist/kfio-*.whl)[control,sweep]"
-# what a server never runs: the test suites of the largest dependencies, and pip itself
+# What a server never runs: the test suites of the largest dependencies, pip itself, and SCS's
+# optional MKL build (110 MB; SCS falls back to its bundled QDLDL, and kfio's LMIs use Clarabel).
 RUN /opt/kfio/bin/pip uninstall --yes pip \
+    && rm -f /opt/kfio/lib/python3*/site-packages/scs/_scs_mkl.*.so \
     && find /opt/kfio -depth -type d -name tests -path "*/site-packages/*" \
         \( -path "*/numpy/*" -o -path "*/scipy/*" -o -path "*/pyarrow/*" -o -path "*/matplotlib/*" \
            -o -path "*/sympy/*" \) -exec rm -rf {} +

@@ -8,16 +8,17 @@
 #
 # Where no registry of container images can be reached, scripts/standin-base.sh builds a
 # stand-in base image (Debian bookworm and its Python 3.11) first; STANDIN=1 does that here.
-# Settings: IMAGE (default kfio:<version>), PORT (default 8765: not the image's 8000, so the
+# Settings: BUILD=0 reuses an image already built, IMAGE (default kfio:<version>), PORT (default 8765: not the image's 8000, so the
 # server and the HEALTHCHECK must follow KFIO_PORT), SOURCE (the OCI source label).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-export STORAGE_DRIVER="${STORAGE_DRIVER:-vfs}"      # works without overlay support
+. scripts/vfs-storage.sh      # vfs storage (CONTAINERS_STORAGE_CONF names another store)
 BASE_IMAGE="${BASE_IMAGE:-python:3.11-slim}"
 PORT="${PORT:-8765}"
 VERSION="$(sed -n 's/^__version__ = "\(.*\)"/\1/p' analyzer/_version.py)"
 REVISION="$(git rev-parse HEAD 2>/dev/null || echo unknown)"
+git diff --quiet HEAD -- 2>/dev/null || REVISION="$REVISION-dirty"   # uncommitted changes are built too
 SOURCE="${SOURCE:-$(git config --get remote.origin.url 2>/dev/null || echo unknown)}"
 IMAGE="${IMAGE:-localhost/kfio:$VERSION}"
 URL="http://127.0.0.1:$PORT"
@@ -26,18 +27,31 @@ if [ "${STANDIN:-0}" = 1 ] && ! buildah inspect --type image "$BASE_IMAGE" >/dev
     scripts/standin-base.sh "$BASE_IMAGE"
 fi
 
+# pip's CA bundle on this machine (PIP_CERT, or pip's configured cert), lent to the build's RUN steps
+ca="${PIP_CERT:-$(pip config get global.cert 2>/dev/null || true)}"
+ca_args=()
+if [ -n "$ca" ] && [ -f "$ca" ]; then
+    ca_args=(--volume "$ca:/run/build-ca.crt:ro" --build-arg PIP_CERT=/run/build-ca.crt)
+fi
+
 echo "== build $IMAGE from $BASE_IMAGE (revision $REVISION)"
 start=$(date +%s)
-buildah bud --isolation chroot --format docker --layers=false \
+[ "${BUILD:-1}" = 0 ] && buildah inspect --type image "$IMAGE" >/dev/null 2>&1 && echo "(BUILD=0: reusing $IMAGE)" \
+|| buildah bud --isolation chroot --format docker --layers=false \
     --build-arg BASE_IMAGE="$BASE_IMAGE" --build-arg VERSION="$VERSION" \
-    --build-arg REVISION="$REVISION" --build-arg SOURCE="$SOURCE" \
+    --build-arg REVISION="$REVISION" --build-arg SOURCE="$SOURCE" "${ca_args[@]}" \
     -f Dockerfile -t "$IMAGE" .
 build_s=$(( $(date +%s) - start ))
 
 ctr="$(buildah from "$IMAGE")"
 server=""
 cleanup() {
-    if [ -n "$server" ]; then kill "$server" 2>/dev/null || true; wait "$server" 2>/dev/null || true; fi
+    # the server's process id, as the container wrote it (chroot isolation shares the host's process ids)
+    if [ -n "$server" ]; then
+        pid="$(cat "$(buildah mount "$ctr")/tmp/kfio-serve.pid" 2>/dev/null || true)"
+        [ -n "$pid" ] && kill "$pid" 2>/dev/null || true
+        wait "$server" 2>/dev/null || true
+    fi
     buildah rm "$ctr" >/dev/null 2>&1 || true
 }
 trap cleanup EXIT
@@ -45,9 +59,9 @@ run() { buildah run --isolation chroot --env KFIO_PORT="$PORT" "$ctr" -- "$@"; }
 
 echo "== image configuration"
 buildah inspect --type image --format \
-    'user={{.OCIv1.Config.User}} cmd={{json .OCIv1.Config.Cmd}} healthcheck={{json .Docker.Config.Healthcheck.Test}}' \
+    'user {{.OCIv1.Config.User}}, cmd {{.OCIv1.Config.Cmd}}, healthcheck {{.Docker.Config.Healthcheck.Test}}' "$IMAGE"
+buildah inspect --type image --format '{{range $k, $v := .OCIv1.Config.Labels}}label {{$k}}={{$v}}{{println}}{{end}}' \
     "$IMAGE"
-buildah inspect --type image --format '{{json .OCIv1.Config.Labels}}' "$IMAGE"
 echo "uid in the container: $(run id -u)"
 run python -c "import control, dask.distributed, pyarrow, tqdm, kfio; print('kfio', kfio.__version__, \
 'with python-control', control.__version__, 'dask', dask.__version__, 'pyarrow', pyarrow.__version__)"
@@ -55,7 +69,8 @@ run python -c "import control, dask.distributed, pyarrow, tqdm, kfio; print('kfi
 echo "== kfio serve on port $PORT (KFIO_PORT)"
 # the image's CMD, as the container runtime would start it
 mapfile -t cmd < <(buildah inspect --type image --format '{{range .OCIv1.Config.Cmd}}{{println .}}{{end}}' "$IMAGE" | sed '/^$/d')
-run "${cmd[@]}" &
+buildah run --isolation chroot --env KFIO_PORT="$PORT" "$ctr" -- \
+    sh -c 'echo $$ > /tmp/kfio-serve.pid && exec "$@"' sh "${cmd[@]}" &
 server=$!
 python3 - "$URL" <<'PY'
 import sys, time, urllib.request

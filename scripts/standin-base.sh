@@ -9,7 +9,7 @@ name="${1:-localhost/python:3.11-slim}"
 mirror="${DEBIAN_MIRROR:-http://deb.debian.org/debian}"
 root="$(mktemp -d)"
 trap 'rm -rf "$root"' EXIT
-export STORAGE_DRIVER="${STORAGE_DRIVER:-vfs}"
+. "$(dirname "$0")/vfs-storage.sh"
 
 debootstrap --variant=minbase --include=python3,python3-pip,python3-venv,ca-certificates \
     bookworm "$root" "$mirror"

@@ -110,6 +110,7 @@ def test_dockerignore_keeps_the_context_small_and_the_build_inputs_in() -> None:
 def test_the_container_script_builds_with_buildah_as_documented() -> None:
     script = (ROOT / "scripts" / "container.sh").read_text()
     assert re.search(r"buildah bud --isolation chroot --format docker", script)
-    assert 'STORAGE_DRIVER="${STORAGE_DRIVER:-vfs}"' in script and "BASE_IMAGE" in script
+    assert ". scripts/vfs-storage.sh" in script and "BASE_IMAGE" in script
+    assert 'driver = "vfs"' in (ROOT / "scripts" / "vfs-storage.sh").read_text()
     for probe in ("/healthz", "/v1/analyze", "/v1/sweeps", "kfio sweep", "buildah images --format"):
         assert probe in script, probe
