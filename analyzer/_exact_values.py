@@ -47,10 +47,6 @@ class ExactReal:
         return self.text
 
 
-#: What an exact value of a report is as an object.
-ExactNumber = Fraction | ExactReal
-
-
 def exact_value(text: str, approx: SupportsFloat | None = None) -> Fraction | ExactReal:
     """The exact value that a report's text denotes: a ``Fraction`` if rational, else an :class:`ExactReal`.
 
@@ -74,4 +70,4 @@ def exact_value(text: str, approx: SupportsFloat | None = None) -> Fraction | Ex
     return ExactReal(text, None if approx is None else float(approx))
 
 
-__all__ = ["ExactNumber", "ExactReal", "exact_value"]
+__all__ = ["ExactReal", "exact_value"]
