@@ -12,6 +12,11 @@ The Python API (see ``docs/python_api.md``)::
     kfio.simulate(sys, kfio.bernoulli(0.6), steps=50)     # Monte Carlo
     kfio.expected_covariance(sys, kfio.bernoulli(0.6), 6) # exact E[P_t]
 
+Typed (``py.typed``): ``report.verdict`` is a :class:`Verdict` (equal to its
+JSON text), ``report.exact_of("critical_arrival_probability")`` the exact value
+as a ``Fraction`` (or an :class:`ExactReal`), and the arguments take
+:data:`NumberLike` and :data:`MatrixLike` values.
+
 Every name is imported when first used, so ``import kfio`` (and the ``kfio``
 command) start at once: SymPy, CVXPY and Matplotlib load only with the
 function that needs them.

@@ -32,8 +32,8 @@ def roots(extras: tuple[str, ...]) -> list[Requirement]:
     """kfio's own requirements: ``dependencies`` and those of ``extras``, from pyproject.toml."""
     project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
     names = list(project["dependencies"])
-    for extra in extras:
-        names += project["optional-dependencies"][extra]
+    for extra in extras:  # an extra that pyproject no longer has adds nothing (its packages became regular)
+        names += project.get("optional-dependencies", {}).get(extra, [])
     return [Requirement(r) for r in names]
 
 
