@@ -3,9 +3,10 @@
 Reports carry every exact value as text (``critical_arrival_probability_exact
 = "9/25"``), which is what the JSON holds.  :func:`exact_value` turns such a
 text into an object for Python code: a rational text (``"9/25"``, ``"-3"``)
-becomes the ``Fraction`` it denotes; an algebraic text (``"1 - 2**(2/3)/4"``,
-a ``CRootOf`` expression) becomes an :class:`ExactReal` that keeps the exact
-text and converts with ``float()``.  The text is never evaluated: the float
+becomes the ``Fraction`` it denotes; any other text (an algebraic number
+such as ``"1 - 2**(2/3)/4"`` or a ``CRootOf`` expression, or a closed form
+such as the tail exponent ``"log(5/2)/log(25/16)"``) becomes an
+:class:`ExactReal` that keeps the exact text and converts with ``float()``.  The text is never evaluated: the float
 is the one kfio computed beside it (at 40 digits, rounded once).
 """
 
@@ -22,7 +23,10 @@ _RATIONAL = re.compile(r"-?[0-9]+(/[0-9]+)?")
 
 @dataclass(frozen=True)
 class ExactReal:
-    """An exact real algebraic number that is not rational: its exact text and its float.
+    """An exact real number that is not written as a rational: its exact text and its float.
+
+    An algebraic number (``sqrt(10)/10``, a ``CRootOf``) or a closed form
+    (``log(5/2)/log(25/16)``, a tail exponent).
 
     ``str(x)`` is the exact text (SymPy's printing, as in the JSON), ``float(x)``
     the nearest double kfio computed; :class:`OverflowError` when the value is

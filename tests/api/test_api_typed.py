@@ -7,12 +7,14 @@ verdict just above, at and just below it.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from fractions import Fraction
 
 import pytest
 
 import kfio
+from kfio._reporting import ReportPart
 
 
 def scalar(a: Fraction | int) -> kfio.System:
@@ -86,3 +88,46 @@ def test_one_public_name_per_concept() -> None:
     assert "compute_bounds" not in kfio.__all__ and not hasattr(kfio, "compute_bounds")
     assert "System" not in kfio.model.__all__ and not hasattr(kfio.model, "System")
     assert kfio.mare.compute_bounds is not kfio.bounds  # the request-level engine under kfio.mare only
+
+
+def _parts(value: object) -> list[ReportPart]:
+    """Every report part inside ``value`` (fields of dataclasses, tuples, lists and dicts), depth first."""
+    found: list[ReportPart] = []
+    if isinstance(value, ReportPart):
+        found.append(value)
+        if dataclasses.is_dataclass(value):
+            for f in dataclasses.fields(value):
+                found += _parts(getattr(value, f.name))
+    elif isinstance(value, (tuple, list)):
+        for v in value:
+            found += _parts(v)
+    elif isinstance(value, dict):
+        for v in value.values():
+            found += _parts(v)
+    return found
+
+
+def test_every_exact_text_of_every_part_reads_as_its_float() -> None:
+    ge = kfio.gilbert_elliott(failure_rate="1/10", recovery_rate="3/5")
+    two = kfio.System(A=[[2, 0], [0, 3]], C=[[1, 0], [0, 1]], sensors={"a": [0], "b": [1]})
+    reports = [
+        kfio.analyze(kfio.System(A=[[1.25, 0], [1, 1.1]], C=[[1, 1]]), ge, options={"ge_grid": 3}),
+        kfio.analyze(two, kfio.per_sensor({"a": 0.9, "b": 0.95})),
+        kfio.analyze(kfio.System(A=[[0, 2], [1, 0]], C=[[1, 0]]), kfio.bernoulli("9/10")),
+    ]
+    checked = 0
+    for part in [p for r in reports for p in _parts(r)]:
+        for name in part.exact_names():
+            value, text = part.exact_of(name), getattr(part, name + "_exact")
+            approx = getattr(part, name, None)
+            if value is None:
+                assert text is None
+                continue
+            if isinstance(value, Fraction):
+                assert str(value) == text.replace(" ", "")
+            else:
+                assert isinstance(value, kfio.ExactReal) and value.text == text
+            if isinstance(approx, float):
+                assert float(value) == pytest.approx(approx, rel=1e-12, abs=1e-300)
+            checked += 1
+    assert checked >= 10
