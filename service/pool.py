@@ -30,7 +30,7 @@ import signal
 import time
 from dataclasses import dataclass
 from multiprocessing.connection import Connection
-from typing import Any, Callable
+from typing import Any, Callable, cast
 
 from .threads import one_thread_per_process
 from .watchdog import limit_memory
@@ -178,7 +178,12 @@ class WorkerPool:
         self.start_timeout_s = start_timeout_s
         self.memory_bytes = memory_bytes
         self.retire = retire
-        self._ctx = multiprocessing.get_context(start_method)
+        # typeshed's BaseContext has no Process; every concrete start method's context does
+        self._ctx = cast(
+            "multiprocessing.context.ForkContext | multiprocessing.context.SpawnContext"
+            " | multiprocessing.context.ForkServerContext",
+            multiprocessing.get_context(start_method),
+        )
         if start_method == "forkserver" and preload:
             self._ctx.set_forkserver_preload(list(preload))
         self._idle: asyncio.Queue[_Worker] | None = None
@@ -274,7 +279,12 @@ class WorkerPool:
         """Kill every worker (they hold no state worth a graceful stop)."""
         self._closed = True
         workers, self._all = list(self._all), set()
-        await asyncio.to_thread(lambda: [w.kill() for w in workers])
+
+        def kill_all() -> None:
+            for worker in workers:
+                worker.kill()
+
+        await asyncio.to_thread(kill_all)
 
     @property
     def ready(self) -> bool:

@@ -47,6 +47,9 @@ VIEWS: dict[str, str] = {
     # kfio sweep
     "sweep._engine.SweepResult": "_sweep:sweep_result",
     "sweep._engine.SweepRow": "_sweep:sweep_row",
+    # kfio check
+    "check._run.CheckResult": "_check:check_result",
+    "check._run.Outcome": "_check:outcome",
 }
 
 _ROOT = __name__.split(".")[0]  # "kfio"

@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 from typing import Any, Callable, Iterator
 
 from .._reporting import Report, ReportPart
-from ..errors import InvalidInput
+from ..errors import InvalidInput, MissingDependency
 from ._evaluate import evaluate_chunk
 from ._rows import FIELDS, error_row
 from ._spec import SweepSpec, request_text, validate_points
@@ -168,9 +168,9 @@ def iter_sweep(
 def _iter_dask(spec, text, coords, deadline, scheduler, workers, chunk_size, progress, cancel, reuse, info):
     try:
         from distributed import Client, LocalCluster, as_completed
-    except ImportError:  # pragma: no cover - the sweep extra is installed in CI
-        raise InvalidInput(
-            "/engine", "the Dask engine needs the 'sweep' extra: pip install 'kfio[sweep]' (or use engine 'serial')"
+    except ImportError:  # a regular dependency: missing only in a broken install
+        raise MissingDependency(
+            "distributed", "the Dask sweep engine", "or run in this process: kfio sweep --serial FILE"
         ) from None
     total = spec.size
     cluster = None
