@@ -12,6 +12,11 @@ The Python API (see ``docs/python_api.md``)::
     kfio.simulate(sys, kfio.bernoulli(0.6), steps=50)     # Monte Carlo
     kfio.expected_covariance(sys, kfio.bernoulli(0.6), 6) # exact E[P_t]
 
+Typed (``py.typed``): ``report.verdict`` is a :class:`Verdict` (equal to its
+JSON text), ``report.exact_of("critical_arrival_probability")`` the exact value
+as a ``Fraction`` (or an :class:`ExactReal`), and the arguments take
+:data:`NumberLike` and :data:`MatrixLike` values.
+
 Every name is imported when first used, so ``import kfio`` (and the ``kfio``
 command) start at once: SymPy, CVXPY and Matplotlib load only with the
 function that needs them.
@@ -61,18 +66,29 @@ _LAZY = {
     # reports and the request-level entry points
     "StabilityReport": ".stability._verdict",
     "BlockReport": ".stability._verdict",
-    "compute_bounds": ".mare",
     "BoundsReport": ".mare",
     "SimulationReport": ".simulation",
     "FiniteHorizonReport": ".simulation",
     "SimulationLimits": ".simulation",
     "DEFAULT_SIMULATION_LIMITS": ".simulation",
+    # typed use: the verdict enum, exact values as objects, the argument types
+    "Verdict": "._verdicts",
+    "ExactReal": "._exact_values",
+    "exact_value": "._exact_values",
+    "BudgetLike": "._typing",
+    "ChannelLike": "._typing",
+    "MatrixLike": "._typing",
+    "NumberLike": "._typing",
+    "SensorsLike": "._typing",
 }
 
 if TYPE_CHECKING:  # what the lazy names are, for type checkers and editors
     from ._api import analyze, bounds, build_request, expected_covariance, request_dict, simulate
     from ._budget import Budget
+    from ._exact_values import ExactReal, exact_value
     from ._system import System
+    from ._typing import BudgetLike, ChannelLike, MatrixLike, NumberLike, SensorsLike
+    from ._verdicts import Verdict
     from .errors import (
         AnalyzerError,
         AssumptionViolation,
@@ -81,7 +97,7 @@ if TYPE_CHECKING:  # what the lazy names are, for type checkers and editors
         LimitExceeded,
         NumericalFailure,
     )
-    from .mare import BoundsReport, compute_bounds
+    from .mare import BoundsReport
     from .model._channels import bernoulli, gilbert_elliott, markov, per_sensor
     from .model._exact import load_json, parse_number
     from .model._limits import DEFAULT_LIMITS, Limits
@@ -115,26 +131,33 @@ __all__ = [
     "BoundsReport",
     "Budget",
     "BudgetExceeded",
+    "BudgetLike",
+    "ChannelLike",
     "DEFAULT_LIMITS",
     "DEFAULT_SIMULATION_LIMITS",
+    "ExactReal",
     "FiniteHorizonReport",
     "InvalidInput",
     "LimitExceeded",
     "Limits",
     "MarkovChannel",
+    "MatrixLike",
+    "NumberLike",
     "NumericalFailure",
     "PerSensorChannel",
     "Request",
     "Sensor",
+    "SensorsLike",
     "SimulationLimits",
     "SimulationReport",
     "StabilityReport",
     "System",
+    "Verdict",
     "analyze",
     "bernoulli",
     "bounds",
     "build_request",
-    "compute_bounds",
+    "exact_value",
     "expected_covariance",
     "gilbert_elliott",
     "load_json",

@@ -25,6 +25,7 @@ from .model._request import parse_request
 from .model._types import Request
 
 if TYPE_CHECKING:
+    from ._typing import BudgetLike, ChannelLike, MatrixLike
     from .mare._report import BoundsReport
     from .simulation._finite_horizon import FiniteHorizonReport
     from .simulation._simulate import SimulationReport
@@ -40,11 +41,11 @@ def _budget_of(budget: Any) -> tuple[Budget | None, Any]:
 
 def request_dict(
     system: System,
-    channel: Any,
+    channel: ChannelLike,
     *,
     command: str | None = None,
     options: Mapping[str, Any] | None = None,
-    budget: Any = None,
+    budget: BudgetLike | None = None,
 ) -> dict[str, Any]:
     """The request file for ``system`` and ``channel``, as a JSON-ready dict.
 
@@ -112,6 +113,36 @@ def _tree(
 
 def build_request(
     system: System | Request,
+    channel: ChannelLike | None = None,
+    *,
+    command: str | None = None,
+    options: Mapping[str, Any] | None = None,
+    budget: BudgetLike | None = None,
+    limits: Limits | None = None,
+) -> Request:
+    """The validated :class:`kfio.Request` that the JSON route builds from the same values.
+
+    ``load_request(json.dumps(request_dict(...)))`` gives the same request:
+    one validator (:func:`kfio.parse_request`) for every surface.  A
+    :class:`Request` passes through unchanged.  ``command`` names the
+    ``options`` group (``"analyze"``, ``"bounds"``, ``"simulate"``); budget
+    seconds become ``request.time_budget_s`` (a :class:`kfio.Budget` object
+    is not part of a request: pass it to :func:`analyze` and friends).
+    ``limits`` default to those the :class:`System` was built with.
+
+    Examples
+    --------
+    >>> import kfio
+    >>> req = kfio.build_request(kfio.System(A=[[1.1]], C=[[1]]), kfio.bernoulli(0.5), budget=10)
+    >>> req.channel.table, req.time_budget_s
+    ((Fraction(1, 2),), 10.0)
+    """
+    request, _, _ = _build_request(system, channel, command=command, options=options, budget=budget, limits=limits)
+    return request
+
+
+def _build_request(
+    system: System | Request,
     channel: Any = None,
     *,
     command: str | None = None,
@@ -120,13 +151,8 @@ def build_request(
     limits: Limits | None = None,
     keywords: Mapping[str, Any] | None = None,
 ) -> tuple[Request, Budget | None, list[Route]]:
-    """The validated :class:`~kfio.model._types.Request` that the JSON route builds from the same values.
-
-    A :class:`Request` passes through unchanged (the entry of the CLI and the
-    service).  Returns the request, the :class:`~kfio.Budget` object if one
-    was given, and the routes that rename later errors to Python arguments.
-    ``limits`` default to those the :class:`System` was built with.
-    """
+    """:func:`build_request`, with the :class:`~kfio.Budget` object if one was given and the routes
+    that rename later errors to Python arguments."""
     if isinstance(system, Request):
         if channel is not None or options is not None or keywords:
             raise InvalidInput("channel", "a validated Request already holds its channel and options")
@@ -154,7 +180,11 @@ def _run(fn: Any, routes: Sequence[Route], *args: Any, **kwargs: Any) -> Any:
 
 
 def analyze(
-    system: System | Request, channel: Any = None, *, options: Mapping[str, Any] | None = None, budget: Any = None
+    system: System | Request,
+    channel: ChannelLike | None = None,
+    *,
+    options: Mapping[str, Any] | None = None,
+    budget: BudgetLike | None = None,
 ) -> StabilityReport:
     """Decide whether the Kalman filter's expected error covariance stays bounded.
 
@@ -209,12 +239,16 @@ def analyze(
     """
     from .stability._verdict import analyze as _analyze
 
-    request, work, routes = build_request(system, channel, command="analyze", options=options, budget=budget)
+    request, work, routes = _build_request(system, channel, command="analyze", options=options, budget=budget)
     return _run(_analyze, routes, request, budget=work)
 
 
 def bounds(
-    system: System | Request, channel: Any = None, *, options: Mapping[str, Any] | None = None, budget: Any = None
+    system: System | Request,
+    channel: ChannelLike | None = None,
+    *,
+    options: Mapping[str, Any] | None = None,
+    budget: BudgetLike | None = None,
 ) -> BoundsReport:
     """Bounds on the critical arrival probability and on ``lim E[P_t]``.
 
@@ -246,22 +280,22 @@ def bounds(
     """
     from .mare._compute import compute_bounds
 
-    request, work, routes = build_request(system, channel, command="bounds", options=options, budget=budget)
+    request, work, routes = _build_request(system, channel, command="bounds", options=options, budget=budget)
     return _run(compute_bounds, routes, request, work)
 
 
 def simulate(
     system: System | Request,
-    channel: Any = None,
+    channel: ChannelLike | None = None,
     *,
     steps: int | None = None,
     trajectories: int | None = None,
     seed: int | None = None,
     exact_steps: int | None = None,
-    P0: Any = None,
+    P0: MatrixLike | None = None,
     initial_channel: str | None = None,
     options: Mapping[str, Any] | None = None,
-    budget: Any = None,
+    budget: BudgetLike | None = None,
 ) -> SimulationReport:
     """Monte Carlo of the error covariance ``P_t`` of the intermittent Kalman filter.
 
@@ -307,7 +341,7 @@ def simulate(
         initial_channel=initial_channel,
     )
     keywords = {k: v for k, v in given.items() if v is not None}
-    request, work, routes = build_request(
+    request, work, routes = _build_request(
         system, channel, command="simulate", options=options, budget=budget, keywords=keywords
     )
     return _run(_simulate, routes, request, work)
@@ -315,12 +349,12 @@ def simulate(
 
 def expected_covariance(
     system: System | Request,
-    channel: Any = None,
-    steps: Any = None,
+    channel: ChannelLike | int | None = None,
+    steps: int | None = None,
     *,
-    P0: Any = None,
+    P0: MatrixLike | None = None,
     initial_channel: str | None = None,
-    budget: Any = None,
+    budget: BudgetLike | None = None,
 ) -> FiniteHorizonReport:
     """The exact ``E[P_t]``, ``t = 0..steps``, by summing over every arrival sequence.
 
@@ -358,7 +392,7 @@ def expected_covariance(
     if steps is None:
         raise InvalidInput("steps", "the horizon is required: expected_covariance(system, channel, steps)")
     keywords = {k: v for k, v in dict(P0=P0, initial_channel=initial_channel).items() if v is not None}
-    request, work, routes = build_request(system, channel, command="simulate", budget=budget, keywords=keywords)
+    request, work, routes = _build_request(system, channel, command="simulate", budget=budget, keywords=keywords)
     routes = [("/options/simulate/exact_steps", "steps", steps, False), *routes]
     return _run(_expected, routes, request, python_tree(steps), work)
 

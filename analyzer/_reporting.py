@@ -14,8 +14,10 @@ CLI's ``--json``, the HTTP body and ``to_json()``).
 from __future__ import annotations
 
 import json
+from fractions import Fraction
 from typing import Any, ClassVar
 
+from ._exact_values import ExactReal, exact_value
 from ._json import encode, stamp
 from ._version import __version__
 
@@ -35,6 +37,37 @@ class ReportPart:
         """The JSON object of this report (its view in :mod:`kfio._json`, encoded)."""
         out: dict[str, Any] = encode(self)
         return out
+
+    def exact_of(self, name: str) -> Fraction | ExactReal | None:
+        """The exact value of field ``name`` as an object: ``Fraction`` if rational, else :class:`kfio.ExactReal`.
+
+        ``name`` is a value that has an exact text beside its float, the
+        field ``name + "_exact"`` (``"critical_arrival_probability"``,
+        ``"sigma"``, ``"modulus"``, ...; :meth:`exact_names` lists them);
+        ``None`` when the report has no exact value there.  The text is read
+        as :func:`kfio.exact_value` reads it, never evaluated.
+
+        Examples
+        --------
+        >>> import kfio
+        >>> r = kfio.analyze(kfio.System(A=[[1.25]], C=[[1]]), kfio.bernoulli(0.5))
+        >>> r.exact_of("critical_arrival_probability"), r.blocks[0].exact_of("modulus")
+        (Fraction(9, 25), Fraction(5, 4))
+        """
+        key = name.removesuffix("_exact")
+        if key not in self.exact_names():
+            raise AttributeError(
+                f"{type(self).__name__} has no exact value {name!r}; it has: {', '.join(self.exact_names()) or 'none'}"
+            )
+        text = getattr(self, key + "_exact")
+        if text is None:
+            return None
+        approx = getattr(self, key, None)
+        return exact_value(text, approx if isinstance(approx, (int, float)) else None)
+
+    def exact_names(self) -> tuple[str, ...]:
+        """The names :meth:`exact_of` accepts: every field ``X`` with an exact text ``X_exact``."""
+        return tuple(sorted(n.removesuffix("_exact") for n in dir(self) if n.endswith("_exact")))
 
 
 class ShortRepr(ReportPart):

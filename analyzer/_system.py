@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import fields
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from .errors import InvalidInput
 from .model import _types
@@ -19,6 +19,9 @@ from .model._exact import fraction_text
 from .model._limits import DEFAULT_LIMITS, Limits
 from .model._request import parse_system
 from .model._types import Matrix, Sensor
+
+if TYPE_CHECKING:
+    from ._typing import MatrixLike, SensorsLike
 
 _MATRICES = ("A", "C", "Q", "R")
 
@@ -95,11 +98,11 @@ class System(_types.System):
 
     def __init__(
         self,
-        A: Any,
-        C: Any,
-        Q: Any = None,
-        R: Any = None,
-        sensors: Any = None,
+        A: MatrixLike,
+        C: MatrixLike,
+        Q: MatrixLike | None = None,
+        R: MatrixLike | None = None,
+        sensors: SensorsLike | None = None,
         *,
         limits: Limits = DEFAULT_LIMITS,
     ) -> None:
@@ -121,7 +124,9 @@ class System(_types.System):
         object.__setattr__(self, "_limits", limits)  # not a field: the requests built from it use them too
 
     @classmethod
-    def from_statespace(cls, ss: Any, Q: Any = None, R: Any = None, *, sensors: Any = None) -> System:
+    def from_statespace(
+        cls, ss: Any, Q: MatrixLike | None = None, R: MatrixLike | None = None, *, sensors: SensorsLike | None = None
+    ) -> System:
         """The plant of a discrete-time python-control ``StateSpace``.
 
         Takes ``A`` and ``C`` of ``x[t+1] = A x[t] + B u[t] + w[t]``,

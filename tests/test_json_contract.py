@@ -17,10 +17,11 @@ import pytest
 import sympy
 
 import kfio
-from kfio import analyze, compute_bounds, load_request
+from kfio import analyze, load_request
 from kfio._json import encode
 from kfio._json._registry import VIEWS, class_key, view_of
 from kfio._reporting import Report, ReportPart
+from kfio.mare import compute_bounds
 from kfio.simulation import simulate
 from kfio.stability._regions_constraints import BlindPattern
 

@@ -91,8 +91,10 @@ def encode(value: Any, path: str = "$") -> Any:
 def _encode(value: Any) -> Any:
     if isinstance(value, float):  # numpy.float64 too: a plain float comes out
         return float(value) if math.isfinite(value) else None
-    if value is None or isinstance(value, (str, int)):  # bool is an int
+    if type(value) is str or value is None or isinstance(value, int):  # bool is an int
         return value
+    if isinstance(value, str):  # a kfio.Verdict: its JSON text, as a plain str
+        return str(value)
     if isinstance(value, dict):
         out = {}
         for k, v in value.items():

@@ -16,6 +16,7 @@ import numpy as np
 
 from .._json import json_float as num
 from .._reporting import Report, ReportPart
+from .._verdicts import Verdict
 from ..model._types import Packet
 from ._certificate import StabilityCertificate
 from ._filtered import FilteredBounds
@@ -123,7 +124,7 @@ class BoundsReport(Report):
     arrival: tuple[Fraction, ...]
     rho: float
     hypotheses: dict[str, Any]
-    verdict: str
+    verdict: Verdict
     verdict_reason: str
     verdict_certificate: StabilityCertificate | None
     critical: tuple[CriticalInterval, ...]
@@ -132,6 +133,9 @@ class BoundsReport(Report):
     p_hat: PHatBounds | None
     region: RegionMap | None
     trace_target: Any = None  # kfio.mare._targets.TraceTarget when options.bounds.trace_target is set
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "verdict", Verdict(self.verdict))
 
     @property
     def one_packet(self) -> bool:

@@ -2,12 +2,15 @@
 
 Exact rationals from decimal text (:func:`parse_number`), the single validator
 (:func:`parse_request`, :func:`load_request`) and the typed request objects.
+The plant has one public name, :class:`kfio.System` (which validates what it
+is given); the validator's own frozen record of a plant, the type of
+``Request.system``, is its base class and is not exported here.
 """
 
 from ._exact import fraction_text, load_json, parse_number
 from ._limits import DEFAULT_LIMITS, Limits
 from ._request import load_request, parse_request
-from ._types import MarkovChannel, PerSensorChannel, Request, Sensor, System
+from ._types import MarkovChannel, PerSensorChannel, Request, Sensor
 
 __all__ = [
     "DEFAULT_LIMITS",
@@ -16,7 +19,6 @@ __all__ = [
     "PerSensorChannel",
     "Request",
     "Sensor",
-    "System",
     "fraction_text",
     "load_json",
     "load_request",

@@ -9,7 +9,7 @@ so a channel made here is the one the JSON route makes from the same numbers.
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from ..errors import InvalidInput
 from ._coerce import Route, python_tree, renamed
@@ -17,6 +17,9 @@ from ._exact import fraction_text
 from ._limits import DEFAULT_LIMITS, Limits
 from ._request import parse_markov_channel
 from ._types import Channel, MarkovChannel, PerSensorChannel
+
+if TYPE_CHECKING:
+    from .._typing import ChannelLike, NumberLike
 
 _WHERE = "/channel"
 
@@ -28,7 +31,7 @@ def _build(tree: dict[str, Any], routes: list[Route], limits: Limits) -> MarkovC
         raise renamed(exc, routes) from None
 
 
-def bernoulli(p: Any, *, limits: Limits = DEFAULT_LIMITS) -> MarkovChannel:
+def bernoulli(p: NumberLike, *, limits: Limits = DEFAULT_LIMITS) -> MarkovChannel:
     """I.i.d. packet arrivals with probability ``p`` (Sinopoli et al. 2004).
 
     ``gamma_t ~ Bernoulli(p)`` independently over time: the channel of the
@@ -59,7 +62,9 @@ def bernoulli(p: Any, *, limits: Limits = DEFAULT_LIMITS) -> MarkovChannel:
     return _build(tree, [(f"{_WHERE}/arrival_probability", "p", tree["arrival_probability"], False)], limits)
 
 
-def gilbert_elliott(*, failure_rate: Any, recovery_rate: Any, limits: Limits = DEFAULT_LIMITS) -> MarkovChannel:
+def gilbert_elliott(
+    *, failure_rate: NumberLike, recovery_rate: NumberLike, limits: Limits = DEFAULT_LIMITS
+) -> MarkovChannel:
     """Bursty losses: a two-state Gilbert-Elliott chain (Rohr, Marelli and Fu 2014, order 1).
 
     ``P(lost | arrived before) = failure_rate`` and
@@ -79,7 +84,7 @@ def gilbert_elliott(*, failure_rate: Any, recovery_rate: Any, limits: Limits = D
 
 
 def markov(
-    arrival_probability: Mapping[str, Any], *, order: int | None = None, limits: Limits = DEFAULT_LIMITS
+    arrival_probability: Mapping[str, NumberLike], *, order: int | None = None, limits: Limits = DEFAULT_LIMITS
 ) -> MarkovChannel:
     """A Markov packet channel of order ``nu`` (Rohr, Marelli and Fu 2014, Definition 2).
 
@@ -110,7 +115,9 @@ def markov(
     return _build(tree, routes, limits)
 
 
-def per_sensor(channels: Mapping[str, Any], *, limits: Limits = DEFAULT_LIMITS) -> PerSensorChannel:
+def per_sensor(
+    channels: Mapping[str, ChannelLike | NumberLike], *, limits: Limits = DEFAULT_LIMITS
+) -> PerSensorChannel:
     """One independent channel per sensor packet (``System(..., sensors=...)``).
 
     Parameters

@@ -40,6 +40,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from .._reporting import ReportPart
+from .._verdicts import Verdict
 from ..errors import InvalidInput, LimitExceeded
 from ..model._exact import parse_number
 from ..model._types import Request
@@ -141,8 +142,12 @@ class StationaryReport(ReportPart):
     kappa_exact: str | None
     growth_rate: float | None
     warnings: tuple[str, ...]
-    verdict: str | None = None
+    verdict: Verdict | None = None
     filtered_quantiles: tuple[tuple[float, float, float, float], ...] = ()
+
+    def __post_init__(self) -> None:
+        if self.verdict is not None:
+            object.__setattr__(self, "verdict", Verdict(self.verdict))
 
     @property
     def mean_unreliable(self) -> bool:

@@ -23,13 +23,14 @@ import mpmath
 from sympy import QQ, CRootOf, Poly, oo
 from sympy.polys.matrices import DomainMatrix
 
+from .._verdicts import Verdict
 from ..errors import NumericalFailure
 from ..structure._algebraic import AlgebraicReal
 from ..structure._balls import MAX_PREC, START_PREC, integer_coeffs, precision, root_balls, sign
 from ..structure._eigen import X
 
 #: Verdict names by the sign of ``rate - 1``: ``VERDICTS[sign + 1]``.
-VERDICTS = ("stable", "boundary", "unstable")
+VERDICTS = (Verdict.STABLE, Verdict.BOUNDARY, Verdict.UNSTABLE)
 
 
 def bernoulli_factor(exponents: Sequence[Fraction], lambdas: Sequence[Fraction], N: int) -> Fraction:

@@ -47,6 +47,7 @@ import sympy
 from .._budget import Budget
 from .._json import encode
 from .._reporting import ReportPart
+from .._verdicts import Verdict
 from ..errors import InvalidInput
 from ..model._exact import value_text
 from ..model._request import require_assumption_1
@@ -131,10 +132,13 @@ class SensorThresholds(ReportPart):
     blocks: tuple[BlockConstraints, ...]
     block_verdicts: tuple[str, ...]
     block_rates: tuple[float, ...]
-    verdict: str
+    verdict: Verdict
     thresholds: tuple[SensorThreshold, ...]
     certified: bool
     consistent_with_analyze: bool | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "verdict", Verdict(self.verdict))
 
 
 def _log_value(block: BlockConstraints, rest: Fraction, z: int) -> Any:

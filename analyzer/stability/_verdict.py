@@ -22,6 +22,7 @@ from flint import fmpq_mat
 from .._budget import Budget
 from .._json import json_float
 from .._reporting import Report, ShortRepr
+from .._verdicts import Verdict
 from ..errors import BudgetExceeded
 from ..model._request import require_assumption_1
 from ..model._types import MarkovChannel, PerSensorChannel, Request, System, packets_of
@@ -64,13 +65,16 @@ class BlockReport(ShortRepr):
     sigma: float | None
     sigma_exact: str | None
     rate: float | None
-    verdict: str
+    verdict: Verdict
     certified: bool
     blind_set: list[list[int]] | None = None
     basis: str = "theorem"
     notes: tuple[str, ...] = ()
     bernoulli_blind_fraction: tuple[Fraction, ...] | None = field(default=None, repr=False)
     modulus_sq_expr: Any = field(default=None, repr=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "verdict", Verdict(self.verdict))
 
     def _repr_items(self) -> list[tuple[str, Any]]:
         # long algebraic texts (CRootOf with 100-digit coefficients) stay in to_dict(); the repr shows their value
@@ -90,7 +94,7 @@ class StabilityReport(Report):
 
     _repr_fields = ("verdict", "critical_arrival_probability", "critical_arrival_probability_exact", "blocks")
 
-    verdict: str
+    verdict: Verdict
     blocks: tuple[BlockReport, ...]
     critical_arrival_probability: float | None
     critical_arrival_probability_exact: str | None
@@ -105,6 +109,9 @@ class StabilityReport(Report):
 
     #: Short forms of long exact texts for :meth:`summary` (never in the JSON).
     display: Mapping[str, str] = field(default_factory=dict, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "verdict", Verdict(self.verdict))
 
     @property
     def gilbert_elliott_region(self) -> Optional[GeRegion]:

@@ -172,7 +172,7 @@ def test_request_dict_is_a_request_file_for_the_json_route():
         "channel": {"model": "bernoulli", "arrival_probability": "1/2"},
         "options": {"simulate": {"steps": 3}, "time_budget_s": "5.5"},
     }
-    req, _, _ = kfio.build_request(system, kfio.bernoulli(0.5), command="simulate", options={"steps": 3}, budget=5.5)
+    req = kfio.build_request(system, kfio.bernoulli(0.5), command="simulate", options={"steps": 3}, budget=5.5)
     assert load_request(json.dumps(body)) == req and req.time_budget_s == 5.5
 
 

@@ -48,8 +48,9 @@ def test_wheel_installs_kfio_and_nothing_generic(tmp_path: Path) -> None:
     assert wheel.name.startswith(f"kfio-{kfio.__version__}-")
     with zipfile.ZipFile(wheel) as zf:
         top = {n.split("/")[0] for n in zf.namelist()}
+        typed = "kfio/py.typed" in zf.namelist()  # PEP 561: type checkers read the annotations
         metadata = zf.read(f"kfio-{kfio.__version__}.dist-info/METADATA").decode()
-    assert top == {"kfio", f"kfio-{kfio.__version__}.dist-info"}
+    assert top == {"kfio", f"kfio-{kfio.__version__}.dist-info"} and typed
     assert f"Version: {kfio.__version__}" in metadata and "Provides-Extra: control" in metadata
 
     venv = tmp_path / "venv"

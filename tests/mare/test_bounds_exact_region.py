@@ -4,7 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from kfio import compute_bounds, load_request
+from kfio import load_request
+from kfio.mare import compute_bounds
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 

@@ -13,7 +13,8 @@ import json
 import numpy as np
 import pytest
 
-from kfio import InvalidInput, compute_bounds, load_request
+from kfio import InvalidInput, load_request
+from kfio.mare import compute_bounds
 from kfio.mare._riccati import v_bar
 from kfio.mare._targets import smallest_arrival_for_trace
 

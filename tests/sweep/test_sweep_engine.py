@@ -9,7 +9,8 @@ import threading
 
 import pytest
 
-from kfio import analyze, compute_bounds, load_request
+from kfio import analyze, load_request
+from kfio.mare import compute_bounds
 from kfio.sweep import cache_stats, clear_caches, iter_sweep, load_sweep, point_at, row_from_report, run_sweep
 from kfio.sweep._spec import request_text
 

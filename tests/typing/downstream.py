@@ -1,0 +1,41 @@
+"""A downstream user's typed code: ``mypy --strict`` must pass on it (tests/typing/test_typed_api.py)."""
+
+from __future__ import annotations
+
+from fractions import Fraction
+
+import numpy as np
+
+import kfio
+
+
+def critical_probability(a: Fraction) -> Fraction:
+    """The exact critical arrival probability of a scalar plant, as a ``Fraction``."""
+    report: kfio.StabilityReport = kfio.analyze(kfio.System(A=[[a]], C=[[1]]), kfio.bernoulli("1/2"))
+    value = report.exact_of("critical_arrival_probability")
+    if not isinstance(value, Fraction):
+        raise TypeError(f"not rational: {value}")
+    return value
+
+
+def is_stable(A: kfio.MatrixLike, p: kfio.NumberLike) -> bool:
+    """Whether the filter of ``A`` observed through ``C = I`` is stable at arrival probability ``p``."""
+    n = len(np.asarray(A))
+    system = kfio.System(A=A, C=np.eye(n), Q=np.eye(n), R=np.eye(n))
+    verdict: kfio.Verdict = kfio.analyze(system, kfio.bernoulli(p), budget=30).verdict
+    return verdict == kfio.Verdict.STABLE
+
+
+def critical_as_float(report: kfio.StabilityReport) -> float | None:
+    """The critical arrival probability as a float, whether it is rational or algebraic."""
+    exact: Fraction | kfio.ExactReal | None = report.exact_of("critical_arrival_probability")
+    return None if exact is None else float(exact)
+
+
+def request_file(system: kfio.System) -> kfio.Request:
+    """The validated request that the JSON route builds for the same values."""
+    return kfio.build_request(system, kfio.gilbert_elliott(failure_rate=0.1, recovery_rate="3/5"), budget=10)
+
+
+if __name__ == "__main__":
+    print(critical_probability(Fraction(5, 4)), is_stable([[1.25]], 0.5), request_file(kfio.System(A=[[2]], C=[[1]])))
