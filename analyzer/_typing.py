@@ -15,7 +15,7 @@ if TYPE_CHECKING:
     from numpy.typing import NDArray
 
     from ._budget import Budget
-    from .model._types import MarkovChannel, PerSensorChannel
+    from .model._types import MarkovChannel, PerSensorChannel, Sensor
 
 #: A real number: ``int``, ``float``, ``Fraction``, a NumPy scalar, or its exact text (``"11/10"``, ``"1.1e-3"``).
 #: A float means its shortest decimal text (``1.1`` is ``11/10``).
@@ -32,6 +32,6 @@ ChannelLike: TypeAlias = Union["MarkovChannel", "PerSensorChannel", Mapping[str,
 BudgetLike: TypeAlias = Union["Budget", NumberLike]
 
 #: Sensors of a :class:`kfio.System`: ``{"gps": [0], "imu": [1, 2]}`` or ``[{"name": ..., "rows": [...]}]``.
-SensorsLike: TypeAlias = Union[Mapping[str, Sequence[int]], Sequence[Mapping[str, Any]]]
+SensorsLike: TypeAlias = Union[Mapping[str, Sequence[int]], Sequence[Mapping[str, Any]], Sequence["Sensor"]]
 
 __all__ = ["BudgetLike", "ChannelLike", "MatrixLike", "NumberLike", "SensorsLike"]

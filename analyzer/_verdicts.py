@@ -32,6 +32,11 @@ class Verdict(StrEnum):
     UNSTABLE = "unstable"
     UNDECIDED = "undecided"
 
+    @classmethod
+    def of_sign(cls, sign: int) -> Verdict:
+        """The verdict of the sign of ``rate - 1`` (Theorem 1): ``-1`` stable, ``0`` boundary, ``1`` unstable."""
+        return (cls.STABLE, cls.BOUNDARY, cls.UNSTABLE)[sign + 1]
+
     def __repr__(self) -> str:
         # reports and tuples print the JSON text, as before the enum: ('stable', '9/25', 0.5)
         return repr(self.value)

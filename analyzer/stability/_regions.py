@@ -210,11 +210,12 @@ def _threshold(blocks: Sequence[BlockConstraints], lambdas: Sequence[Fraction], 
     return SensorThreshold(name, lambdas[s], "threshold", value, str(expr), (k, b.eigenvalues, p), exact, reason)
 
 
-def _operating_point(blocks: Sequence[BlockConstraints], lambdas: Sequence[Fraction]) -> tuple[list[str], bool]:
-    verdicts, exact = [], True
+def _operating_point(blocks: Sequence[BlockConstraints], lambdas: Sequence[Fraction]) -> tuple[list[Verdict], bool]:
+    verdicts: list[Verdict] = []
+    exact = True
     for b in blocks:
         s, ex = block_sign(b, lambdas)
-        verdicts.append(VERDICTS[s + 1])
+        verdicts.append(Verdict.of_sign(s))
         exact = exact and ex
     return verdicts, exact
 
@@ -296,7 +297,7 @@ def sensor_thresholds(
     names, lambdas = bernoulli_packets(request)
     blocks = block_constraints(request.system, budget, fmo, sigma)
     verdicts, exact = _operating_point(blocks, lambdas)
-    verdict = max(verdicts, key=VERDICTS.index, default="stable")
+    verdict = max(verdicts, key=VERDICTS.index, default=Verdict.STABLE)
     rates = tuple(block_rate(b, [float(x) for x in lambdas]) for b in blocks)
     thresholds = tuple(_threshold(blocks, lambdas, s, name) for s, name in enumerate(names))
     certified = exact and all(t.certified for t in thresholds) and all(b.certified for b in blocks)

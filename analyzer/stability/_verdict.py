@@ -254,7 +254,7 @@ def _analyze_block(
             sigma=None,
             sigma_exact=None,
             rate=None,
-            verdict="stable",
+            verdict=Verdict.STABLE,
             certified=below_certified,
             notes=block.notes + (() if below_certified else ("|alpha| < 1 was decided numerically, not proved",)),
             **base,
@@ -293,7 +293,7 @@ def _analyze_block(
     certified = exact and res.certified and block.certified
     sigma_exact = _sigma_exact(res, c) if all_bernoulli else None
     sigma = float(sigma_exact.approx(20)) if sigma_exact is not None else res.sigma
-    verdict = {1: "unstable", 0: "boundary", -1: "stable"}[s]
+    verdict = Verdict.of_sign(s)
     if not exact:
         notes.append("rate compared with 1 numerically (50 digits), not exactly")
     report = BlockReport(
@@ -450,7 +450,7 @@ def analyze(
         fmo = fmo_blocks(system, budget)
     analyzed = [_analyze_block(b, channels, basis, budget) for b in fmo]
     blocks = [rep for rep, _ in analyzed]
-    verdict = max((b.verdict for b in blocks), key=VERDICTS.index, default="stable")
+    verdict = max((b.verdict for b in blocks), key=VERDICTS.index, default=Verdict.STABLE)
     warnings: list[str] = []
     assumptions: list[str] = []
     if basis == "extension":
