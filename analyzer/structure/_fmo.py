@@ -43,6 +43,7 @@ from ._eigen import DIGITS, EigenFactor, X, eigen_factors
 from ._modp import ModP
 from ._modulus import modulus_squared
 from ._phases import PhaseBlock, RankOracle, Slot
+from ._texts import poly_text
 from ._unity import Root as UnityRoot
 from ._unity import euler_phi, ratio_relation
 
@@ -351,7 +352,10 @@ def _close_relations(relation: dict[tuple[Root, Root], tuple[int, int]], uf: _Un
 
 
 def _eigen_text(f: EigenFactor, index: int) -> str:
-    """Exact text of a root: rational, quadratic radicals, else its polynomial and a numerical value."""
+    """Exact text of a root: rational, quadratic radicals, else its polynomial and a numerical value.
+
+    The polynomial is written as SymPy prints ``f.poly.as_expr()`` (:func:`kfio.structure._texts.poly_text`).
+    """
     if f.is_rational:
         return fraction_text(f.rational_root)
     if f.degree == 2:
@@ -367,7 +371,8 @@ def _eigen_text(f: EigenFactor, index: int) -> str:
     bits = max(max(int(c.numerator).bit_length(), int(c.denominator).bit_length()) for c in f.poly.all_coeffs())
     if bits > _TEXT_BITS:  # beyond Python's int-to-text limit: describe the polynomial instead
         return f"root of a degree-{f.degree} polynomial with {bits}-bit coefficients near {z.real:.12g}{z.imag:+.12g}i"
-    return f"root of {f.poly.as_expr()} near {z.real:.12g}{z.imag:+.12g}i"
+    coeffs = [Fraction(int(c.numerator), int(c.denominator)) for c in f.poly.all_coeffs()]
+    return f"root of {poly_text(coeffs)} near {z.real:.12g}{z.imag:+.12g}i"
 
 
 class _SingleRows:
