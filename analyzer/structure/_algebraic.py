@@ -24,6 +24,10 @@ from ._balls import MAX_PREC, START_PREC, IntCoeffs, integer_coeffs, precision, 
 from ._eigen import DIGITS, X
 from ._texts import crootof_text
 
+#: Largest ``deg h * |a|`` and ``deg h * b`` for which :meth:`AlgebraicReal.power_degree` factors
+#: (``g(x^b)`` of degree 3800 took 15 s; degree 256 takes milliseconds).
+MAX_POWER_DEGREE_WORK = 256
+
 
 def power_minus(N: int, c: Any) -> Poly:
     """``x**N - c`` over ``QQ``, built from its coefficients.
@@ -131,7 +135,8 @@ class AlgebraicReal:
         polynomial is the factor of ``g(x^b)`` vanishing on the enclosure of
         ``gamma`` (distinct irreducible factors share no root, so refining the
         enclosure singles it out).  ``None`` for a rational or when no factor
-        is singled out by :data:`MAX_PREC`.  Only short display texts use it
+        is singled out by :data:`MAX_PREC`, and when ``d |a|`` or ``d b`` exceeds
+        :data:`MAX_POWER_DEGREE_WORK` (``d = deg h``).  Only short display texts use it
         (:func:`kfio.structure._display.short_text`).
         """
         if self.rational is not None:
@@ -141,6 +146,8 @@ class AlgebraicReal:
         a, b = e.numerator, e.denominator
         if abs(a) == 1 and b == 1:  # 1/beta has the reversed minimal polynomial
             return d
+        if d * abs(a) > MAX_POWER_DEGREE_WORK or d * b > MAX_POWER_DEGREE_WORK:
+            return None  # the display says "algebraic number": factoring g(x^b) of degree d b could take minutes
         C = fmpq_mat(d, d)
         for i in range(1, d):
             C[i, i - 1] = 1
