@@ -20,6 +20,7 @@ Jordan chains of ``theta`` span ``ker(A - theta I)``, so
 from __future__ import annotations
 
 import math
+import weakref
 from dataclasses import dataclass, field
 from fractions import Fraction
 from functools import cached_property, reduce
@@ -374,19 +375,22 @@ def _eigen_text(f: EigenFactor, index: int) -> str:
     return f"root of {_poly_text_of(f)} near {z.real:.12g}{z.imag:+.12g}i"
 
 
-_POLY_TEXTS: dict[int, tuple[EigenFactor, str]] = {}
+_POLY_TEXTS: dict[int, tuple[weakref.ref, str]] = {}
 
 
 def _poly_text_of(f: EigenFactor) -> str:
-    """SymPy's text of ``f.poly.as_expr()``, kept for the last factors seen (one text serves all ``deg f`` roots)."""
+    """SymPy's text of ``f.poly.as_expr()``, kept for the last factors seen (one text serves all ``deg f`` roots).
+
+    The factor is held by a weak reference: the cache never keeps a system's eigenstructure alive.
+    """
     hit = _POLY_TEXTS.get(id(f))
-    if hit is not None and hit[0] is f:
+    if hit is not None and hit[0]() is f:
         return hit[1]
     coeffs = [Fraction(int(c.numerator), int(c.denominator)) for c in f.poly.all_coeffs()]
     text = poly_text(coeffs)
     if len(_POLY_TEXTS) > 64:
         _POLY_TEXTS.clear()
-    _POLY_TEXTS[id(f)] = (f, text)
+    _POLY_TEXTS[id(f)] = (weakref.ref(f), text)
     return text
 
 
