@@ -59,7 +59,7 @@ def _old_sigma_exact(res: Any, c: Fraction | None) -> _OldSigma | None:
     return _OldSigma(str(sympy.nsimplify(expr)), res.sigma)
 
 
-def _old_critical_probability(blocks: Any) -> tuple[float | None, str | None, list[str]]:
+def _old_critical_probability(blocks: Any, display: Any = None) -> tuple[float | None, str | None, list[str]]:
     best = None
     for b in blocks:
         if b.rate is None:

@@ -41,6 +41,7 @@ from sympy import CRootOf, Poly
 
 from .._reporting import ReportPart
 from ..model._types import MarkovChannel
+from ..structure._algebraic import AlgebraicReal
 from ..structure._fmo import FmoBlock
 from ._decide import _rho_poly, bernoulli_factor, compare_rate_bernoulli, compare_rate_markov, spectral_radius
 from ._sigma import SigmaResult, period_transfer_matrix
@@ -219,7 +220,6 @@ def block_tail(
     N = res.period
     beta = block.modulus_sq
     basis, reference = _label(res.degenerate, channels)
-    beta_expr = beta.expr() if beta is not None else sympy.Float(block.modulus_sq_float, 30)
     P: list[list[Fraction]] | None = None
     if res.fully_blind:
         c_expr: Any = sympy.Integer(1)
@@ -260,8 +260,22 @@ def block_tail(
     if kappa_exact is None and beta is not None:
         if c_rational is not None and beta.rational is not None and c_rational < 1 < beta.rational:
             kappa_exact = log_ratio_text(1 / c_rational, beta.rational, N)
+        elif c_rational is not None and 0 < c_rational < 1 and beta.root_text() is not None:
+            kappa_exact = log_root_ratio_text(1 / c_rational, beta, N)
         else:
+            beta_expr = beta.expr()
             kappa_exact = str(sympy.log(1 / c_expr) / (N * sympy.log(beta_expr)))
+    if N == 1 and c_rational is not None:
+        return BlockTail(
+            eigenvalues=block.eigenvalue_texts,
+            kappa=kappa,
+            kappa_exact=kappa_exact,
+            sigma_exact=_text(c_rational),
+            moments=moments,
+            exact=exact,
+            basis=basis,
+            reference=reference,
+        )
     sigma_expr = c_expr ** sympy.Rational(1, N)
     return BlockTail(
         eigenvalues=block.eigenvalue_texts,
@@ -297,6 +311,20 @@ def log_ratio_text(x: Fraction, b: Fraction, N: int) -> str:
     if x == b:  # the one case SymPy's product cancels: log(b) / (N log(b)) = 1/N
         return _text(Fraction(1, N))
     den = f"log({_text(b)})" if N == 1 else f"({N}*log({_text(b)}))"
+    return f"log({_text(x)})/{den}"
+
+
+def log_root_ratio_text(x: Fraction, beta: AlgebraicReal, N: int) -> str:
+    """SymPy's text of ``log(x) / (N log(beta))`` for a rational ``x > 1`` and an irrational ``beta`` printed as a plain ``CRootOf``.
+
+    As :func:`log_ratio_text`, without building SymPy's expression (the root's
+    text is :meth:`AlgebraicReal.root_text`); ``tests/stability/test_tail.py``
+    checks it against SymPy's text.
+    """
+    root = beta.root_text()
+    if not (x > 1 and N >= 1 and root is not None):
+        raise ValueError(f"log_root_ratio_text needs x > 1, N >= 1 and a CRootOf text, not x = {x}, N = {N}")
+    den = f"log({root})" if N == 1 else f"({N}*log({root}))"
     return f"log({_text(x)})/{den}"
 
 

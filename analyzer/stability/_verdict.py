@@ -27,7 +27,9 @@ from ..errors import BudgetExceeded
 from ..model._request import require_assumption_1
 from ..model._types import MarkovChannel, PerSensorChannel, Request, System, packets_of
 from ..structure._adjugate import to_fmpq_mat
-from ..structure._display import SHORT_TEXT_CHARS, algebraic_degree, readable, short_text
+from ..structure._algebraic import AlgebraicReal
+from ..structure._balls import START_PREC, precision
+from ..structure._display import SHORT_TEXT_CHARS, readable, short_text
 from ..structure._fmo import FmoBlock, fmo_blocks
 from ._critical_parameter import CriticalParameter, critical_parameter
 from ._decide import VERDICTS, bernoulli_factor, compare_rate_bernoulli, compare_rate_markov
@@ -71,7 +73,12 @@ class BlockReport(ShortRepr):
     basis: str = "theorem"
     notes: tuple[str, ...] = ()
     bernoulli_blind_fraction: tuple[Fraction, ...] | None = field(default=None, repr=False)
-    modulus_sq_expr: Any = field(default=None, repr=False)
+    modulus_sq_algebraic: AlgebraicReal | None = field(default=None, repr=False)
+
+    @property
+    def modulus_sq_expr(self) -> Any:
+        """``|alpha|^2`` as a SymPy expression (``Rational`` or ``CRootOf``), ``None`` when not exact."""
+        return None if self.modulus_sq_algebraic is None else self.modulus_sq_algebraic.expr()
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "verdict", Verdict(self.verdict))
@@ -206,9 +213,11 @@ def _controllable(system: System) -> bool | None:
 
 
 def _modulus_text(block: FmoBlock) -> str | None:
+    """SymPy's text of ``sqrt(|alpha|^2)``: ``sqrt(CRootOf(...))`` is written directly (see :mod:`kfio.structure._texts`)."""
     if block.modulus_sq is None or not block.modulus_sq.writable():
         return None
-    return str(sympy.sqrt(block.modulus_sq.expr()))
+    root = block.modulus_sq.root_text()
+    return f"sqrt({root})" if root is not None else str(sympy.sqrt(block.modulus_sq.expr()))
 
 
 def _modulus_float(block: FmoBlock) -> float:
@@ -238,7 +247,7 @@ def _analyze_block(
         modulus_exact=_modulus_text(block),
         jordan_sizes=block.jordan_sizes,
         basis=basis,
-        modulus_sq_expr=block.modulus_sq.expr() if block.modulus_sq else None,
+        modulus_sq_algebraic=block.modulus_sq,
     )
     below_one, below_certified = (-1, True) if block.phase is None else block.compare_power(1, Fraction(1))
     if below_one < 0:
@@ -325,9 +334,11 @@ def _critical_probability(
     Exact arithmetic only: for a rational ``beta_k`` the term is ``1 - r`` with
     ``r = beta_k^(-N_k/z_k)`` a :class:`RealRadical` (a rational when it is one,
     e.g. ``1 - 1/alpha^2`` for a rational real ``alpha``), compared exactly
-    between blocks; for an algebraic ``beta_k`` it is the SymPy expression
-    ``1 - CRootOf(h, i)**(-N/z)``, compared at 40 digits.  Long exact texts get
-    a short form for the terminal in ``display`` (the JSON keeps the text).
+    between blocks; for an algebraic ``beta_k`` it is ``1 - CRootOf(h, i)**(-N/z)``,
+    valued from FLINT's certified enclosure of ``beta_k`` and rounded to a float
+    (as the 40-digit SymPy value was before), its text written as SymPy prints
+    it; the float path (``beta_k`` not exact) stays in SymPy.  Long exact texts
+    get a short form for the terminal in ``display`` (the JSON keeps the text).
     """
     warnings: list[str] = []
     candidates: list[tuple[mpmath.mpf, RealRadical | None, Any]] = []
@@ -342,15 +353,19 @@ def _critical_probability(
                 "no arrival probability makes the filter stable"
             )
             return None, None, warnings
-        beta = b.modulus_sq_expr
-        if isinstance(beta, sympy.Rational):
-            r = RealRadical.power(1 / Fraction(int(beta.p), int(beta.q)), 1 / share)
+        beta = b.modulus_sq_algebraic
+        if beta is not None and beta.rational is not None:
+            r = RealRadical.power(1 / beta.rational, 1 / share)
             with mpmath.workdps(50):
                 candidates.append((1 - r.approx(40), r, None))
             continue
-        if beta is None:
-            beta = sympy.Float(b.modulus**2, 30)
-        expr = 1 - beta ** (-1 / sympy.Rational(share.numerator, share.denominator))
+        if beta is not None:  # 1 - beta^(-1/share) from FLINT's certified enclosure of beta
+            exponent = -1 / share
+            with precision(START_PREC):
+                value = float((1 - beta.power_ball(exponent)).mid())
+            candidates.append((mpmath.mpf(value), None, (beta, exponent)))
+            continue
+        expr = 1 - sympy.Float(b.modulus**2, 30) ** (-1 / sympy.Rational(share.numerator, share.denominator))
         candidates.append((mpmath.mpf(str(sympy.N(expr, 40))), None, expr))
     if not candidates:
         return 0.0, "0", warnings
@@ -368,10 +383,33 @@ def _critical_probability(
     val, rad, expr = max(candidates, key=lambda t: t[0])
     if val <= 0:
         return 0.0, "0", warnings
-    text = rad.one_minus_text() if rad is not None else str(expr)
+    degree: int | None = None
+    if rad is not None:
+        text = rad.one_minus_text()
+    elif isinstance(expr, tuple):
+        beta, exponent = expr
+        text = _one_minus_power_text(beta, exponent)
+        degree = beta.power_degree(exponent) if len(text) > SHORT_TEXT_CHARS else None
+    else:
+        text = str(expr)
     if len(text) > SHORT_TEXT_CHARS:
-        display[text] = short_text(text, float(val), algebraic_degree(expr) if expr is not None else None)
+        display[text] = short_text(text, float(val), degree)
     return float(val), text, warnings
+
+
+def _one_minus_power_text(beta: AlgebraicReal, exponent: Fraction) -> str:
+    """SymPy's text of ``1 - beta**exponent`` (``exponent < 0``): ``1 - 1/CRootOf(...)**(3/2)``.
+
+    Written from :meth:`AlgebraicReal.root_text` when SymPy prints the root as
+    a plain ``CRootOf`` (``tests/structure/test_texts.py`` checks the form
+    against SymPy's), else printed by SymPy.
+    """
+    root = beta.root_text()
+    if root is None:
+        return str(1 - beta.expr() ** sympy.Rational(exponent.numerator, exponent.denominator))
+    e = -exponent
+    power = "" if e == 1 else f"**{e}" if e.denominator == 1 else f"**({e})"
+    return f"1 - 1/{root}{power}"
 
 
 #: The Gilbert-Elliott region is computed unasked only for periods up to this (the boundary polynomials have

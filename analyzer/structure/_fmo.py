@@ -20,6 +20,7 @@ Jordan chains of ``theta`` span ``ker(A - theta I)``, so
 from __future__ import annotations
 
 import math
+import weakref
 from dataclasses import dataclass, field
 from fractions import Fraction
 from functools import cached_property, reduce
@@ -43,6 +44,7 @@ from ._eigen import DIGITS, EigenFactor, X, eigen_factors
 from ._modp import ModP
 from ._modulus import modulus_squared
 from ._phases import PhaseBlock, RankOracle, Slot
+from ._texts import poly_text
 from ._unity import Root as UnityRoot
 from ._unity import euler_phi, ratio_relation
 
@@ -351,7 +353,10 @@ def _close_relations(relation: dict[tuple[Root, Root], tuple[int, int]], uf: _Un
 
 
 def _eigen_text(f: EigenFactor, index: int) -> str:
-    """Exact text of a root: rational, quadratic radicals, else its polynomial and a numerical value."""
+    """Exact text of a root: rational, quadratic radicals, else its polynomial and a numerical value.
+
+    The polynomial is written as SymPy prints ``f.poly.as_expr()`` (:func:`kfio.structure._texts.poly_text`).
+    """
     if f.is_rational:
         return fraction_text(f.rational_root)
     if f.degree == 2:
@@ -367,7 +372,26 @@ def _eigen_text(f: EigenFactor, index: int) -> str:
     bits = max(max(int(c.numerator).bit_length(), int(c.denominator).bit_length()) for c in f.poly.all_coeffs())
     if bits > _TEXT_BITS:  # beyond Python's int-to-text limit: describe the polynomial instead
         return f"root of a degree-{f.degree} polynomial with {bits}-bit coefficients near {z.real:.12g}{z.imag:+.12g}i"
-    return f"root of {f.poly.as_expr()} near {z.real:.12g}{z.imag:+.12g}i"
+    return f"root of {_poly_text_of(f)} near {z.real:.12g}{z.imag:+.12g}i"
+
+
+_POLY_TEXTS: dict[int, tuple[weakref.ref, str]] = {}
+
+
+def _poly_text_of(f: EigenFactor) -> str:
+    """SymPy's text of ``f.poly.as_expr()``, kept for the last factors seen (one text serves all ``deg f`` roots).
+
+    The factor is held by a weak reference: the cache never keeps a system's eigenstructure alive.
+    """
+    hit = _POLY_TEXTS.get(id(f))
+    if hit is not None and hit[0]() is f:
+        return hit[1]
+    coeffs = [Fraction(int(c.numerator), int(c.denominator)) for c in f.poly.all_coeffs()]
+    text = poly_text(coeffs)
+    if len(_POLY_TEXTS) > 64:
+        _POLY_TEXTS.clear()
+    _POLY_TEXTS[id(f)] = (weakref.ref(f), text)
+    return text
 
 
 class _SingleRows:
@@ -579,6 +603,17 @@ def _member_field_and_values(
     return None, {}
 
 
+def _output_columns(Cq: fmpq_mat, f: EigenFactor, p: int) -> list[list[list[Fraction]]]:
+    """``C v`` for every eigenvector polynomial ``v(theta)`` of ``f``: per vector, per output row, the coefficients."""
+    out = []
+    for vec in f.eigvec_coeffs:
+        d = len(vec[0])
+        CB = Cq * fmpq_mat(len(vec), d, [fmpq(c.numerator, c.denominator) for comp in vec for c in comp])
+        entries = CB.entries()
+        out.append([[Fraction(int(x.p), int(x.q)) for x in entries[i * d : (i + 1) * d]] for i in range(p)])
+    return out
+
+
 def build_block(
     members: Sequence[Root],
     relation: dict[tuple[Root, Root], tuple[int, int]],
@@ -587,8 +622,13 @@ def build_block(
     row_groups: tuple[tuple[int, ...], ...],
     certified: bool,
     notes: Sequence[str],
+    columns: dict[int, list[list[list[Fraction]]]] | None = None,
 ) -> FmoBlock:
-    """Reduced FMO block (Rohr, Marelli and Fu (2014), Definition 4) of one class, in phase form."""
+    """Reduced FMO block (Rohr, Marelli and Fu (2014), Definition 4) of one class, in phase form.
+
+    ``columns`` caches, per factor index, the exact ``C v(theta)`` coefficient
+    lists of :func:`_output_columns` across the blocks of one system.
+    """
     head = members[0]
     fi0, ri0 = head
     texts = tuple(_eigen_text(factors[fi], ri) for fi, ri in members)
@@ -618,18 +658,17 @@ def build_block(
 
     Cq = to_fmpq_mat(C)
     p = len(C)
+    columns = {} if columns is None else columns
     columns_num: list[np.ndarray] = []
     exponents: list[int] = []
     exact_cols: list[tuple[Root, list[list[Fraction]]]] = []
     for (fi, ri), e in zip(members, member_exp):
         f = factors[fi]
+        if fi not in columns:  # C times the eigenvector polynomials: one product per factor, shared by its roots
+            columns[fi] = _output_columns(Cq, f, p)
         with precision(START_PREC):
             theta = f.root_ball(ri)
-            for vec in f.eigvec_coeffs:
-                d = len(vec[0])
-                CB = Cq * fmpq_mat(len(vec), d, [fmpq(c.numerator, c.denominator) for comp in vec for c in comp])
-                entries = CB.entries()
-                coeffs = [[Fraction(int(x.p), int(x.q)) for x in entries[i * d : (i + 1) * d]] for i in range(p)]
+            for coeffs in columns[fi]:
                 exact_cols.append(((fi, ri), coeffs))
                 vals = [horner(cs, theta) for cs in coeffs]
                 nrm = sum((abs(v) ** 2 for v in vals), arb(0)).sqrt()
@@ -720,10 +759,11 @@ def fmo_blocks(system: System, budget: Budget | None = None) -> list[FmoBlock]:
         groups = tuple(s.rows for s in system.sensors)
     classes, relation, certified, notes = fmo_classes(factors, budget)
     blocks = []
+    columns: dict[int, list[list[list[Fraction]]]] = {}
     for c in classes:
         if budget is not None:
             budget.tick("FMO blocks", 64)
-        blocks.append(build_block(c, relation, factors, system.C, groups, certified, notes))
+        blocks.append(build_block(c, relation, factors, system.C, groups, certified, notes, columns))
     blocks.sort(key=lambda b: -b.modulus_sq_float)
     for fi, f in enumerate(factors):
         if f.is_zero:

@@ -5,7 +5,9 @@ Rohr, Marelli and Fu (2014), Theorem 1 compares ``|alpha_k|^2 sigma_k`` with
 ``theta`` of the irreducible ``f`` (degree ``d``, companion matrix ``C_f``):
 
 * rational ``theta``: ``theta^2``;
-* real ``theta``: a root of ``charpoly(C_f^2)`` (eigenvalues ``theta_i^2``);
+* real ``theta``: a root of the Graeffe transform ``g(x^2) = (-1)^d f(x) f(-x)``
+  (roots ``theta_i^2``; the same polynomial as ``charpoly(C_f^2)``, from one
+  polynomial product instead of a ``d x d`` characteristic polynomial);
 * non-real ``theta``: ``theta * conj(theta)`` is a root of
   ``charpoly(Lambda^2 C_f)``, the second exterior power, whose eigenvalues are
   the ``theta_i theta_j`` with ``i < j`` (degree ``d (d - 1) / 2``, against
@@ -14,7 +16,11 @@ Rohr, Marelli and Fu (2014), Theorem 1 compares ``|alpha_k|^2 sigma_k`` with
 The minimal polynomial is the irreducible factor that vanishes on the
 certified enclosure of ``beta``, and the root is the one real root of that
 factor whose isolating ball meets the enclosure.  Factorizations are done
-once per factor ``f``, not once per root.
+once per factor ``f``, not once per root.  The Graeffe transform needs none:
+``g`` is the characteristic polynomial of ``theta^2`` over ``Q(theta)``,
+i.e. the minimal polynomial of ``theta^2`` raised to the degree
+``[Q(theta) : Q(theta^2)]``, which is 1 or 2; so ``g`` is irreducible or the
+square of an irreducible polynomial.
 """
 
 from __future__ import annotations
@@ -24,10 +30,11 @@ from functools import lru_cache
 from itertools import combinations
 
 from flint import arb, fmpq, fmpz_mat, fmpz_poly
+from flint.utils.flint_exceptions import DomainError
 from sympy import QQ, Poly
 
 from ._algebraic import AlgebraicReal
-from ._balls import MAX_PREC, START_PREC, IntCoeffs, precision, root_balls
+from ._balls import MAX_PREC, START_PREC, IntCoeffs, integer_coeffs, precision, root_balls
 from ._eigen import EigenFactor, X
 
 #: Largest ``deg f`` for which ``|theta|^2`` of a non-real root is made exact
@@ -47,23 +54,42 @@ def _companion(coeffs: IntCoeffs) -> fmpz_mat:
 
 
 @lru_cache(maxsize=256)
-def _square_factors(coeffs: IntCoeffs, real: bool) -> tuple[IntCoeffs, ...]:
-    """Irreducible factors of the polynomial whose roots include every ``|theta|^2`` of ``f`` (monic ``f``)."""
+def _square_factors(coeffs: IntCoeffs) -> tuple[IntCoeffs, ...]:
+    """Irreducible factors of ``charpoly(Lambda^2 C_f)``, whose roots include every ``|theta|^2`` of a non-real root of monic ``f``."""
     C = _companion(coeffs)
-    if real:
-        P = (C * C).charpoly()
-    else:
-        d = C.nrows()
-        pairs = list(combinations(range(d), 2))
-        M = fmpz_mat(len(pairs), len(pairs))
-        for a, (i, j) in enumerate(pairs):
-            for b, (k, m) in enumerate(pairs):
-                v = C[i, k] * C[j, m] - C[i, m] * C[j, k]
-                if v:
-                    M[a, b] = v
-        P = M.charpoly()
+    d = C.nrows()
+    pairs = list(combinations(range(d), 2))
+    M = fmpz_mat(len(pairs), len(pairs))
+    for a, (i, j) in enumerate(pairs):
+        for b, (k, m) in enumerate(pairs):
+            v = C[i, k] * C[j, m] - C[i, m] * C[j, k]
+            if v:
+                M[a, b] = v
+    P = M.charpoly()
     _, factors = P.factor()
     return tuple(tuple(int(c) for c in h.coeffs()) for h, _ in factors)
+
+
+@lru_cache(maxsize=256)
+def _graeffe_factors(coeffs: IntCoeffs) -> tuple[IntCoeffs, ...]:
+    """The irreducible factor over ``Q`` of the polynomial with roots ``theta_i^2`` (``f`` irreducible, any leading coefficient).
+
+    ``f(x) = e(x^2) + x o(x^2)`` gives ``f(x) f(-x) = e(x^2)^2 - x^2 o(x^2)^2``, so
+    ``g(y) = e(y)^2 - y o(y)^2`` has the roots ``theta_i^2`` (Graeffe's
+    root-squaring step).  ``g`` is the minimal polynomial of ``theta^2`` to
+    the power ``[Q(theta) : Q(theta^2)] <= 2`` (see the module docstring), so
+    its square root, when it has one, is that minimal polynomial, else ``g`` is.
+    """
+    F = fmpz_poly(list(coeffs))
+    d = len(coeffs) - 1
+    even = fmpz_poly([F[i] for i in range(0, d + 1, 2)])
+    odd = fmpz_poly([F[i] for i in range(1, d + 1, 2)])
+    g = even * even - fmpz_poly([0, 1]) * odd * odd
+    try:
+        g = g.sqrt()
+    except DomainError:
+        pass
+    return (integer_coeffs([int(c) for c in reversed(g.coeffs())]),)
 
 
 def _monic_coeffs(f: EigenFactor) -> IntCoeffs | None:
@@ -84,15 +110,19 @@ def modulus_squared(f: EigenFactor, index: int) -> AlgebraicReal | None:
     if not real and f.degree > MAX_MODULUS_DEGREE:
         return _reciprocal_modulus(f, index)
     c = f.int_coeffs
-    a = c[-1]
-    d = len(c) - 1
-    monic = tuple(c[i] * a ** (d - 1 - i) for i in range(d)) + (1,)  # y = a theta
+    if real:  # the roots of the Graeffe factor are the theta_i^2 themselves: no change of variable
+        a = 1
+        factors = _graeffe_factors(c)
+    else:
+        a = c[-1]
+        d = len(c) - 1
+        monic = tuple(c[i] * a ** (d - 1 - i) for i in range(d)) + (1,)  # y = a theta
+        factors = _square_factors(monic)
 
     def beta_ball(prec: int) -> arb:
         z = f.root_ball(index, prec) * a
         return (z * z.conjugate()).real
 
-    factors = _square_factors(monic, real)
     prec = START_PREC
     while prec <= MAX_PREC:
         with precision(prec):

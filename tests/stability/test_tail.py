@@ -136,3 +136,32 @@ def test_log_ratio_text_is_sympys_text():
     for bad in ((F(1), F(2), 1), (F(2), F(1, 2), 1), (F(2), F(2), 0)):
         with pytest.raises(ValueError):
             log_ratio_text(*bad)
+
+
+def test_log_root_ratio_text_is_sympys_text():
+    # log(x) / (N log(beta)) for an algebraic beta written as CRootOf: the direct text is SymPy's
+    import sympy
+    from sympy import QQ, Poly
+
+    from kfio.stability._tail import log_root_ratio_text
+    from kfio.structure._algebraic import AlgebraicReal
+    from kfio.structure._eigen import X
+
+    rng = random.Random(12)
+    checked = 0
+    while checked < 25:
+        coeffs = [QQ(rng.randint(-30, 30), rng.randint(1, 9)) for _ in range(rng.randint(2, 4))]
+        h = Poly([QQ(1)] + coeffs, X, domain=QQ)
+        if not h.is_irreducible or h.count_roots() == 0:
+            continue
+        beta = AlgebraicReal(minpoly=h, index=h.count_roots() - 1)
+        if beta.root_text() is None or not beta.expr().is_positive:
+            continue
+        x = F(rng.randint(2, 10**9), rng.randint(1, 10**6))
+        x = x if x > 1 else 1 / x
+        for N in (1, 2, 7):
+            expected = sympy.log(sympy.Rational(x.numerator, x.denominator)) / (N * sympy.log(beta.expr()))
+            assert log_root_ratio_text(x, beta, N) == str(expected), (x, h, N)
+        checked += 1
+    with pytest.raises(ValueError):
+        log_root_ratio_text(F(1, 2), beta, 1)

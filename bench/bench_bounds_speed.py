@@ -1,0 +1,81 @@
+"""``kfio bounds`` end to end (issue 25): CPU of ``compute_bounds`` against a reference commit, same run.
+
+    python bench/bench_bounds_speed.py [--reference 13e923d] [--sizes 3,10,20]
+
+For each size, one system of ``bench_bounds.random_system`` (seed 0, two outputs, ``Q = I``,
+``R = I``, Bernoulli ``0.9``) goes through :func:`kfio.mare._compute.compute_bounds` (the work of
+``kfio bounds``: interval, covariance bounds with the SDP cross-check, ``P_hat``), timed with
+``time.process_time`` here and in a child interpreter on the reference code (:mod:`_reference`).
+The JSON of both reports is compared too.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from _reference import run_reference  # noqa: E402
+
+
+def request_text(n: int) -> str:
+    """The bounds request of size ``n`` (entries rounded to 3 decimals, spectral radius about 1.2)."""
+    import numpy as np
+    from bench_bounds import random_system
+
+    A, C = random_system(np.random.default_rng(0), n, 2)
+    return json.dumps(
+        {
+            "system": {
+                "A": [[repr(float(x)) for x in r] for r in A],
+                "C": [[repr(float(x)) for x in r] for r in C],
+                "Q": np.eye(n).tolist(),
+                "R": np.eye(2).tolist(),
+            },
+            "channel": {"model": "bernoulli", "arrival_probability": "0.9"},
+            "options": {"time_budget_s": 3000},
+        }
+    )
+
+
+def measure(sizes: list[int]) -> dict:
+    """CPU seconds of ``compute_bounds`` per size, and the JSON text of each report."""
+    import time
+
+    from kfio import load_request
+    from kfio.mare._compute import compute_bounds
+
+    compute_bounds(load_request(request_text(2)))  # imports and CVXPY's first solve
+    out = {}
+    for n in sizes:
+        req = load_request(request_text(n))
+        t = time.process_time()
+        report = compute_bounds(req)
+        out[str(n)] = [time.process_time() - t, json.dumps(report.to_dict(), sort_keys=True, default=str)]
+    return out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--reference", default="13e923d", help="commit whose code is timed beside this one")
+    ap.add_argument("--sizes", default="3,10,20")
+    args = ap.parse_args()
+    sizes = [int(s) for s in args.sizes.split(",") if s]
+    bench = str(Path(__file__).resolve().parent)
+    child = f"import json, sys; sys.path.insert(0, {bench!r}); from bench_bounds_speed import measure\n"
+    old = run_reference(child + f"print(json.dumps(measure({sizes})))", args.reference)
+    now = measure(sizes)
+    print(f"load average {os.getloadavg()[0]:.1f}; CPU s of compute_bounds (time.process_time), same run")
+    print(f"| n | now | {args.reference} | ratio | same JSON |")
+    print("|---|---|---|---|---|")
+    for n in now:
+        print(f"| {n} | {now[n][0]:.3g} | {old[n][0]:.3g} | {old[n][0] / now[n][0]:.2f}x | {now[n][1] == old[n][1]} |")
+
+
+if __name__ == "__main__":
+    main()
