@@ -15,6 +15,7 @@ from fastapi import FastAPI
 from fastapi.exceptions import RequestValidationError
 from fastapi.openapi.utils import get_openapi
 from starlette.exceptions import HTTPException as StarletteHTTPException
+from starlette.requests import ClientDisconnect
 
 from kfio._version import __version__
 from kfio.errors import AnalyzerError
@@ -23,7 +24,7 @@ from .api import api_router, web
 from .api.schemas import COMPONENTS
 from .dispatch import Dispatcher
 from .jobstore import JobStore
-from .problems import ProblemError, problem_handler
+from .problems import ProblemError, disconnect_handler, problem_handler
 from .settings import Settings, get_settings
 
 #: OpenAPI ``info.version``: the package's version (the HTTP contract ships with the package).
@@ -84,6 +85,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     web.install(app)  # /, /docs, /redoc: every asset from the package, none from another host
     for exc in (ProblemError, AnalyzerError, RequestValidationError, StarletteHTTPException, Exception):
         app.add_exception_handler(exc, problem_handler)
+    app.add_exception_handler(ClientDisconnect, disconnect_handler)  # an info line, not "internal error"
 
     def openapi() -> dict[str, Any]:
         if app.openapi_schema is None:

@@ -32,7 +32,7 @@ from typing import Any
 
 from fastapi import Request
 from fastapi.exceptions import RequestValidationError
-from fastapi.responses import JSONResponse
+from fastapi.responses import JSONResponse, Response
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
 from kfio.errors import (
@@ -185,6 +185,15 @@ def problem_from_exception(exc: BaseException) -> Problem:
 
 def _pointer(parts: tuple[Any, ...]) -> str:
     return "/" + "/".join(str(p).replace("~", "~0").replace("/", "~1") for p in parts) if parts else "/"
+
+
+async def disconnect_handler(request: Request, exc: Exception) -> Response:
+    """A client that went away before its body was read: one info line, no traceback (it is not a bug).
+
+    The answer goes nowhere; it is there because a handler must return one.
+    """
+    log.info("client disconnected before its request body was read: %s %s", request.method, request.url.path)
+    return Response(status_code=400)
 
 
 async def problem_handler(request: Request, exc: Exception) -> JSONResponse:

@@ -73,6 +73,16 @@ class Settings(BaseSettings):
         runs its sweeps on; without it a sweep runs in its job-lane worker.
     max_sweep_points:
         Points one ``POST /v1/sweeps`` may have.
+    header_timeout_s, body_timeout_s:
+        A request's headers must arrive within ``header_timeout_s`` of the
+        connection opening (or of the request's first byte on a kept-alive
+        connection), its body within ``body_timeout_s`` of its headers; the
+        connection is closed otherwise (:mod:`kfio.service.connection_guard`).
+    keep_alive_s:
+        How long an idle kept-alive connection stays open.
+    max_connections:
+        Open connections at most (lowered to fit the descriptor limit); one
+        more is answered 503 at once.
     """
 
     model_config = SettingsConfigDict(env_prefix="KFIO_", frozen=True, extra="ignore")
@@ -99,6 +109,10 @@ class Settings(BaseSettings):
     job_retention: int = Field(64, ge=1)
     dask_scheduler: str | None = Field(None, pattern=r"^(tcp|tls|inproc)://[^\s]+$")
     max_sweep_points: int = Field(100_000, ge=1, le=1_000_000)
+    header_timeout_s: float = Field(10.0, gt=0, le=600)
+    body_timeout_s: float = Field(60.0, gt=0, le=3600)
+    keep_alive_s: float = Field(5.0, gt=0, le=600)
+    max_connections: int = Field(1000, ge=1, le=100_000)
 
     def memory_bytes(self) -> int | None:
         """:attr:`memory_mb` in bytes, ``None`` for no limit."""

@@ -58,6 +58,7 @@ def _run(args: argparse.Namespace) -> int:
     from pydantic import ValidationError
 
     from ..app import create_app
+    from ..connection_guard import install_accept_error_log, uvicorn_options
     from ..settings import Settings
 
     overrides = {k: getattr(args, k) for k in ("host", "port", "workers") if getattr(args, k) is not None}
@@ -76,6 +77,10 @@ def _run(args: argparse.Namespace) -> int:
 
     class DrainingServer(uvicorn.Server):
         """Uvicorn's server, draining the worker pool while it waits for connections to finish."""
+
+        async def startup(self, sockets: Any = None) -> None:
+            install_accept_error_log(asyncio.get_running_loop())  # out of descriptors: one line, not a flood
+            await super().startup(sockets)
 
         async def shutdown(self, sockets: Any = None) -> None:
             dispatcher = getattr(app.state, "dispatcher", None)
@@ -96,6 +101,7 @@ def _run(args: argparse.Namespace) -> int:
         # The standard loop, even where uvloop is installed: uvloop's add_reader makes the worker
         # pipes non-blocking, and a large answer (a plot) would then be read as a crashed worker.
         loop="asyncio",
+        **uvicorn_options(settings),  # slow, idle and excess connections are cut off
         timeout_graceful_shutdown=int(settings.shutdown_grace_s + UVICORN_MARGIN_S),
     )
     try:
