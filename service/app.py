@@ -68,6 +68,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         jobs = JobStore(settings)
         app.state.dispatcher, app.state.jobs = dispatcher, jobs
         starting = [asyncio.create_task(dispatcher.pool.start()), asyncio.create_task(jobs.start())]
+        app.state.starting = starting  # kfio serve stops (exit 6) if a pool cannot start
         try:
             yield
         finally:

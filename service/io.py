@@ -13,7 +13,7 @@ if TYPE_CHECKING:  # the analyzer is imported when a command runs, not for `kfio
     from kfio import Budget, Request
 
 from . import exitcodes
-from .watchdog import DEFAULT_MEMORY_MB, memory_message, run_supervised
+from .watchdog import DEFAULT_MEMORY_MB, MAX_MEMORY_MB, memory_message, run_supervised
 
 #: Budget of a command whose request and flags name none (seconds).
 DEFAULT_TIME_BUDGET_S = 120.0
@@ -82,12 +82,19 @@ def request_budget(data: bytes) -> float | None:
 
 def memory_limit(args: argparse.Namespace) -> int | None:
     """The ``--memory-mb`` limit in bytes (``None``: no limit)."""
-    mb = args.memory_mb
+    rule = f"must be a whole number of MiB in [0, {MAX_MEMORY_MB}] (0: no limit)"
+    mb, name = args.memory_mb, "--memory-mb"
     if mb is None:
-        text = os.environ.get("KFIO_MEMORY_MB", "").strip()
-        mb = int(text) if text.isdigit() else DEFAULT_MEMORY_MB
-    if mb < 0:
-        raise InvalidInput("--memory-mb", "must be a whole number of MiB, at least 0")
+        name = "KFIO_MEMORY_MB"
+        text = os.environ.get(name, "").strip()
+        if not text:
+            mb = DEFAULT_MEMORY_MB
+        elif text.isascii() and text.isdigit() and len(text) <= 12:
+            mb = int(text)
+        else:
+            raise InvalidInput(name, rule)
+    if not 0 <= mb <= MAX_MEMORY_MB:
+        raise InvalidInput(name, rule)
     return mb << 20 if mb else None
 
 

@@ -20,7 +20,7 @@ from pydantic_settings import BaseSettings, SettingsConfigDict
 
 from kfio.model._limits import Limits
 
-from .watchdog import DEFAULT_MEMORY_MB
+from .watchdog import DEFAULT_MEMORY_MB, MAX_MEMORY_MB
 
 
 def _default_workers() -> int:
@@ -85,28 +85,28 @@ class Settings(BaseSettings):
         more is answered 503 at once.
     """
 
-    model_config = SettingsConfigDict(env_prefix="KFIO_", frozen=True, extra="ignore")
+    model_config = SettingsConfigDict(env_prefix="KFIO_", frozen=True, extra="ignore", allow_inf_nan=False)
 
     host: str = "127.0.0.1"
     port: int = Field(8000, ge=0, le=65535)
     workers: int = Field(default_factory=_default_workers, ge=1, le=64)
     time_budget_s: float = Field(30.0, gt=0, le=3600)
     kill_grace_s: float = Field(0.25, ge=0, le=60)
-    memory_mb: int = Field(DEFAULT_MEMORY_MB, ge=0)
+    memory_mb: int = Field(DEFAULT_MEMORY_MB, ge=0, le=MAX_MEMORY_MB)
     shutdown_grace_s: float = Field(3.0, ge=0, le=600)
-    max_queue: int = Field(64, ge=0)
-    max_body_bytes: int = Field(1 << 20, ge=1)
-    cache_entries: int = Field(512, ge=0)
-    cache_bytes: int = Field(64 << 20, ge=0)
-    max_states: int = Field(Limits.max_states, ge=1)
-    max_markov_order: int = Field(Limits.max_markov_order, ge=0)
-    max_digits: int = Field(Limits.max_digits, ge=1)
-    max_outputs: int = Field(Limits.max_outputs, ge=1)
-    max_sensors: int = Field(Limits.max_sensors, ge=1)
+    max_queue: int = Field(64, ge=0, le=100_000)
+    max_body_bytes: int = Field(1 << 20, ge=1, le=1 << 30)
+    cache_entries: int = Field(512, ge=0, le=10_000_000)
+    cache_bytes: int = Field(64 << 20, ge=0, le=1 << 40)
+    max_states: int = Field(Limits.max_states, ge=1, le=400)
+    max_markov_order: int = Field(Limits.max_markov_order, ge=0, le=100)
+    max_digits: int = Field(Limits.max_digits, ge=1, le=4000)  # below Python's 4300-digit int parsing limit
+    max_outputs: int = Field(Limits.max_outputs, ge=1, le=400)
+    max_sensors: int = Field(Limits.max_sensors, ge=1, le=64)
     job_workers: int = Field(1, ge=1, le=64)
     job_time_budget_s: float = Field(3600.0, gt=0, le=86400)
-    max_jobs: int = Field(16, ge=0)
-    job_retention: int = Field(64, ge=1)
+    max_jobs: int = Field(16, ge=0, le=100_000)
+    job_retention: int = Field(64, ge=1, le=100_000)
     dask_scheduler: str | None = Field(None, pattern=r"^(tcp|tls|inproc)://[^\s]+$")
     max_sweep_points: int = Field(100_000, ge=1, le=1_000_000)
     header_timeout_s: float = Field(10.0, gt=0, le=600)
