@@ -134,15 +134,17 @@ def dump_json(report: dict[str, Any]) -> str:
 def emit(text: str, stream: TextIO | None = None) -> None:
     """Print ``text`` so that no user string can make printing fail.
 
-    Sensor names and keys are user text; whatever the terminal's encoding,
-    a character it cannot show is written as a backslash escape instead of
-    raising ``UnicodeEncodeError``.
+    Sensor names and keys are user text: a control character a terminal would
+    act on (ESC, ...) is written as a visible escape (:func:`kfio._reporting.terminal_text`),
+    and whatever the terminal's encoding, a character it cannot show is
+    written as a backslash escape instead of raising ``UnicodeEncodeError``.
     """
+    from kfio._reporting import terminal_text
     from kfio.model._exact import escaped
 
     stream = stream if stream is not None else sys.stdout
     encoding = getattr(stream, "encoding", None) or "utf-8"
-    print(escaped(text).encode(encoding, "backslashreplace").decode(encoding), file=stream)
+    print(terminal_text(escaped(text)).encode(encoding, "backslashreplace").decode(encoding), file=stream)
 
 
 def run_guarded(body: Callable[[], int]) -> int:

@@ -43,6 +43,7 @@ from kfio.errors import (
     LimitExceeded,
     NumericalFailure,
 )
+from kfio.model import json_pointer
 from kfio.model._exact import escaped
 
 from .pool import PoolBusy, PoolShuttingDown, PoolTimeout, WorkerCrashed, WorkerOutOfMemory
@@ -183,10 +184,6 @@ def problem_from_exception(exc: BaseException) -> Problem:
     )
 
 
-def _pointer(parts: tuple[Any, ...]) -> str:
-    return "/" + "/".join(str(p).replace("~", "~0").replace("/", "~1") for p in parts) if parts else "/"
-
-
 async def disconnect_handler(request: Request, exc: Exception) -> Response:
     """A client that went away before its body was read: one info line, no traceback (it is not a bug).
 
@@ -206,8 +203,8 @@ async def problem_handler(request: Request, exc: Exception) -> JSONResponse:
             422,
             "invalid-input",
             "Invalid request",
-            f"{_pointer(rest)}: {err.get('msg')}",
-            field=_pointer(rest),
+            f"{json_pointer(rest)}: {err.get('msg')}",
+            field=json_pointer(rest),
             rule=str(err.get("msg")),
             location=where,
         )

@@ -6,6 +6,7 @@ Exact rationals from decimal text (:func:`parse_number`), the single validator
 
 from ._exact import fraction_text, load_json, parse_number
 from ._limits import DEFAULT_LIMITS, Limits
+from ._pointer import json_pointer, pointer_tokens
 from ._request import load_request, parse_request
 from ._types import MarkovChannel, PerSensorChannel, Request, Sensor, System
 
@@ -18,8 +19,10 @@ __all__ = [
     "Sensor",
     "System",
     "fraction_text",
+    "json_pointer",
     "load_json",
     "load_request",
     "parse_number",
     "parse_request",
+    "pointer_tokens",
 ]

@@ -318,7 +318,9 @@ _SURROGATE_RULE = (
 
 
 def _path_pointer(path: tuple[str, ...]) -> str:
-    return "".join("/" + escaped(p).replace("~", "~0").replace("/", "~1") for p in path) or "/"
+    from ._pointer import json_pointer
+
+    return json_pointer(escaped(p) for p in path)
 
 
 def fraction_text(x: Fraction) -> str:

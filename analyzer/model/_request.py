@@ -15,6 +15,7 @@ from typing import Any, Iterable, Mapping, Optional
 from ..errors import InvalidInput, LimitExceeded
 from ._exact import load_json, parse_number, value_text
 from ._limits import DEFAULT_LIMITS, Limits
+from ._pointer import json_pointer
 from ._types import Channel, MarkovChannel, Matrix, PerSensorChannel, Request, Sensor, System
 
 #: Option groups a request may carry, one per command.  Commands validate their own group.
@@ -26,7 +27,7 @@ _SYSTEM_KEYS = {"A", "C", "Q", "R", "sensors"}
 
 def pointer(where: str, key: str) -> str:
     """``where`` extended by one object key, escaped as RFC 6901 requires (``~0``, ``~1``)."""
-    return f"{where}/{key.replace('~', '~0').replace('/', '~1')}"
+    return where + json_pointer((key,))
 
 
 def _check_keys(obj: Any, where: str, allowed: set[str], required: set[str]) -> Mapping[str, Any]:
@@ -39,7 +40,7 @@ def _check_keys(obj: Any, where: str, allowed: set[str], required: set[str]) -> 
             )
     for key in sorted(required):
         if key not in obj:
-            raise InvalidInput(f"{where}/{key}", "required field is missing")
+            raise InvalidInput(pointer(where, key), "required field is missing")
     return obj
 
 
@@ -392,7 +393,7 @@ def require_assumption_1(channel: Channel) -> None:
 
     chans = channel.channels if isinstance(channel, PerSensorChannel) else (("", channel),)
     for name, ch in chans:
-        base = f"/channel/channels/{name}" if name else "/channel"
+        base = json_pointer(("channel", "channels", name)) if name else "/channel"
         for h, x in enumerate(ch.table):
             if x in (0, 1):
                 if ch.model == "bernoulli":
