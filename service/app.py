@@ -37,7 +37,10 @@ Stability analysis of Kalman filters whose measurements travel over lossy packet
   or a PNG for `/v1/plots/...`.  Numbers are exact: `1.1` means 11/10; strings such as `"11/10"` work too.
 * Errors are `application/problem+json` (RFC 9457).  Invalid input is 422 with `field`
   (a JSON pointer into the request) and `rule`.  Bodies over 1 MiB are refused with 413, bodies
-  not sent as `Content-Type: application/json` with 415.
+  not sent as `Content-Type: application/json` with 415.  Malformed HTTP (a negative `Content-Length`, ...)
+  is 400 `malformed-http`; a request whose headers or body arrive too slowly is 408 `request-timeout`
+  (`KFIO_HEADER_TIMEOUT_S`, `KFIO_BODY_TIMEOUT_S`), and a connection past `KFIO_MAX_CONNECTIONS` is 503
+  `busy`; all three close the connection.
 * Each request has a time budget (30 s by default, set per deployment with `KFIO_TIME_BUDGET_S`;
   a request may ask for less with `options.time_budget_s`, at least 0.01 s).  Past it the answer
   is 504; when no worker becomes free in time, 503 with `Retry-After` (an invalid body is 422 even

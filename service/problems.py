@@ -34,6 +34,7 @@ from fastapi import Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse, Response
 from starlette.exceptions import HTTPException as StarletteHTTPException
+from starlette.routing import Match
 
 from kfio.errors import (
     AnalyzerError,
@@ -184,6 +185,22 @@ def problem_from_exception(exc: BaseException) -> Problem:
     )
 
 
+#: Methods a 405's ``Allow`` may list.
+_METHODS = ("DELETE", "GET", "HEAD", "PATCH", "POST", "PUT")
+
+
+def allowed_methods(request: Request) -> str:
+    """The ``Allow`` header of a 405: every method some route answers on the request's path (RFC 9110, 15.5.6).
+
+    Starlette's own header names the methods of the first route on the path
+    only (``GET`` for ``/v1/jobs/{id}``, which ``DELETE`` serves too), so each
+    method is tried against the app's routes with Starlette's own matching.
+    """
+    routes = request.app.router.routes
+    allowed = [m for m in _METHODS if any(r.matches({**request.scope, "method": m})[0] is Match.FULL for r in routes)]
+    return ", ".join(allowed)
+
+
 async def disconnect_handler(request: Request, exc: Exception) -> Response:
     """A client that went away before its body was read: one info line, no traceback (it is not a bug).
 
@@ -211,7 +228,9 @@ async def problem_handler(request: Request, exc: Exception) -> JSONResponse:
     elif isinstance(exc, StarletteHTTPException):
         problem = Problem(exc.status_code, f"http-{exc.status_code}", str(exc.detail), str(exc.detail))
         response = problem.response()
-        response.headers.update(exc.headers or {})  # e.g. Allow on 405
+        response.headers.update(exc.headers or {})
+        if exc.status_code == 405:  # Starlette names the methods of one route only; a path may have several
+            response.headers["Allow"] = allowed_methods(request)
         return response
     else:
         problem = problem_from_exception(exc)

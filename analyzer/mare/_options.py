@@ -17,7 +17,7 @@ from typing import Any, Mapping
 from ..errors import InvalidInput, LimitExceeded
 from ..model._exact import parse_integer, parse_number
 from ..model._pointer import json_pointer
-from ..model._request import option_group
+from ..model._request import OPTION_KEYS, option_group
 from ..model._types import MarkovChannel, Packet, Request, packets_of
 from ._phat import max_horizon
 
@@ -32,7 +32,7 @@ MAX_LMI_ROWS = 200
 MAX_FLOAT_EXPONENT = 30
 MAX_FLOAT_ENTRY = Fraction(10) ** MAX_FLOAT_EXPONENT
 
-_KEYS = ("tolerance", "horizon", "grid", "arrival_probability", "trace_target")
+_KEYS = OPTION_KEYS["bounds"]
 _WHERE = "/options/bounds"
 
 

@@ -34,13 +34,13 @@ HANG_GUARD_S = 20.0
 class ThreadServer:
     """Uvicorn with kfio's app and guard, in a thread, on a free port of 127.0.0.1."""
 
-    def __init__(self, settings: Settings) -> None:
+    def __init__(self, settings: Settings, log_level: str = "info") -> None:
         config = uvicorn.Config(
             create_app(settings),
             host="127.0.0.1",
             port=0,
             loop="asyncio",
-            log_level="info",
+            log_level=log_level,
             **uvicorn_options(settings),
         )
         self.server = uvicorn.Server(config)
