@@ -21,4 +21,8 @@ USER kfio
 EXPOSE 8000
 HEALTHCHECK --interval=30s --timeout=3s --start-period=30s --retries=3 \
     CMD ["python", "-c", "import urllib.request; urllib.request.urlopen('http://127.0.0.1:8000/healthz', timeout=2)"]
+# Inside the container every name is trusted: the host name clients use is only known where the
+# container is published.  A deployment should name it, e.g. -e KFIO_TRUSTED_HOSTS=kfio.example.org
+# (any other Host header is then 421), which also keeps DNS-rebinding pages out (docs/service.md).
+ENV KFIO_TRUSTED_HOSTS="*"
 CMD ["kfio", "serve", "--host", "0.0.0.0", "--port", "8000"]

@@ -22,6 +22,9 @@ from kfio.model._limits import Limits
 
 from .watchdog import DEFAULT_MEMORY_MB, MAX_MEMORY_MB
 
+#: The names a local server answers for unless ``KFIO_TRUSTED_HOSTS`` says otherwise (:mod:`kfio.service.host_check`).
+LOOPBACK_HOSTS = "localhost,127.0.0.1,[::1]"
+
 
 def _default_workers() -> int:
     return max(1, min(4, os.cpu_count() or 1))
@@ -83,6 +86,10 @@ class Settings(BaseSettings):
     max_connections:
         Open connections at most (lowered to fit the descriptor limit); one
         more is answered 503 at once.
+    trusted_hosts:
+        Comma-separated host names the server answers for (``*.example.org``
+        for subdomains, ``*`` for any); any other ``Host`` is answered 421
+        (:mod:`kfio.service.host_check`, against DNS rebinding).
     """
 
     model_config = SettingsConfigDict(env_prefix="KFIO_", frozen=True, extra="ignore", allow_inf_nan=False)
@@ -113,6 +120,7 @@ class Settings(BaseSettings):
     body_timeout_s: float = Field(60.0, gt=0, le=3600)
     keep_alive_s: float = Field(5.0, gt=0, le=600)
     max_connections: int = Field(1000, ge=1, le=100_000)
+    trusted_hosts: str = Field(LOOPBACK_HOSTS, max_length=4096, pattern=r"[^\s,]")  # at least one name
 
     def memory_bytes(self) -> int | None:
         """:attr:`memory_mb` in bytes, ``None`` for no limit."""

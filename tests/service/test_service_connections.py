@@ -220,3 +220,11 @@ def test_out_of_descriptors_is_one_log_line_not_a_flood(caplog: pytest.LogCaptur
     lines = [r for r in caplog.records if "accept" in r.getMessage()]
     assert len(lines) == 1 and "Too many open files" in lines[0].getMessage()
     assert lines[0].exc_info is None
+
+
+def test_a_rebinding_host_name_is_refused_on_the_wire(server: ThreadServer) -> None:
+    with connect(server) as s:
+        s.sendall(b"GET /healthz HTTP/1.1\r\nHost: rebind.evil.example\r\nConnection: close\r\n\r\n")
+        answer = read_until_closed(s)
+    assert answer.startswith(b"HTTP/1.1 421"), answer[:200]
+    assert problem_of(answer)["type"] == "urn:kfio:problem:misdirected-request"
