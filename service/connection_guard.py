@@ -13,8 +13,11 @@ process's descriptors (then ``/healthz`` stops answering too).
 * **Body deadline** (``KFIO_BODY_TIMEOUT_S``): the body must be complete this
   long after the headers.
 * **Connection cap** (``KFIO_MAX_CONNECTIONS``, lowered to fit the process's
-  descriptor limit): a connection past it is answered ``503 busy`` at once and
-  closed, without reading its request.
+  descriptor limit): a new connection past it takes the place of the oldest
+  connection that has not sent its request's headers yet (that one gets
+  ``408``); when every connection has, the new one is answered ``503 busy`` at
+  once and closed, without reading its request.  So clients that hold
+  connections without sending requests cannot lock out the ones that do.
 
 A deadline that passes before the response has started is answered ``408``
 (problem+json, ``Connection: close``); the connection is closed either way.
@@ -118,6 +121,8 @@ class Guard:
         self.max_connections = max_connections
         self.open = 0
         self.log = RateLimitedLog()
+        #: Connections still waiting for a request's headers, oldest first (a dict as an ordered set).
+        self.waiting: dict[Any, None] = {}
 
 
 def guarded_protocol(base: type[asyncio.Protocol], guard: Guard) -> type[asyncio.Protocol]:
@@ -135,6 +140,8 @@ def guarded_protocol(base: type[asyncio.Protocol], guard: Guard) -> type[asyncio
         _waiting_for: str | None = None
 
         def connection_made(self, transport: asyncio.BaseTransport) -> None:
+            if guard.open >= guard.max_connections and guard.waiting:
+                next(iter(guard.waiting))._evict()  # the oldest connection still owing its headers makes room
             if guard.open >= guard.max_connections:
                 self._refused = True
                 self.transport = transport
@@ -194,16 +201,33 @@ def guarded_protocol(base: type[asyncio.Protocol], guard: Guard) -> type[asyncio
             self._disarm()
             self._waiting_for = what
             self._deadline = self.loop.call_later(seconds, self._expired, what, seconds)
+            if what == "headers":
+                guard.waiting[self] = None
 
         def _disarm(self) -> None:
             if self._deadline is not None:
                 self._deadline.cancel()
             self._deadline = None
             self._waiting_for = None
+            guard.waiting.pop(self, None)
+
+        def _evict(self) -> None:
+            """Close this connection, which owes its request's headers, to make room for a new one."""
+            self._disarm()
+            if self._counted:  # counted out now: the new connection takes its place at once
+                guard.open -= 1
+                self._counted = False
+            guard.log.note("connection closed: it had sent no complete request when the connection cap was reached")
+            detail = (
+                "the request's headers had not arrived when the server, at its connection cap, needed the connection"
+            )
+            self.transport.write(raw_problem(408, "request-timeout", "Request timeout", detail))
+            self.transport.close()
 
         def _expired(self, what: str, seconds: float) -> None:
             self._deadline = None
             self._waiting_for = None
+            guard.waiting.pop(self, None)
             if self.transport is None or self.transport.is_closing():
                 return
             guard.log.note(f"connection closed: request {what} not received within {seconds:g} s")

@@ -175,22 +175,45 @@ def test_healthz_answers_while_slow_clients_are_held(server: ThreadServer) -> No
     assert httpx.get(f"{server.url}/healthz", timeout=HANG_GUARD_S).json() == {"status": "ok"}
 
 
-def test_connections_past_the_cap_get_503_at_once(server: ThreadServer) -> None:
-    # opened together, well within the header deadline: the first MAX_CONNECTIONS are held, the rest refused
-    held = [connect(server) for _ in range(MAX_CONNECTIONS + 3)]
+def test_at_the_cap_a_new_client_displaces_the_oldest_idle_one(server: ThreadServer) -> None:
+    # opened together, well within the header deadline: MAX_CONNECTIONS connections that send nothing
+    idle = [connect(server) for _ in range(MAX_CONNECTIONS)]
     try:
-        refusals = []
-        for s in held[MAX_CONNECTIONS:]:
-            s.settimeout(HANG_GUARD_S)
-            refusals.append(s.recv(65536))
-        # accepted, they waited for a request until the header deadline
-        assert all(read_until_closed(s).startswith(b"HTTP/1.1 408") for s in held[:MAX_CONNECTIONS])
+        with connect(server) as s:  # one more, with a request: it gets its answer
+            s.sendall(b"GET /healthz HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n")
+            answer = read_until_closed(s)
+        assert answer.startswith(b"HTTP/1.1 200") and answer.endswith(b'{"status":"ok"}'), answer[:300]
+        # the connections owing their headers were closed with a 408, the oldest first, or at their deadline
+        answers = [read_until_closed(c) for c in idle]
     finally:
-        for s in held:
-            s.close()
-    for refused in refusals:
-        assert refused.startswith(b"HTTP/1.1 503"), refused[:200]
-        assert problem_of(refused)["type"] == "urn:kfio:problem:busy"
+        for c in idle:
+            c.close()
+    assert all(a.startswith(b"HTTP/1.1 408") for a in answers), answers
+
+
+def test_at_the_cap_with_every_request_under_way_a_new_connection_gets_503(server: ThreadServer) -> None:
+    # each held connection has sent its headers and owes its body: none can be displaced
+    head = (
+        b"POST /v1/analyze HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: application/json\r\nContent-Length: 50\r\n\r\n"
+    )
+    held = [connect(server) for _ in range(MAX_CONNECTIONS)]
+    try:
+        for c in held:
+            c.sendall(head)
+        refused = b""
+        for _ in range(50):  # bounded: the server has read every head after a moment
+            time.sleep(0.02)
+            with connect(server) as s:
+                refused = read_until_closed(s)
+            if refused.startswith(b"HTTP/1.1 503"):
+                break
+        answers = [read_until_closed(c) for c in held]  # each is cut off at the body deadline
+    finally:
+        for c in held:
+            c.close()
+    assert refused.startswith(b"HTTP/1.1 503"), refused[:200]
+    assert problem_of(refused)["type"] == "urn:kfio:problem:busy"
+    assert all(a.startswith(b"HTTP/1.1 408") and b"body" in a for a in answers), answers
 
 
 def test_malformed_http_is_a_problem(server: ThreadServer) -> None:
