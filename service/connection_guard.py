@@ -140,7 +140,7 @@ def guarded_protocol(base: type[asyncio.Protocol], guard: Guard) -> type[asyncio
         _waiting_for: str | None = None
 
         def connection_made(self, transport: asyncio.BaseTransport) -> None:
-            if guard.open >= guard.max_connections and guard.waiting:
+            while guard.open >= guard.max_connections and guard.waiting:
                 next(iter(guard.waiting))._evict()  # the oldest connection still owing its headers makes room
             if guard.open >= guard.max_connections:
                 self._refused = True
@@ -217,6 +217,8 @@ def guarded_protocol(base: type[asyncio.Protocol], guard: Guard) -> type[asyncio
             if self._counted:  # counted out now: the new connection takes its place at once
                 guard.open -= 1
                 self._counted = False
+            if self.transport.is_closing():
+                return
             guard.log.note("connection closed: it had sent no complete request when the connection cap was reached")
             detail = (
                 "the request's headers had not arrived when the server, at its connection cap, needed the connection"
