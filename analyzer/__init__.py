@@ -32,6 +32,7 @@ _LAZY = {
     "bounds": "._api",
     "simulate": "._api",
     "expected_covariance": "._api",
+    "loop": ".loop",
     "build_request": "._api",
     "request_dict": "._api",
     "bernoulli": ".model._channels",
@@ -94,7 +95,10 @@ def __getattr__(name: str) -> Any:
     module = _LAZY.get(name)
     if module is None:
         raise AttributeError(f"module 'kfio' has no attribute {name!r}")
-    value = getattr(importlib.import_module(module, __name__), name)
+    if name == "loop":  # the package kfio.loop, which is callable: kfio.loop(...) is kfio.loop.loop(...)
+        value = importlib.import_module(module, __name__)
+    else:
+        value = getattr(importlib.import_module(module, __name__), name)
     globals()[name] = value
     return value
 
@@ -134,6 +138,7 @@ __all__ = [
     "expected_covariance",
     "gilbert_elliott",
     "load_json",
+    "loop",
     "load_request",
     "markov",
     "parse_number",

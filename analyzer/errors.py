@@ -3,7 +3,8 @@
 Every error subclasses :class:`AnalyzerError` *and* a built-in, so callers can
 catch either.  Input errors carry a JSON pointer (``field``) into the request
 and the rule that was broken; the CLI maps them to exit code 2 and the HTTP
-service to status 422.
+service to status 422.  A missing optional package is not bad input: it is
+:class:`MissingDependency` (CLI exit code 9, HTTP status 503).
 """
 
 from __future__ import annotations
@@ -48,3 +49,28 @@ class BudgetExceeded(AnalyzerError, TimeoutError):
 
 class NumericalFailure(AnalyzerError, ArithmeticError):
     """A numerical step could not be completed or certified."""
+
+
+class MissingDependency(AnalyzerError, ImportError):
+    """A package kfio needs for this feature is not installed.
+
+    Not the request's fault, so never "invalid input": the CLI exits with
+    code 9 and the HTTP service answers 503.  The message names the package
+    and a command that works from where the user is.
+
+    Parameters
+    ----------
+    package:
+        The distribution name, e.g. ``"dask[distributed]"``.
+    feature:
+        What needs it, e.g. ``"the Dask sweep engine"``.
+    hint:
+        What to do instead, e.g. ``"or run kfio sweep --serial"``.
+    """
+
+    def __init__(self, package: str, feature: str, hint: str = "") -> None:
+        self.package = package
+        self.feature = feature
+        self.hint = hint
+        text = f"{feature} needs the package {package!r}, which is not installed: pip install {package!r}"
+        super().__init__(f"{text} ({hint})" if hint else text)

@@ -27,7 +27,7 @@ def build_parser() -> argparse.ArgumentParser:
         description="Stability analyzer for Kalman filters with lossy measurement channels.",
         epilog="Exit codes: 0 stable/ok, 1 unstable, 2 invalid input, 3 boundary, 4 budget exceeded, "
         "5 numerical failure, 6 cannot serve (kfio serve), 8 some sweep points failed (kfio sweep), "
-        "70 internal error, 141 output pipe closed by its reader.",
+        "9 a package the feature needs is not installed, 70 internal error, 141 output pipe closed by its reader.",
     )
     parser.add_argument("--version", action="version", version=f"kfio {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")

@@ -165,7 +165,7 @@ class Dispatcher:
             outcome = await self.pool.run((job, body, self.settings, dict(params)), budget)
         except PoolBusy as exc:
             if not isinstance(exc, PoolShuttingDown):
-                await self._off_loop(self._validate, body)  # an invalid body is told so, not to retry
+                await self._off_loop(self._validate, body, job)  # an invalid body is told so, not to retry
             raise ProblemError(problem_from_exception(exc)) from None
         except Exception as exc:  # noqa: BLE001 - pool failures are problems too
             raise ProblemError(problem_from_exception(exc)) from None
@@ -175,9 +175,14 @@ class Dispatcher:
         self.cache.put(key, answer)
         return answer
 
-    def _validate(self, body: bytes) -> None:
-        """Raise the 422 problem of an invalid ``body`` (nothing if it is valid)."""
+    def _validate(self, body: bytes, job: str = "analyze") -> None:
+        """Raise the 422 problem of an invalid ``body`` (nothing if it is valid); a loop body is a loop request."""
         try:
-            load_request(body, self.settings.limits())
+            if job == "loop":
+                from kfio.loop import load_loop_request
+
+                load_loop_request(body, self.settings.limits())
+            else:
+                load_request(body, self.settings.limits())
         except InvalidInput as exc:
             raise ProblemError(problem_from_exception(exc)) from None

@@ -7,7 +7,7 @@ import os
 import sys
 from typing import TYPE_CHECKING, Any, Callable, TextIO
 
-from kfio.errors import BudgetExceeded, InvalidInput, NumericalFailure
+from kfio.errors import BudgetExceeded, InvalidInput, MissingDependency, NumericalFailure
 
 if TYPE_CHECKING:  # the analyzer is imported when a command runs, not for `kfio --help`
     from kfio import Budget, Request
@@ -163,6 +163,9 @@ def run_guarded(body: Callable[[], int]) -> int:
     except NumericalFailure as exc:
         emit(f"kfio: numerical failure: {exc}", sys.stderr)
         return exitcodes.NUMERICAL
+    except MissingDependency as exc:
+        emit(f"kfio: missing dependency: {exc}", sys.stderr)
+        return exitcodes.MISSING_DEPENDENCY
     except KeyboardInterrupt:
         emit("kfio: interrupted", sys.stderr)
         return 130

@@ -88,6 +88,49 @@ def simulate_job(body: bytes, settings: Settings, budget: Budget, params: Mappin
     return report_json(simulate(parse(body, settings), budget=budget))
 
 
+def simulate_long_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[str, Any]) -> JobOutput:
+    """``POST /v1/jobs/simulate``: Monte Carlo error bands with the job lane's larger work cap
+    (:meth:`kfio.service.settings.Settings.job_simulation_limits`)."""
+    from kfio.simulation._simulate import simulate
+
+    request = parse(body, settings)
+    return report_json(simulate(request, budget=budget, limits=job_simulation_limits(request, settings)))
+
+
+def job_simulation_limits(request: Request, settings: Settings) -> Any:
+    """The job lane's simulation limits, where the request names its ``trajectories``.
+
+    Without it the default count is the synchronous one (it is fitted to the
+    synchronous cap), so a job's report equals its synchronous twin's byte for byte.
+    """
+    from kfio.simulation._setup import DEFAULT_SIMULATION_LIMITS
+
+    sim = request.options.get("simulate")
+    if isinstance(sim, Mapping) and "trajectories" in sim:
+        return settings.job_simulation_limits()
+    return DEFAULT_SIMULATION_LIMITS
+
+
+def check_job_request(kind: str, body: bytes, settings: Settings) -> None:
+    """Validate and size a job's request as its job will, before it is queued (runs in a thread).
+
+    The request is validated (:func:`kfio.load_request`) and, for ``simulate``,
+    its options are sized against the job's limits, so a job that would be
+    refused is a 422 at once, as on the synchronous endpoint.
+    """
+    request = parse(body, settings)
+    if kind == "simulate":
+        from kfio.simulation._setup import parse_options
+
+        parse_options(request, job_simulation_limits(request, settings))
+
+
+def check_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[str, Any]) -> JobOutput:
+    """:func:`check_job_request` for the job kind ``params["kind"]``, in a worker of the synchronous lane."""
+    check_job_request(str(params.get("kind")), body, settings)
+    return b"", JSON
+
+
 def _plot_job(name: str) -> JobFn:
     def job(body: bytes, settings: Settings, budget: Budget, params: Mapping[str, Any]) -> JobOutput:
         from . import plots
@@ -106,15 +149,25 @@ def _sweep_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[
     return sweep_job(body, settings, budget, params)
 
 
+def _loop_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[str, Any]) -> JobOutput:
+    """``kfio loop``: the closed loop's exact verdict, cost and critical probabilities (:mod:`kfio.loop`)."""
+    from kfio.loop import analyze_loop, load_loop_request
+
+    return report_json(analyze_loop(load_loop_request(body, settings.limits())))
+
+
 JOBS: dict[str, JobFn] = {
     "analyze": analyze_job,
     "bounds": bounds_job,
     "simulate": simulate_job,
+    "simulate-job": simulate_long_job,
+    "check-job": check_job,
     "plot-phase-transition": _plot_job("phase_transition"),
     "plot-region": _plot_job("region"),
     "plot-simulation": _plot_job("simulation"),
     "sweep": _sweep_job,
     "plot-ge-region": _plot_job("ge_region"),
+    "loop": _loop_job,
 }
 
 

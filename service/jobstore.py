@@ -30,7 +30,9 @@ Bounds and lifetime
 -------------------
 At most ``max_jobs`` jobs wait; beyond that :meth:`JobStore.submit` raises a
 429 problem.  At most ``job_retention`` finished jobs are kept, the oldest
-forgotten first (then their id answers 404).  Jobs live in the server's
+forgotten first (then their id answers 404), and their results hold at most
+``job_retention_bytes`` (the first finished forgotten first; the newest is
+kept whatever its size).  Jobs live in the server's
 memory only: a restart forgets every job (queued and running ones are not
 resumed; their ids answer 404), and a job's worker dies with the server.
 A worker that crashes fails its job with a ``worker-crashed`` problem; the
@@ -266,10 +268,12 @@ class JobStore:
 
     # -- the interface ----------------------------------------------------
 
-    def submit(self, kind: str, body: bytes, params: Mapping[str, Any] | None = None) -> Job:
+    def submit(self, kind: str, body: bytes, params: Mapping[str, Any] | None = None, tree: Any = None) -> Job:
         """Queue a job of ``kind`` on ``body``.
 
-        The body must be JSON (checked here, 422 otherwise); the request itself
+        The body must be JSON (checked here, 422 otherwise) unless the caller
+        has read it already and passes its ``tree`` (a sweep may be JSON Lines:
+        its caller passes ``{"options": ...}``); the request itself
         is validated by the job, whose problem then says what is wrong.  The
         budget is ``job_time_budget_s``, or less if the request asks for less
         with ``options.time_budget_s``; it counts from when the job starts running.
@@ -283,7 +287,8 @@ class JobStore:
         """
         if kind not in self.kinds:
             raise ProblemError(Problem(404, "unknown-job-kind", "Unknown kind of job", f"no job kind {kind!r}"))
-        tree = load_json(body)
+        if tree is None:
+            tree = load_json(body)
         if self._queued >= self.settings.max_jobs:
             raise ProblemError(
                 Problem(
@@ -362,6 +367,7 @@ class JobStore:
             await asyncio.wait([job.task])
             self._settle(job, job.task)
             job.task = None
+            self._evict()  # a result may have pushed the kept results past their bounds
             if job.progress_file is not None:
                 job.progress_file.unlink(missing_ok=True)
 
@@ -404,9 +410,24 @@ class JobStore:
         job.progress = progress
 
     def _evict(self) -> None:
-        finished = [job_id for job_id, job in self._jobs.items() if job.status in FINISHED]
-        for job_id in finished[: max(0, len(finished) - self.settings.job_retention)]:
-            del self._jobs[job_id]
+        """Forget finished jobs, the first finished first, until at most ``job_retention`` are kept
+        and their results hold at most ``job_retention_bytes`` (the newest is kept whatever its size)."""
+        finished = sorted((job for job in self._jobs.values() if job.status in FINISHED), key=_finish_order)
+        kept, held = len(finished), sum(_held_bytes(job) for job in finished)
+        for job in finished[:-1]:  # job_retention >= 1: the newest is never over the count
+            if kept <= self.settings.job_retention and held <= self.settings.job_retention_bytes:
+                break
+            del self._jobs[job.id]
+            kept, held = kept - 1, held - _held_bytes(job)
+
+
+def _finish_order(job: Job) -> float:
+    return job.finished or 0.0
+
+
+def _held_bytes(job: Job) -> int:
+    """What a finished job keeps in memory: its result's bytes (its body was dropped when it finished)."""
+    return len(job.content or b"") + len(job.body)
 
 
 def _iso(t: float | None) -> str | None:
@@ -417,6 +438,7 @@ def _iso(t: float | None) -> str | None:
 BUILTIN_KINDS = (
     worker_kind("analyze"),
     worker_kind("bounds"),
-    worker_kind("simulate", fraction=simulation_fraction),
+    worker_kind("simulate", "simulate-job", fraction=simulation_fraction),
     worker_kind("sweep", fraction=sweep_fraction),
+    worker_kind("loop"),
 )

@@ -28,14 +28,18 @@ import multiprocessing
 import os
 import signal
 import time
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from multiprocessing.connection import Connection
-from typing import Any, Callable
+from typing import Any, Callable, cast
 
 from .threads import one_thread_per_process
 from .watchdog import limit_memory
 
 log = logging.getLogger("kfio.service")
+
+#: Threads of a pool's own for starting, killing and reaping its workers.
+_POOL_THREADS = 2
 
 
 class PoolError(RuntimeError):
@@ -178,7 +182,12 @@ class WorkerPool:
         self.start_timeout_s = start_timeout_s
         self.memory_bytes = memory_bytes
         self.retire = retire
-        self._ctx = multiprocessing.get_context(start_method)
+        # typeshed's BaseContext has no Process; every concrete start method's context does
+        self._ctx = cast(
+            "multiprocessing.context.ForkContext | multiprocessing.context.SpawnContext"
+            " | multiprocessing.context.ForkServerContext",
+            multiprocessing.get_context(start_method),
+        )
         if start_method == "forkserver" and preload:
             self._ctx.set_forkserver_preload(list(preload))
         self._idle: asyncio.Queue[_Worker] | None = None
@@ -193,6 +202,17 @@ class WorkerPool:
         self._draining = False
         self._queued: set[asyncio.Task[Any]] = set()  # tasks waiting for a worker
         self._running: set[asyncio.Task[Any]] = set()  # tasks whose worker computes
+        # Spawning, killing and reaping workers run in threads of the pool's own: never in the
+        # loop's default executor, which request handlers may fill (a full one once held a
+        # replacement back: "replaced: 1" and "alive: 1" for as long as it stayed full).
+        self._threads = ThreadPoolExecutor(_POOL_THREADS, thread_name_prefix="kfio-pool")
+
+    async def _in_thread(self, fn: Callable[..., Any], *args: Any) -> Any:
+        """``fn(*args)`` in one of the pool's own threads (inline once the pool is closed)."""
+        try:
+            return await asyncio.get_running_loop().run_in_executor(self._threads, fn, *args)
+        except RuntimeError:  # the executor was shut down by close(): finish the kill here
+            return fn(*args)
 
     # -- life cycle -------------------------------------------------------
 
@@ -212,15 +232,15 @@ class WorkerPool:
 
     async def _new_worker(self) -> _Worker:
         """A started worker that has said ``"ready"`` (its imports are done)."""
-        worker = await asyncio.to_thread(self._spawn)
+        worker = await self._in_thread(self._spawn)
         try:
             await _readable(worker.conn, self.start_timeout_s)
             hello = worker.conn.recv()
         except (TimeoutError, EOFError, OSError):
-            await asyncio.to_thread(worker.kill)
+            await self._in_thread(worker.kill)
             raise WorkerCrashed(f"a new worker did not become ready (exit code {worker.process.exitcode})") from None
         if hello != "ready":  # pragma: no cover - protocol error
-            await asyncio.to_thread(worker.kill)
+            await self._in_thread(worker.kill)
             raise WorkerCrashed(f"a new worker said {hello!r} instead of 'ready'")
         return worker
 
@@ -236,7 +256,7 @@ class WorkerPool:
             workers = await asyncio.gather(*(self._new_worker() for _ in range(self.size)))
             for worker in workers:
                 if self._closed:
-                    await asyncio.to_thread(worker.kill)
+                    await self._in_thread(worker.kill)
                     continue
                 self._all.add(worker)
                 self._idle.put_nowait(worker)
@@ -274,7 +294,8 @@ class WorkerPool:
         """Kill every worker (they hold no state worth a graceful stop)."""
         self._closed = True
         workers, self._all = list(self._all), set()
-        await asyncio.to_thread(lambda: [w.kill() for w in workers])
+        await self._in_thread(_kill_all, workers)
+        self._threads.shutdown(wait=False)
 
     @property
     def ready(self) -> bool:
@@ -300,12 +321,12 @@ class WorkerPool:
     async def _replace(self, worker: _Worker) -> None:
         self._all.discard(worker)
         self.replaced += 1
-        await asyncio.to_thread(worker.kill)
+        await self._in_thread(worker.kill)
         if self._closed:
             return
         fresh = await self._new_worker()
         if self._closed:
-            await asyncio.to_thread(fresh.kill)
+            await self._in_thread(fresh.kill)
             return
         self._all.add(fresh)
         assert self._idle is not None
@@ -408,7 +429,7 @@ class WorkerPool:
             try:
                 value = worker.conn.recv()
             except (EOFError, OSError):
-                await asyncio.to_thread(worker.process.join, 1.0)  # reap it, for the exit code
+                await self._in_thread(worker.process.join, 1.0)  # reap it, for the exit code
                 code = worker.process.exitcode
                 if self.memory_bytes is not None and code is not None and -code in _MEMORY_SIGNALS:
                     raise WorkerOutOfMemory(
@@ -451,6 +472,11 @@ async def _readable(conn: Connection, timeout: float) -> None:
         loop.remove_reader(fd)
         if not os.get_blocking(fd):  # some event loops (uvloop) leave the fd non-blocking: recv() needs it blocking
             os.set_blocking(fd, True)
+
+
+def _kill_all(workers: list[_Worker]) -> None:
+    for worker in workers:
+        worker.kill()
 
 
 def _log_task_error(task: asyncio.Task[None]) -> None:

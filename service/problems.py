@@ -13,6 +13,7 @@ exception                  status  type (``urn:kfio:problem:...``)
 ``LimitExceeded``          422     ``limit-exceeded``
 ``AssumptionViolation``    422     ``assumption-violation``
 ``NumericalFailure``       422     ``numerical-failure``
+``MissingDependency``      503     ``missing-dependency`` (the deployment lacks a package)
 ``BudgetExceeded``         504     ``budget-exceeded``
 ``PoolTimeout``            504     ``budget-exceeded`` (the worker was killed)
 ``PoolShuttingDown``       503     ``shutting-down`` (with ``Retry-After``)
@@ -42,6 +43,7 @@ from kfio.errors import (
     BudgetExceeded,
     InvalidInput,
     LimitExceeded,
+    MissingDependency,
     NumericalFailure,
 )
 from kfio.model import json_pointer
@@ -178,6 +180,8 @@ def problem_from_exception(exc: BaseException) -> Problem:
         )
     if isinstance(exc, NumericalFailure):
         return Problem(422, "numerical-failure", "Numerical step could not be certified", str(exc))
+    if isinstance(exc, MissingDependency):
+        return Problem(503, "missing-dependency", "A package this feature needs is not installed", str(exc))
     if isinstance(exc, AnalyzerError):
         return Problem(422, "analysis-error", "The analysis could not be completed", str(exc))
     return Problem(

@@ -14,11 +14,15 @@ from __future__ import annotations
 
 import os
 from functools import lru_cache
+from typing import TYPE_CHECKING
 
 from pydantic import Field
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
 from kfio.model._limits import Limits
+
+if TYPE_CHECKING:
+    from kfio.simulation._setup import SimulationLimits
 
 from .watchdog import DEFAULT_MEMORY_MB, MAX_MEMORY_MB
 
@@ -71,11 +75,17 @@ class Settings(BaseSettings):
         answers 429.
     job_retention:
         Finished jobs kept for polling (the oldest are forgotten first).
+    job_retention_bytes:
+        Bytes the kept jobs' results may hold (the first finished are forgotten
+        first; the newest is kept whatever its size).
     dask_scheduler:
         Address of a Dask scheduler (``tcp://HOST:PORT``) that ``POST /v1/sweeps``
         runs its sweeps on; without it a sweep runs in its job-lane worker.
     max_sweep_points:
         Points one ``POST /v1/sweeps`` may have.
+    job_max_trajectory_steps:
+        Cap on a simulation job's ``steps * trajectories`` (a synchronous
+        request has :class:`kfio.SimulationLimits`' 10^6: a job may run an hour).
     header_timeout_s, body_timeout_s:
         A request's headers must arrive within ``header_timeout_s`` of the
         connection opening (or of the request's first byte on a kept-alive
@@ -84,8 +94,9 @@ class Settings(BaseSettings):
     keep_alive_s:
         How long an idle kept-alive connection stays open.
     max_connections:
-        Open connections at most (lowered to fit the descriptor limit); one
-        more is answered 503 at once.
+        Open connections at most (lowered to fit the descriptor limit); past
+        it a new connection displaces the oldest one still owing its headers,
+        or is answered 503.
     trusted_hosts:
         Comma-separated host names the server answers for (``*.example.org``
         for subdomains, ``*`` for any); any other ``Host`` is answered 421
@@ -114,8 +125,10 @@ class Settings(BaseSettings):
     job_time_budget_s: float = Field(3600.0, gt=0, le=86400)
     max_jobs: int = Field(16, ge=0, le=100_000)
     job_retention: int = Field(64, ge=1, le=100_000)
+    job_retention_bytes: int = Field(256 << 20, ge=0, le=1 << 40)
     dask_scheduler: str | None = Field(None, pattern=r"^(tcp|tls|inproc)://[^\s]+$")
     max_sweep_points: int = Field(100_000, ge=1, le=1_000_000)
+    job_max_trajectory_steps: int = Field(100_000_000, ge=1, le=10_000_000_000)
     header_timeout_s: float = Field(10.0, gt=0, le=600)
     body_timeout_s: float = Field(60.0, gt=0, le=3600)
     keep_alive_s: float = Field(5.0, gt=0, le=600)
@@ -125,6 +138,14 @@ class Settings(BaseSettings):
     def memory_bytes(self) -> int | None:
         """:attr:`memory_mb` in bytes, ``None`` for no limit."""
         return self.memory_mb << 20 if self.memory_mb else None
+
+    def job_simulation_limits(self) -> SimulationLimits:
+        """The simulation limits of a job: :attr:`job_max_trajectory_steps` work, the rest as a request's."""
+        from dataclasses import replace
+
+        from kfio.simulation._setup import DEFAULT_SIMULATION_LIMITS
+
+        return replace(DEFAULT_SIMULATION_LIMITS, max_trajectory_steps=self.job_max_trajectory_steps)
 
     def limits(self) -> Limits:
         """The request size limits of this deployment."""

@@ -13,9 +13,54 @@ import dataclasses
 from typing import Any, Mapping
 
 from kfio import Budget
-from kfio.errors import BudgetExceeded, LimitExceeded
+from kfio.errors import BudgetExceeded, InvalidInput
 
+from .problems import Problem, ProblemError
 from .settings import Settings
+
+#: The problem type of a deployment whose settings cannot work (``urn:kfio:problem:server-misconfigured``).
+MISCONFIGURED = "server-misconfigured"
+
+
+def misconfigured(setting: str, why: str) -> ProblemError:
+    """A 503 that blames the deployment's ``setting``, not the client's request."""
+    return ProblemError(
+        Problem(
+            503,
+            MISCONFIGURED,
+            "Server misconfigured",
+            f"the service's setting {setting} does not work: {why}; this is not a fault of the request",
+        )
+    )
+
+
+def dask_missing() -> str | None:
+    """Why the Dask engine cannot run here (``None`` if ``distributed`` is importable)."""
+    import importlib.util
+
+    if importlib.util.find_spec("distributed") is None:
+        return "Dask distributed is not installed (pip install 'kfio[sweep]')"
+    return None
+
+
+#: How long ``kfio serve`` tries to reach ``KFIO_DASK_SCHEDULER`` at start.
+DASK_CONNECT_TIMEOUT_S = 5.0
+
+
+def dask_scheduler_problem(address: str, timeout_s: float | None = None) -> str | None:
+    """Why the Dask scheduler at ``address`` cannot be used (``None`` if a client connects to it)."""
+    missing = dask_missing()
+    if missing is not None:
+        return missing
+    from distributed import Client
+
+    try:
+        client = Client(address, timeout=DASK_CONNECT_TIMEOUT_S if timeout_s is None else timeout_s)
+    except (OSError, TimeoutError) as exc:
+        return f"cannot reach the Dask scheduler at {address}: {exc}"
+    client.close()
+    return None
+
 
 #: The stage name the progress file carries; ``sweep_fraction`` reads the total back from it.
 STAGE = "sweep of {total} points"
@@ -24,14 +69,14 @@ STAGE = "sweep of {total} points"
 def sweep_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[str, Any]) -> tuple[bytes, str]:
     """Run the sweep in ``body`` and answer its table as JSON (:meth:`kfio.sweep.SweepResult.to_dict`)."""
     from kfio.sweep import load_sweep, run_sweep
+    from kfio.sweep._spec import check_points
 
     from .io import dump_json
 
-    spec = load_sweep(body)
-    if spec.size > settings.max_sweep_points:
-        raise LimitExceeded(
-            "/axes", f"the sweep has {spec.size} points; this service runs at most {settings.max_sweep_points}"
-        )
+    spec = load_sweep(body, settings.max_sweep_points)
+    limits = settings.limits()
+    # Here, in the worker, under the job's budget and memory limit: a bad point fails the job (422).
+    check_points(spec, limits, tick=lambda: budget.tick("validating the sweep's points", 0))
     stage = STAGE.format(total=spec.size)
     last = [0]
 
@@ -46,12 +91,20 @@ def sweep_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[s
     remaining = budget.remaining()
     if remaining is not None:
         spec = dataclasses.replace(spec, time_budget_s=min(spec.time_budget_s or remaining, max(0.01, remaining - 1.0)))
-    result = run_sweep(
-        spec,
-        engine="dask" if settings.dask_scheduler else "serial",
-        scheduler=settings.dask_scheduler,
-        progress=progress,
-    )
+    try:
+        result = run_sweep(
+            spec,
+            engine="dask" if settings.dask_scheduler else "serial",
+            scheduler=settings.dask_scheduler,
+            progress=progress,
+            limits=limits,
+            validated=True,
+        )
+    except InvalidInput as exc:
+        # the engine and the scheduler are the deployment's choice here, not the client's
+        if settings.dask_scheduler and exc.field in ("/engine", "/scheduler"):
+            raise misconfigured("KFIO_DASK_SCHEDULER", exc.rule) from None
+        raise
     return dump_json(result.to_dict()).encode("utf-8"), "application/json"
 
 

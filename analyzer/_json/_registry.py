@@ -44,9 +44,14 @@ VIEWS: dict[str, str] = {
     "simulation._finite_horizon.FiniteHorizonReport": "_simulation:finite_horizon_report",
     "simulation._stationary.StationaryReport": "_simulation:stationary_report",
     "simulation._outage_target.OutageTarget": "_simulation:outage_target",
+    # kfio loop (Schenato, Sinopoli, Franceschetti, Poolla and Sastry 2007; Costa, Fragoso and Marques 2005)
+    "loop._report.LoopReport": "_loop:loop_report",
     # kfio sweep
     "sweep._engine.SweepResult": "_sweep:sweep_result",
     "sweep._engine.SweepRow": "_sweep:sweep_row",
+    # kfio check
+    "check._run.CheckResult": "_check:check_result",
+    "check._run.Outcome": "_check:outcome",
 }
 
 _ROOT = __name__.split(".")[0]  # "kfio"

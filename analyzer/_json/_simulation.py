@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ..simulation._setup import PERCENTILES, matrix_or_none
-from ..simulation._simulate import Z95
+from ..simulation._stationary import Z95
 from ._stability import as_float
 
 if TYPE_CHECKING:

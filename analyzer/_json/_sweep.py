@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
+from ..sweep._rows import coordinate_column
+
 if TYPE_CHECKING:
     from ..sweep._engine import SweepResult, SweepRow
 
@@ -14,8 +16,8 @@ def _coordinate(v: Any) -> Any:
 
 
 def sweep_row(r: SweepRow) -> dict[str, Any]:
-    """One finished point: its index, its coordinates (exact value texts) and the command's key fields."""
-    return {"index": r.index, **{k: _coordinate(v) for k, v in r.coordinates.items()}, **r.fields}
+    """One finished point: its index, its coordinates (``axis:<name>``, exact value texts) and the key fields."""
+    return {"index": r.index, **{coordinate_column(k): _coordinate(v) for k, v in r.coordinates.items()}, **r.fields}
 
 
 def sweep_result(s: SweepResult) -> dict[str, Any]:

@@ -10,7 +10,7 @@ class Limits:
     """Upper bounds on request sizes.
 
     The defaults are the ones promised in the README; a deployment may pass
-    its own instance to :func:`analyzer.parse_request`.
+    its own instance to :func:`kfio.parse_request`.
     """
 
     max_states: int = 40

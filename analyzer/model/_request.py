@@ -88,7 +88,7 @@ def parse_matrix(obj: Any, where: str, name: str, limits: Limits, max_rows: int,
 #: Largest Hadamard bound (bits) of the integer congruence ``D m D`` for which :func:`is_psd` runs
 #: its exact route.  Every intermediate of the elimination is a ratio of minors of that matrix, so
 #: this bounds the work by size, not by time: at the limit a near-singular 40 x 40 matrix takes
-#: about 2 s of CPU on a loaded 2-core machine (bench/bench_validation.py, docs/hardening.md).
+#: about 2 s of CPU on a loaded 2-core machine (bench/bench_validation.py, docs/input-limits.md).
 MAX_EXACT_PSD_BITS = 1 << 14
 
 

@@ -89,8 +89,8 @@ class MarkovChannel:
         return 1 << self.order
 
     @property
-    def recovery_after_losses(self) -> Fraction:
-        """``P(g = 0 | nu zeros)``: Rohr, Marelli and Fu (2014), Lemma 2."""
+    def loss_after_losses(self) -> Fraction:
+        """``P(g = 0 | nu zeros)``, the probability of another loss after ``order`` losses: Rohr, Marelli and Fu (2014), Lemma 2."""
         return 1 - self.table[0]
 
     @property

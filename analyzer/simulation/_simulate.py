@@ -62,13 +62,12 @@ from ._setup import (
     parse_options,
     sim_system,
 )
-from ._stationary import StationaryReport, parse_thresholds, stationary_report, verdict_headline
+from ._stationary import Z95, StationaryReport, parse_thresholds, stationary_report, verdict_headline
 
 #: Seconds the simulation may spend on Theorem 1's report (tail exponent, growth rate) before going without it.
 EXACT_ANALYSIS_S = 5.0
 
 #: Two-sided 95% quantile of the standard normal distribution.
-Z95 = 1.959963984540054
 
 
 @dataclass(frozen=True, eq=False)
@@ -290,8 +289,11 @@ def run_monte_carlo(
     chan = JointChannel.from_packets(sim.packets)
     M, T = opts.trajectories, opts.steps
     hist = chan.sample_initial(opts.initial_channel, M, rng)
-    P0 = np.broadcast_to(opts.P0, (M, sim.n, sim.n)).copy()
-    run: _PackedRun | _MatrixRun = _PackedRun(step, P0) if isinstance(step, PackedRiccatiStep) else _MatrixRun(step, P0)
+    # The packed run keeps only vech(P) (one packed copy of the batch): the full P0 stays a broadcast view.
+    P0 = np.broadcast_to(opts.P0, (M, sim.n, sim.n))
+    run: _PackedRun | _MatrixRun = (
+        _PackedRun(step, P0) if isinstance(step, PackedRiccatiStep) else _MatrixRun(step, P0.copy())
+    )
     alive = np.ones(M, dtype=bool)
     ranks = order_indices(M, np.array(PERCENTILES) / 100.0)
     mean, std = np.empty(T + 1), np.empty(T + 1)
@@ -322,25 +324,34 @@ def run_monte_carlo(
                 run.freeze(~alive)  # keeps NaN and overflow out of later arithmetic
             diverged[t + 1] = M - int(alive.sum())
             mean[t + 1], std[t + 1], pct[:, t + 1] = _record(tr, alive, ranks)
+        # One full (M, n, n) batch at a time beside the packed one: the predictors' summaries
+        # are taken and the batch dropped before the filtered batch is unpacked.
         P = run.predictors()
+        final_mean = P.mean(axis=0) if alive.all() else None
+        final_traces = np.where(alive, traces(P), np.inf)
+        del P
         if filtered:
             # the arrivals at T, drawn after every draw the predictor used: same seed, same predictor output
             PfT = run.filtered(draw()[1])
-            fmean[T], fstd[T], fpct[:, T] = _record(traces(PfT), alive, ranks)
+            ftraces = traces(PfT)
+            final_mean_filtered = PfT.mean(axis=0) if alive.all() else None
+            del PfT
+            final_filtered_traces = np.where(alive, ftraces, np.inf)
+            fmean[T], fstd[T], fpct[:, T] = _record(ftraces, alive, ranks)
     stats = TraceStatistics(mean=mean, std=std, percentiles=pct, diverged=diverged, trajectories=M)
     out = MonteCarloRun(
         stats=stats,
-        final_mean_covariance=P.mean(axis=0) if alive.all() else None,
+        final_mean_covariance=final_mean,
         arrival_rate=arrivals / (M * T),
-        final_traces=np.where(alive, traces(P), np.inf),
+        final_traces=final_traces,
     )
     if not filtered:
         return out
     return dataclasses.replace(
         out,
         filtered_stats=TraceStatistics(mean=fmean, std=fstd, percentiles=fpct, diverged=diverged, trajectories=M),
-        final_mean_filtered_covariance=PfT.mean(axis=0) if alive.all() else None,
-        final_filtered_traces=np.where(alive, traces(PfT), np.inf),
+        final_mean_filtered_covariance=final_mean_filtered,
+        final_filtered_traces=final_filtered_traces,
     )
 
 
@@ -363,8 +374,9 @@ class _PackedRun:
         return self.kernel.unpack(self.h)
 
     def filtered(self, mask: np.ndarray) -> np.ndarray:
-        """The filtered covariances of the batch now, for the arrivals ``mask``."""
-        return self.kernel.unpack(self.kernel.update_packed(self.h, mask))
+        """The filtered covariances of the batch now, for the arrivals ``mask`` (the run's packed batch is spent)."""
+        self.kernel.advance(self.h, mask, self.work, posterior=True)  # in place: the last use of the batch
+        return self.kernel.unpack(self.h)
 
 
 class _MatrixRun:

@@ -31,7 +31,8 @@ a whole pass leaves the front unchanged.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
@@ -323,59 +324,90 @@ def _hyperplanes(R: np.ndarray, need: np.ndarray, budget: Budget, margins: Margi
     """
     B, n, k = R.shape
     real = not np.iscomplexobj(R)
-    # first row of the window -> parts (owner, rows held before the window, rows picked, W on the window)
-    windows: dict[int, list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]] = {
-        0: [(np.arange(B), np.zeros(B, dtype=int), np.zeros((B, 0), dtype=int), R)]
+    # first row of the window -> the prefixes whose window starts there
+    windows: dict[int, list[_Prefixes]] = {
+        0: [_Prefixes(np.arange(B), np.zeros(B, dtype=int), np.zeros((B, 0), dtype=int), R)]
     }
     out: list[np.ndarray | None] = [None] * B
     for level in range(k):
-        nxt: dict[int, list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]] = {}
+        nxt: dict[int, list[_Prefixes]] = {}
         for lo in sorted(windows):
-            o_all, hb_all, picked_all, W_all = (np.concatenate(q) for q in zip(*windows[lo]))
-            for s in range(0, o_all.size, _CHUNK):
-                o, hb, picked, W = (x[s : s + _CHUNK] for x in (o_all, hb_all, picked_all, W_all))
-                budget.tick("sigma: front proof", max(1, o.size * W.shape[1] // 4096))
+            every = _Prefixes.concat(windows[lo])
+            for s in range(0, every.owner.size, _CHUNK):
+                p = every.chunk(s, s + _CHUNK)
+                owner, W = p.owner, p.W
+                budget.tick("sigma: front proof", max(1, owner.size * W.shape[1] // 4096))
                 size = np.sqrt(_squares(W))
                 spanned = margins.record(size)
-                held = hb + np.count_nonzero(spanned, axis=1)
+                held = p.held_before + np.count_nonzero(spanned, axis=1)
                 if level == k - 1:  # W is one column: the rows on each hyperplane
-                    for c in np.flatnonzero(held >= need[o]):
-                        if out[o[c]] is None:  # the normal of the k - 1 picked rows
-                            out[o[c]] = np.linalg.svd(R[o[c], picked[c]])[2][-1].conj()
+                    for c in np.flatnonzero(held >= need[owner]):
+                        if out[owner[c]] is None:  # the normal of the k - 1 picked rows
+                            out[owner[c]] = np.linalg.svd(R[owner[c], p.picked[c]])[2][-1].conj()
                     continue
                 after = ~spanned
                 cum = np.cumsum(after, axis=1)
-                alive = held + cum[:, -1] >= need[o]
+                alive = held + cum[:, -1] >= need[owner]
                 if W.shape[2] == 2 and real:
                     # The hyperplanes through a prefix with a plane of normals hold its
                     # span plus one class of parallel projections: count the largest.
-                    alive[alive] &= held[alive] + _most_parallel(W[alive], after[alive], margins.tol) >= need[o[alive]]
+                    alive[alive] &= (
+                        held[alive] + _most_parallel(W[alive], after[alive], margins.tol) >= need[owner[alive]]
+                    )
                 # A child adding e holds the spanned rows, e, and at most the others after e.
-                room = (held + 1 + cum[:, -1] - need[o])[:, None] >= cum
-                b, j = np.nonzero(alive[:, None] & after & room)
-                if b.size == 0:
+                room = (held + 1 + cum[:, -1] - need[owner])[:, None] >= cum
+                parent, e = np.nonzero(alive[:, None] & after & room)
+                if parent.size == 0:
                     continue
-                order = np.argsort(j, kind="stable")
-                b, j = b[order], j[order]
-                child_hb = hb[b] + np.cumsum(spanned, axis=1)[b, j] + 1
-                child_picked = np.column_stack([picked[b], lo + j])
-                child_W = _reflect_out(W[b], W[b, j] / size[b, j][:, None])
-                cuts = np.flatnonzero(np.diff(j)) + 1
-                for first, stop in zip(np.concatenate([[0], cuts]), np.concatenate([cuts, [j.size]])):
-                    jj = int(j[first])
+                order = np.argsort(e, kind="stable")
+                parent, e = parent[order], e[order]
+                children = _Prefixes(
+                    owner[parent],
+                    p.held_before[parent] + np.cumsum(spanned, axis=1)[parent, e] + 1,
+                    np.column_stack([p.picked[parent], lo + e]),
+                    _reflect_out(W[parent], W[parent, e] / size[parent, e][:, None]),
+                )
+                cuts = np.flatnonzero(np.diff(e)) + 1
+                for first, stop in zip(np.concatenate([[0], cuts]), np.concatenate([cuts, [e.size]])):
+                    row = int(e[first])  # the row the children of this run added, in window coordinates
                     # A child whose window is empty (e the last row) adds no row after e: its
                     # hyperplane holds no more rows than span(prefix) + r_t, r_t an earlier row outside it.
-                    if jj + 1 < W.shape[1]:
-                        nxt.setdefault(lo + jj + 1, []).append(
-                            (
-                                o[b[first:stop]],
-                                child_hb[first:stop],
-                                child_picked[first:stop],
-                                child_W[first:stop, jj + 1 :],
-                            )
-                        )
+                    if row + 1 < W.shape[1]:
+                        nxt.setdefault(lo + row + 1, []).append(children.chunk(first, stop, window_from=row + 1))
         windows = nxt
     return out
+
+
+@dataclass(frozen=True)
+class _Prefixes:
+    """Prefixes of greedy bases in :func:`_hyperplanes` that share one window, as parallel arrays.
+
+    ``owner[i]`` is the ``b`` of ``R[b]`` prefix ``i`` belongs to;
+    ``held_before[i]`` counts its rows spanned before the window;
+    ``picked[i]`` lists the rows it picked (its greedy basis so far);
+    ``W[i]`` holds the window's rows in an orthonormal basis of the vectors
+    the prefix annihilates (``|W[i, t]|`` is row ``t``'s distance from the
+    prefix's span).
+    """
+
+    owner: np.ndarray
+    held_before: np.ndarray
+    picked: np.ndarray
+    W: np.ndarray
+
+    @staticmethod
+    def concat(parts: Sequence[_Prefixes]) -> _Prefixes:
+        """One set of prefixes from several that share a window."""
+        return _Prefixes(*(np.concatenate(q) for q in zip(*((x.owner, x.held_before, x.picked, x.W) for x in parts))))
+
+    def chunk(self, start: int, stop: int, window_from: int = 0) -> _Prefixes:
+        """Prefixes ``start:stop``, their window cut to begin at row ``window_from``."""
+        return _Prefixes(
+            self.owner[start:stop],
+            self.held_before[start:stop],
+            self.picked[start:stop],
+            self.W[start:stop, window_from:],
+        )
 
 
 def _squares(W: np.ndarray) -> np.ndarray:
@@ -492,81 +524,133 @@ def threshold(front: Front, side: int, most: tuple[int, int]) -> int | None:
 def prove_front(space: SlotSpace, front: Front, budget: Budget, margins: Margins) -> int:
     """Add to ``front`` until no maximal blind set of a two-group ``space`` beats it; returns the flats checked.
 
+    Runs :class:`FrontProof` (its docstring states the invariant and why the
+    loop ends).  Raises :class:`~kfio.errors.BudgetExceeded` when ``budget``
+    runs out.
+    """
+    return FrontProof(space, front, budget, margins).run()
+
+
+class FrontProof:
+    """The proof that a two-group front is complete, as named state (see the module docstring).
+
     Flats are checked as the walk finds them (largest first within each
     hand-over, after seeding the generic front from the largest flat of
     each rank so far), then all of them largest first until a pass leaves
-    the front as it was, which proves it (see the module docstring); a hit
-    is pushed to the most slots of the other group that ``K(F)`` can zero, so the front, and with it the thresholds and the size
-    the walk needs, rise early.  The count ``B(|F|) + 1`` a flat must reach
-    only rises as the front grows, so a flat that held no vector beyond the
-    front keeps holding none: each is checked once.  When the rows of group
-    1 are those of group 0 times one invertible matrix
-    (:func:`shared_matroid`), both groups have the same flats and one walk
-    serves both.  Raises :class:`~kfio.errors.BudgetExceeded` when
-    ``budget`` runs out.
+    the front as it was; a hit is pushed to the most slots of the other
+    group that ``K(F)`` can zero, so the front, and with it the thresholds
+    and the size the walk needs, rise early.  When the rows of group 1 are
+    those of group 0 times one invertible matrix (:func:`shared_matroid`),
+    both groups have the same flats and one walk serves both.
+
+    State:
+
+    * ``front``: the blind-count vectors found; it only grows (as a lower set).
+    * ``walked[source]``: ``(T, flats)``, the flats of at least ``T`` slots
+      the walk over group ``source`` listed, largest first.
+    * ``passed[side]``: flats of group ``side`` shown to hold no kernel
+      vector zeroing ``B(|F|) + 1`` rows of the other group.
+    * ``largest[side]``, ``seeded``: the largest flat per rank and the rank
+      pairs already offered as generic-front seeds (:func:`seed_generic`).
+    * ``checked``: flats checked so far; ``passes``: the front's size after
+      each pass of :meth:`run`.
+
+    Invariant: every flat in ``passed[side]`` holds no vector beating the
+    current front.  It is kept because the count ``B(|F|) + 1`` a flat must
+    reach only rises as the front grows, so a flat that held none keeps
+    holding none: each flat is checked once.
+
+    Why :meth:`run` ends: a pass in which the front did not change proves
+    it (every threshold held still, each side's list reached down to it,
+    and each of its flats passed), and :meth:`run` returns.  Any other pass
+    added a blind-count vector no earlier vector dominated, so the lower
+    set of the front strictly grew; it lies in the finite grid
+    ``[0, most[0]] x [0, most[1]]``, so at most ``(most[0] + 1) (most[1] + 1)``
+    passes change it.  (A change can lower group 1's threshold below what it
+    checked, since a higher ``T_0`` leaves it more, which is why one pass
+    does not suffice.)
     """
-    n = space.n_phases
-    most = (n - int(front.lower[0]), n - int(front.lower[1]))
-    groups = [group_space(space, g) for g in (0, 1)]
-    M = shared_matroid(groups[0], groups[1], margins)
-    walked: dict[int, tuple[int, FlatList]] = {}
-    passed: dict[int, set[bytes]] = {0: set(), 1: set()}
-    largest: list[dict[int, np.ndarray]] = [{}, {}]
-    seeded: set[bytes] = set()
-    checked = 0
 
-    def served(source: int) -> tuple[int, ...]:
+    def __init__(self, space: SlotSpace, front: Front, budget: Budget, margins: Margins) -> None:
+        self.space, self.front, self.budget, self.margins = space, front, budget, margins
+        n = space.n_phases
+        self.most = (n - int(front.lower[0]), n - int(front.lower[1]))
+        self.groups = [group_space(space, g) for g in (0, 1)]
+        self.shared = shared_matroid(self.groups[0], self.groups[1], margins)
+        self.walked: dict[int, tuple[int, FlatList]] = {}
+        self.passed: dict[int, set[bytes]] = {0: set(), 1: set()}
+        self.largest: list[dict[int, np.ndarray]] = [{}, {}]
+        self.seeded: set[bytes] = set()
+        self.checked = 0
+        self.passes: list[int] = []
+
+    def run(self) -> int:
+        """Pass over both sides until a pass leaves the front unchanged; returns the flats checked."""
+        while True:
+            start = self.front.vectors.copy()
+            for side in (0, 1):
+                T = threshold(self.front, side, self.most)
+                if T is not None:
+                    self.checked += self._check(side, self.flats(side, T))
+            self.passes.append(len(self.front.vectors))
+            if np.array_equal(start, self.front.vectors):
+                return self.checked
+
+    def served(self, source: int) -> tuple[int, ...]:
         """The groups whose flats the walk over ``source`` lists."""
-        return (0, 1) if M is not None else (source,)
+        return (0, 1) if self.shared is not None else (source,)
 
-    def least(source: int) -> int | None:
+    def least(self, source: int) -> int | None:
         """The fewest slots of a flat that some group served by ``source`` must check."""
-        Ts = [t for t in (threshold(front, g, most) for g in served(source)) if t is not None]
+        Ts = [t for t in (threshold(self.front, g, self.most) for g in self.served(source)) if t is not None]
         return min(Ts) if Ts else None
 
+    @staticmethod
     def as_side(side: int, source: int, found: FlatList) -> FlatList:
+        """``found`` (flats of group ``source``) as flats of ``side``: same masks, kernels from ``side``'s rows."""
         if side == source:
             return found
-        return [(mask, None) for mask, _ in found]  # same flats; kernels from this group's rows
+        return [(mask, None) for mask, _ in found]
 
-    def flats(side: int, T: int) -> FlatList:
-        source = 0 if M is not None else side
-        if source not in walked or walked[source][0] > T:
+    def flats(self, side: int, T: int) -> FlatList:
+        """The flats of group ``side`` with at least ``T`` slots, largest first (walked once per lower ``T``)."""
+        source = 0 if self.shared is not None else side
+        if source not in self.walked or self.walked[source][0] > T:
+            want = self.least(source)  # at most T: side is one of the groups served
 
             def on_found(batch: FlatList) -> int | None:
-                # Checked as the walk finds them: a hit raises the front, and with it
-                # the size below which the walk needs no flat.
-                nonlocal checked
-                batch = sorted(batch, key=_largest_first)
-                for g in served(source):
-                    largest_by_rank(batch, space.n_columns, largest[g])
-                seed_generic(space, front, groups, largest, margins, seeded)
-                for g in served(source):
-                    if threshold(front, g, most) is not None:
-                        checked += _check(
-                            space, front, g, as_side(g, source, batch), groups, passed[g], most, budget, margins
-                        )
-                return least(source)
+                return self._on_found(source, batch)
 
-            want = least(source)  # at most T: side is one of the groups served
-            found, kept = big_flats(groups[source], T if want is None else min(T, want), budget, margins, on_found)
+            found, kept = big_flats(
+                self.groups[source], T if want is None else min(T, want), self.budget, self.margins, on_found
+            )
             found.sort(key=_largest_first)
-            walked[source] = (kept, found)
-        return as_side(side, source, walked[source][1])
+            self.walked[source] = (kept, found)
+        return self.as_side(side, source, self.walked[source][1])
 
-    while True:
-        # A pass proves the front when the front did not change during it: then every
-        # threshold held still, each side's list reached down to it, and each of its
-        # flats passed. A change (a hit of the checks or of the walk) can lower group 1's
-        # threshold below what it checked (a higher T_0 leaves it more), so pass again.
-        start = front.vectors.copy()
-        for side in (0, 1):
-            T = threshold(front, side, most)
-            if T is None:
-                continue
-            checked += _check(space, front, side, flats(side, T), groups, passed[side], most, budget, margins)
-        if np.array_equal(start, front.vectors):
-            return checked
+    def _on_found(self, source: int, batch: FlatList) -> int | None:
+        """Check a batch as the walk finds it: a hit raises the front, and with it the size the walk needs."""
+        batch = sorted(batch, key=_largest_first)
+        for g in self.served(source):
+            largest_by_rank(batch, self.space.n_columns, self.largest[g])
+        seed_generic(self.space, self.front, self.groups, self.largest, self.margins, self.seeded)
+        for g in self.served(source):
+            if threshold(self.front, g, self.most) is not None:
+                self.checked += self._check(g, self.as_side(g, source, batch))
+        return self.least(source)
+
+    def _check(self, side: int, flats: FlatList) -> int:
+        return _check(
+            self.space,
+            self.front,
+            side,
+            flats,
+            self.groups,
+            self.passed[side],
+            self.most,
+            self.budget,
+            self.margins,
+        )
 
 
 def _largest_first(flat: tuple[np.ndarray, np.ndarray | None]) -> tuple[int, int]:

@@ -21,7 +21,7 @@ here carries ``"basis": "extension"``.  The tests check it against Liu and Golds
 bounds (it must lie between them), Liu and Goldsmith (2004)'s cases with a known answer, a
 brute-force blind probability, and simulation.
 
-What this module adds to the per-block verdict of :func:`analyzer.analyze`:
+What this module adds to the per-block verdict of :func:`kfio.analyze`:
 
 * :func:`sensor_thresholds`: for each sensor ``s``, the exact critical
   arrival probability given the others,

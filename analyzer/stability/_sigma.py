@@ -641,7 +641,7 @@ def _certify(block: PhaseBlock, checks: list, budget: Budget) -> tuple[bool, str
     return True, f"certified: {len(checks)} rank decisions confirmed in exact arithmetic"
 
 
-def _bernoulli_exponents(space: SlotSpace, mask: np.ndarray, channels: Sequence[MarkovChannel]) -> tuple | None:
+def _unblind_shares(space: SlotSpace, mask: np.ndarray, channels: Sequence[MarkovChannel]) -> tuple | None:
     """``z_g / N = (phases of [0, N0) where g is not in F) / N0`` if all channels are Bernoulli."""
     if any(ch.order != 0 for ch in channels):
         return None
@@ -659,7 +659,7 @@ def _sigma_values(
         sigma = math.prod(float(1 - ch.table[0]) ** float(z) for ch, z in zip(channels, exponents))
         return sigma, sigma**period
     if not found.worst.any():
-        sigma = math.prod(float(ch.recovery_after_losses) for ch in channels)
+        sigma = math.prod(float(ch.loss_after_losses) for ch in channels)
         return sigma, sigma**period
     log_rho = float(_LogRho(channels, space.n_phases, period)(found.worst[None, :])[0])
     return math.exp(log_rho / period), math.exp(log_rho)
@@ -731,7 +731,7 @@ def compute_sigma(block: PhaseBlock, channels: Sequence[MarkovChannel], budget: 
     phase0 = space.mask([(0, g) for g in range(space.n_groups)])
     degenerate = space.rank(phase0, margins) < L
     found = _find_worst(space, channels, period, degenerate, fully_blind, budget, margins)
-    exponents = _bernoulli_exponents(space, found.worst, channels)
+    exponents = _unblind_shares(space, found.worst, channels)
     sigma, rho = _sigma_values(space, found, channels, period, exponents)
     certified, cert_note = _certify(
         block, _exact_checks(space, found, margins, phase0, degenerate, all(ch.order == 0 for ch in channels)), budget

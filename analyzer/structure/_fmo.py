@@ -409,6 +409,18 @@ class _SingleRows:
         return self._cache[rows]
 
 
+def _field_power(K: Any, w: Any, n: int) -> Any:
+    """``w^n`` in the field ``K`` by repeated squaring (exact: the same element as ``n`` products)."""
+    out, base = K.one, w
+    while n:
+        if n & 1:
+            out = out * base
+        n >>= 1
+        if n:
+            base = base * base
+    return out
+
+
 class _ExactRows:
     """Exact rank oracle over a number field containing every member of a class."""
 
@@ -421,6 +433,7 @@ class _ExactRows:
         self.groups = groups
         self.period = period
         self._cache: dict[int, list[list[Any]]] = {}
+        self._power_cache: dict[int, list[Any]] = {0: [K.one] * len(omegas)}
         self._reduced: dict[int, list[list[int]] | None] = {}
 
     @cached_property
@@ -428,24 +441,50 @@ class _ExactRows:
         """The reduction modulo a prime of degree one, found on the first rank asked."""
         return ModP.for_field(self.K)
 
+    def _powers(self, n: int) -> list[Any]:
+        """``omega_j^n`` per column, from the cached powers of phase ``n - 1`` when there (one product each)."""
+        if n not in self._power_cache:
+            before = self._power_cache.get(n - 1)
+            if before is not None:
+                self._power_cache[n] = [a * w for a, w in zip(before, self.omegas)]
+            else:
+                self._power_cache[n] = [_field_power(self.K, w, n) for w in self.omegas]
+        return self._power_cache[n]
+
     def _rows(self, n: int) -> list[list[Any]]:
         n %= self.period
         if n not in self._cache:
-            K = self.K
-            pw = [K.one] * len(self.omegas)
-            for j, w in enumerate(self.omegas):
-                for _ in range(n):
-                    pw[j] = pw[j] * w
+            pw = self._powers(n)
             p = len(self.columns[0]) if self.columns else 0
             self._cache[n] = [[self.columns[j][i] * pw[j] for j in range(len(self.columns))] for i in range(p)]
         return self._cache[n]
 
+    @cached_property
+    def _reduced_factors(self) -> tuple[list[list[int]], list[int]] | None:
+        """The columns (``p x L``) and the ``omega_j`` modulo the prime of :class:`ModP`, ``None`` if one does not reduce."""
+        assert self._modp is not None
+        p = len(self.columns[0]) if self.columns else 0
+        cols = self._modp.matrix([[self.columns[j][i] for j in range(len(self.columns))] for i in range(p)])
+        omegas = self._modp.matrix([self.omegas])
+        return None if cols is None or omegas is None else (cols, omegas[0])
+
     def _reduced_rows(self, n: int) -> list[list[int]] | None:
-        """The rows of phase ``n`` modulo the prime of :class:`ModP` (``None`` if one does not reduce)."""
+        """The rows of phase ``n`` modulo the prime of :class:`ModP` (``None`` if one does not reduce).
+
+        Reduction is a ring homomorphism on the ``p``-integral elements, so the image of
+        ``c_ij omega_j^n`` is ``red(c_ij) red(omega_j)^n``: no arithmetic in the field.
+        """
         n %= self.period
         if n not in self._reduced:
             assert self._modp is not None
-            self._reduced[n] = self._modp.matrix(self._rows(n))
+            factors = self._reduced_factors
+            if factors is not None:
+                prime = self._modp.p
+                cols, omegas = factors
+                pw = [pow(w, n, prime) for w in omegas]
+                self._reduced[n] = [[c * w % prime for c, w in zip(row, pw)] for row in cols]
+            else:
+                self._reduced[n] = self._modp.matrix(self._rows(n))
         return self._reduced[n]
 
     def __call__(self, slots: Iterable[Slot]) -> int | None:

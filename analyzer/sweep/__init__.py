@@ -21,13 +21,25 @@ Examples
 from ._engine import SweepResult, SweepRow, iter_sweep, run_sweep
 from ._evaluate import cache_stats, clear_caches, evaluate_point
 from ._rows import FIELDS, row_from_report
-from ._spec import Axis, SweepPointInvalid, SweepSpec, load_sweep, parse_sweep, point_at, points, validate_points
+from ._spec import (
+    Axis,
+    RationalRange,
+    SweepPointInvalid,
+    SweepSpec,
+    load_sweep,
+    parse_sweep,
+    point_at,
+    points,
+    sweep_size,
+    validate_points,
+)
 from ._table import FORMATS, format_of, write_table
 
 __all__ = [
     "FIELDS",
     "FORMATS",
     "Axis",
+    "RationalRange",
     "SweepPointInvalid",
     "SweepResult",
     "SweepRow",
@@ -43,6 +55,7 @@ __all__ = [
     "points",
     "row_from_report",
     "run_sweep",
+    "sweep_size",
     "validate_points",
     "write_table",
 ]

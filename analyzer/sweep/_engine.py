@@ -25,10 +25,11 @@ from dataclasses import dataclass, field
 from typing import Any, Callable, Iterator
 
 from .._reporting import Report, ReportPart
-from ..errors import InvalidInput
+from ..errors import InvalidInput, MissingDependency
+from ..model import DEFAULT_LIMITS, Limits, fraction_text
 from ._evaluate import evaluate_chunk
-from ._rows import FIELDS, error_row
-from ._spec import SweepSpec, request_text, validate_points
+from ._rows import FIELDS, coordinate_column, error_row
+from ._spec import Axis, RationalRange, SweepSpec, points, request_text, validate_points
 
 #: ``progress(done, total)`` after every finished chunk.
 Progress = Callable[[int, int], None]
@@ -80,7 +81,9 @@ class SweepResult(Report):
 
     @property
     def columns(self) -> list[str]:
-        return ["index", *self.spec.coordinate_names, *FIELDS[self.spec.command], "error"]
+        """``index``, ``axis:<name>`` per axis, the command's fields (:data:`FIELDS`), ``error``."""
+        coordinates = [coordinate_column(name) for name in self.spec.coordinate_names]
+        return ["index", *coordinates, *FIELDS[self.spec.command], "error"]
 
     def records(self) -> list[dict[str, Any]]:
         cols = self.columns
@@ -104,8 +107,22 @@ def _canonical(spec: SweepSpec) -> str:
         obj["requests"] = list(spec.requests)
     else:
         obj["base"] = spec.base
-        obj["axes"] = [{"pointer": a.pointer, "name": a.name, "values": list(a.values)} for a in spec.axes]
+        obj["axes"] = [_canonical_axis(a) for a in spec.axes]
     return request_text(obj)
+
+
+def _canonical_axis(axis: Axis) -> dict[str, Any]:
+    """An axis as canonical JSON: a range stays ``from``, ``to``, ``num`` (never its list of values)."""
+    if isinstance(axis.values, RationalRange):
+        r = axis.values
+        return {
+            "pointer": axis.pointer,
+            "name": axis.name,
+            "from": fraction_text(r.lo),
+            "to": fraction_text(r.hi),
+            "num": r.num,
+        }
+    return {"pointer": axis.pointer, "name": axis.name, "values": list(axis.values)}
 
 
 def iter_sweep(
@@ -119,6 +136,8 @@ def iter_sweep(
     cancel: threading.Event | None = None,
     reuse: bool = True,
     info: dict[str, Any] | None = None,
+    limits: Limits = DEFAULT_LIMITS,
+    validated: bool = False,
 ) -> Iterator[SweepRow]:
     """Rows as they finish (completion order).  Every point is validated before any work starts.
 
@@ -135,8 +154,12 @@ def iter_sweep(
         ``False`` analyses every point from scratch (the benchmark's baseline).
     info:
         Filled with ``engine``, ``workers``, ``chunks`` and ``stopped`` as the sweep runs.
+    limits:
+        The size limits every point is validated with.
+    validated:
+        The caller has already run :func:`validate_points` with ``limits`` (skip it here).
     """
-    pts = validate_points(spec)
+    pts = points(spec) if validated else validate_points(spec, limits)
     coords = {p.index: p.coordinates for p in pts}
     del pts
     total = spec.size
@@ -168,9 +191,9 @@ def iter_sweep(
 def _iter_dask(spec, text, coords, deadline, scheduler, workers, chunk_size, progress, cancel, reuse, info):
     try:
         from distributed import Client, LocalCluster, as_completed
-    except ImportError:  # pragma: no cover - the sweep extra is installed in CI
-        raise InvalidInput(
-            "/engine", "the Dask engine needs the 'sweep' extra: pip install 'kfio[sweep]' (or use engine 'serial')"
+    except ImportError:  # a regular dependency: missing only in a broken install
+        raise MissingDependency(
+            "distributed", "the Dask sweep engine", "or run in this process: kfio sweep --serial FILE"
         ) from None
     total = spec.size
     cluster = None

@@ -36,6 +36,15 @@ FIELDS: dict[str, tuple[str, ...]] = {
 }
 
 
+def coordinate_column(name: str) -> str:
+    """The table column of the axis ``name``: ``axis:<name>``, a namespace no result field uses.
+
+    An axis may be called anything (``index``, ``verdict``, ``error``...): its
+    column never replaces a result's.
+    """
+    return f"axis:{name}"
+
+
 def _dig(d: Any, *path: str) -> Any:
     for key in path:
         if not isinstance(d, Mapping):

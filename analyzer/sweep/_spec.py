@@ -10,10 +10,12 @@ from __future__ import annotations
 
 import itertools
 import json
+import math
+from collections.abc import Sequence as SequenceABC
 from dataclasses import dataclass
 from decimal import Decimal
 from fractions import Fraction
-from typing import Any, Iterator, Sequence
+from typing import Any, Callable, Iterator, Sequence
 
 from ..errors import InvalidInput, LimitExceeded
 from ..model import DEFAULT_LIMITS, Limits, fraction_text, load_json, parse_number, parse_request
@@ -30,6 +32,46 @@ MAX_POINTS = 1_000_000
 MAX_AXIS_VALUES = 100_000
 
 
+class RationalRange(SequenceABC):
+    """The exactly spaced values ``from + (to - from) i / (num - 1)``, ``i = 0 .. num - 1``, built on demand.
+
+    A range axis is held as its three numbers, never as a list: the sweep's
+    size is known from ``num`` alone, and a value's exact text
+    (:func:`kfio.model.fraction_text`) is computed only when a point needs it.
+    """
+
+    __slots__ = ("lo", "hi", "num")
+
+    def __init__(self, lo: Fraction, hi: Fraction, num: int):
+        self.lo, self.hi, self.num = lo, hi, num
+
+    def __len__(self) -> int:
+        return self.num
+
+    def __getitem__(self, i: Any) -> Any:
+        if isinstance(i, slice):
+            return tuple(self[k] for k in range(*i.indices(self.num)))
+        i = int(i)
+        if i < 0:
+            i += self.num
+        if not 0 <= i < self.num:
+            raise IndexError(i)
+        if self.num == 1:
+            return fraction_text(self.lo)
+        return fraction_text(self.lo + (self.hi - self.lo) * i / (self.num - 1))
+
+    def __eq__(self, other: object) -> bool:
+        if isinstance(other, RationalRange):
+            return (self.lo, self.hi, self.num) == (other.lo, other.hi, other.num)
+        return NotImplemented
+
+    def __hash__(self) -> int:
+        return hash((self.lo, self.hi, self.num))
+
+    def __repr__(self) -> str:
+        return f"RationalRange({fraction_text(self.lo)!r}, {fraction_text(self.hi)!r}, {self.num})"
+
+
 class SweepPointInvalid(InvalidInput):
     """One point of a sweep fails validation; ``index`` says which."""
 
@@ -43,7 +85,7 @@ class Axis:
     """One swept coordinate: a JSON pointer into the request and its values."""
 
     pointer: str
-    values: tuple[Any, ...]
+    values: Sequence[Any]  # a tuple of given values, or a :class:`RationalRange`
     name: str
 
     @property
@@ -166,17 +208,88 @@ def _axis(obj: Any, index: int, base: Any) -> Axis:
     lo = parse_number(obj["from"], f"{field}/from")
     hi = parse_number(obj["to"], f"{field}/to")
     num = _positive_int(obj["num"], f"{field}/num", MAX_AXIS_VALUES)
-    if num == 1:
-        if lo != hi:
-            raise InvalidInput(f"{field}/num", "num = 1 needs from = to")
-        return Axis(obj["pointer"], (fraction_text(lo),), name)
-    # Exact rational spacing: the i-th value is from + (to - from) i / (num - 1).
-    step = (hi - lo) / (num - 1)
-    return Axis(obj["pointer"], tuple(fraction_text(lo + step * i) for i in range(num)), name)
+    if num == 1 and lo != hi:
+        raise InvalidInput(f"{field}/num", "num = 1 needs from = to")
+    # Exact rational spacing: the i-th value is from + (to - from) i / (num - 1), made when asked for.
+    return Axis(obj["pointer"], RationalRange(lo, hi, num), name)
 
 
-def parse_sweep(obj: Any) -> SweepSpec:
+def _axis_length(obj: Any, index: int) -> int:
+    """How many values axis ``index`` has, from its raw JSON (``len(values)`` or ``num``), building nothing.
+
+    A malformed axis counts 1 here; :func:`_axis` then names what is wrong with it.
+    """
+    if not isinstance(obj, dict):
+        return 1  # not an axis: :func:`_axis` says why
+    if "values" in obj:
+        values = obj["values"]
+        if isinstance(values, list) and len(values) > MAX_AXIS_VALUES:
+            raise LimitExceeded(f"/axes/{index}/values", f"at most {MAX_AXIS_VALUES} values")
+        return len(values) if isinstance(values, list) and values else 1
+    if "num" not in obj:
+        return 1
+    return _positive_int(obj["num"], f"/axes/{index}/num", MAX_AXIS_VALUES)
+
+
+def _too_many(lengths: Sequence[int], limit: int) -> LimitExceeded:
+    """The refusal of a grid past ``limit`` points; its size is said as a power of ten, never printed in full."""
+    # fsum of the log10s is within 1e-9 of log10 of the product here, so 10^k < the product.
+    k = math.floor(math.fsum(math.log10(n) for n in lengths) - 1e-6)
+    if k >= len(str(limit)):
+        return LimitExceeded("/axes", f"the sweep has more than 10^{k} points; at most {limit}")
+    return LimitExceeded("/axes", f"the sweep has more than {limit} points; at most {limit}")
+
+
+def sweep_size(obj: Any, limit: int = MAX_POINTS) -> int:
+    """The number of points of the raw sweep ``obj`` (JSON tree), computed before any axis is built.
+
+    A list of requests has ``len(requests)`` points; a grid has the product of
+    its axes' lengths (``len(values)`` or ``num``), multiplied with an early
+    exit past ``limit``; a zip has its axes' common length.  The work is
+    linear in the number of axes, whatever their ``num``.
+
+    Raises
+    ------
+    LimitExceeded
+        More than ``limit`` points (the message gives a power of ten for a
+        huge count, never the count's digits), or an axis past
+        :data:`MAX_AXIS_VALUES` values.
+    InvalidInput
+        The axes are not a list of axes, or a zip's axes differ in length.
+    """
+    if not isinstance(obj, dict):
+        raise InvalidInput("/", "a sweep is a JSON object with 'command' and 'base' + 'axes' or 'requests'")
+    if "requests" in obj:
+        reqs = obj["requests"]
+        n = len(reqs) if isinstance(reqs, list) else 0
+        if n > limit:
+            raise LimitExceeded("/requests", f"the sweep has {n} points; at most {limit}")
+        return n
+    axes = obj.get("axes", [])
+    if not isinstance(axes, list):
+        raise InvalidInput("/axes", "expected an array of axes")
+    lengths = [_axis_length(a, i) for i, a in enumerate(axes)]
+    if obj.get("combine", "grid") == "zip" and lengths:
+        if len(set(lengths)) > 1:
+            raise InvalidInput("/axes", "zip needs axes of equal length: " + ", ".join(map(str, lengths)))
+        n = lengths[0]
+    else:
+        n = 1
+        for length in lengths:
+            n *= length
+            if n > limit:
+                raise _too_many(lengths, limit)
+    if n > limit:
+        raise LimitExceeded("/axes", f"the sweep has {n} points; at most {limit}")
+    return n
+
+
+def parse_sweep(obj: Any, max_points: int = MAX_POINTS) -> SweepSpec:
     """Validate the shape of a sweep request (not yet its points: see :func:`validate_points`).
+
+    The point count is checked (:func:`sweep_size`) before any axis is built,
+    and range axes stay lazy (:class:`RationalRange`), so this costs time
+    linear in the size of ``obj``, however many points it describes.
 
     Parameters
     ----------
@@ -184,6 +297,8 @@ def parse_sweep(obj: Any) -> SweepSpec:
         The JSON tree of :func:`kfio.model.load_json`:
         ``{"command": "analyze", "base": {...}, "axes": [...], "combine": "grid"}`` or
         ``{"command": "analyze", "requests": [{...}, ...]}``.
+    max_points:
+        Most points allowed (:data:`MAX_POINTS` at most).
     """
     if not isinstance(obj, dict):
         raise InvalidInput("/", "a sweep is a JSON object with 'command' and 'base' + 'axes' or 'requests'")
@@ -208,14 +323,13 @@ def parse_sweep(obj: Any) -> SweepSpec:
     chunk = None if "chunk_size" not in opts else _positive_int(opts["chunk_size"], "/options/chunk_size", 100_000)
     if ("requests" in obj) == ("base" in obj):
         raise InvalidInput("/", "give either 'base' with 'axes', or 'requests'")
+    sweep_size(obj, min(max_points, MAX_POINTS))
     if "requests" in obj:
         if "axes" in obj:
             raise InvalidInput("/axes", "axes go with 'base', not with 'requests'")
         reqs = obj["requests"]
         if not isinstance(reqs, list) or not reqs:
             raise InvalidInput("/requests", "expected a non-empty array of requests")
-        if len(reqs) > MAX_POINTS:
-            raise LimitExceeded("/requests", f"at most {MAX_POINTS} points")
         return SweepSpec(command, None, (), combine, tuple(reqs), point_budget, time_budget, chunk)
     base = obj["base"]
     if not isinstance(base, dict):
@@ -227,12 +341,7 @@ def parse_sweep(obj: Any) -> SweepSpec:
     names = [a.name for a in axes]
     if len(set(names)) != len(names):
         raise InvalidInput("/axes", "two axes have the same name (pointer); give each a distinct 'name'")
-    if combine == "zip" and len({len(a.values) for a in axes}) > 1:
-        raise InvalidInput("/axes", "zip needs axes of equal length: " + ", ".join(str(len(a.values)) for a in axes))
-    spec = SweepSpec(command, base, axes, combine, None, point_budget, time_budget, chunk)
-    if spec.size > MAX_POINTS:
-        raise LimitExceeded("/axes", f"the sweep has {spec.size} points; at most {MAX_POINTS}")
-    return spec
+    return SweepSpec(command, base, axes, combine, None, point_budget, time_budget, chunk)
 
 
 def _budget(value: Any, field: str, upper: int = 3600) -> Fraction:
@@ -244,7 +353,7 @@ def _budget(value: Any, field: str, upper: int = 3600) -> Fraction:
     return t
 
 
-def load_sweep(text: str | bytes) -> SweepSpec:
+def load_sweep(text: str | bytes, max_points: int = MAX_POINTS) -> SweepSpec:
     """Parse sweep JSON, or JSON Lines of whole requests (one plant variant a line).
 
     JSON Lines are recognised by having more than one non-empty line that each
@@ -263,8 +372,8 @@ def load_sweep(text: str | bytes) -> SweepSpec:
         except InvalidInput:
             reqs = None
         if reqs is not None:
-            return parse_sweep({"command": "analyze", "requests": reqs})
-    return parse_sweep(load_json(text))
+            return parse_sweep({"command": "analyze", "requests": reqs}, max_points)
+    return parse_sweep(load_json(text), max_points)
 
 
 @dataclass(frozen=True)
@@ -307,14 +416,40 @@ def validate_points(spec: SweepSpec, limits: Limits = DEFAULT_LIMITS) -> list[Po
         Naming the point's index and the offending field, e.g.
         ``/points/17/channel/arrival_probability``.
     """
-    out = []
+    out: list[Point] = []
+    check_points(spec, limits, out.append)
+    return out
+
+
+def check_points(
+    spec: SweepSpec,
+    limits: Limits = DEFAULT_LIMITS,
+    keep: Callable[[Point], None] | None = None,
+    tick: Callable[[], None] | None = None,
+) -> int:
+    """Check every point with the single-request validator (:func:`kfio.model.parse_request`), keeping none.
+
+    ``keep`` is called with each valid point; ``tick`` after each point (a
+    budget's check-in, which may raise: one point's check can take a tenth of
+    a second).  Returns the number of points.
+
+    Raises
+    ------
+    SweepPointInvalid
+        As :func:`validate_points`.
+    """
+    n = 0
     for p in points(spec):
         try:
             parse_request(p.request, limits)
         except InvalidInput as exc:
             raise SweepPointInvalid(p.index, exc.field if exc.field != "/" else "", exc.rule) from None
-        out.append(p)
-    return out
+        if keep is not None:
+            keep(p)
+        n += 1
+        if tick is not None:
+            tick()
+    return n
 
 
 def request_text(tree: Any) -> str:

@@ -8,7 +8,7 @@ import json
 from pathlib import Path
 from typing import Any, Iterable, Sequence
 
-from ..errors import InvalidInput
+from ..errors import InvalidInput, MissingDependency
 
 FORMATS = ("csv", "parquet", "jsonl")
 
@@ -50,7 +50,7 @@ def write_table(path: str | Path, columns: Sequence[str], records: list[dict[str
             import pyarrow as pa
             import pyarrow.parquet as pq
         except ImportError:
-            raise InvalidInput("--out", "Parquet needs pyarrow: pip install 'kfio[sweep]' (or write .csv)") from None
+            raise MissingDependency("pyarrow", "a Parquet table", "or write --out TABLE.csv") from None
         table = pa.table({c: [r.get(c) for r in records] for c in columns})
         pq.write_table(table, path)
     return fmt

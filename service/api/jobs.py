@@ -14,9 +14,12 @@ from typing import Annotated, Any
 from fastapi import APIRouter, Depends, Path, Request
 from fastapi.responses import Response
 
+from kfio import load_json
+
+from ..dispatch import INLINE_PARSE_BYTES, Dispatcher
 from ..jobstore import JobStore
-from ..problems import Problem, ProblemError
-from .deps import BodyDep
+from ..problems import Problem, ProblemError, problem_from_exception
+from .deps import BodyDep, DispatcherDep
 from .schemas import REQUEST_EXAMPLES, json_body, problem_responses
 
 router = APIRouter(prefix="/v1/jobs", tags=["jobs"])
@@ -59,8 +62,8 @@ def get_jobstore(request: Request) -> JobStore:
 JobStoreDep = Annotated[JobStore, Depends(get_jobstore)]
 
 
-async def validated(check: Any, *args: Any) -> None:
-    """Run ``check(*args)`` (a validator) in a thread, off the event loop, before a job is queued.
+async def validated(check: Any, *args: Any) -> Any:
+    """Run ``check(*args)`` (a validator) in a thread, off the event loop, before a job is queued; its value.
 
     A bad request is a 422 naming the field at once, as on the synchronous
     endpoint, instead of a job that fails later.
@@ -70,7 +73,7 @@ async def validated(check: Any, *args: Any) -> None:
     from ..problems import problem_from_exception
 
     try:
-        await asyncio.to_thread(check, *args)
+        return await asyncio.to_thread(check, *args)
     except ProblemError:
         raise
     except Exception as exc:  # noqa: BLE001 - InvalidInput and friends become their problem document
@@ -80,12 +83,57 @@ async def validated(check: Any, *args: Any) -> None:
         raise ProblemError(problem) from None
 
 
-def _submit_route(kind: str) -> None:
-    async def submit(body: BodyDep, store: JobStoreDep) -> Response:
-        from kfio import load_request
+#: Seconds a job's submit-time check may take in the synchronous lane, waiting for a worker included.
+CHECK_BUDGET_S = 5.0
 
-        await validated(load_request, body, store.settings.limits())
-        job = store.submit(kind, body)
+
+async def checked_in_worker(dispatcher: Dispatcher, kind: str, body: bytes) -> None:
+    """Validate and size a job's request before it is queued, as the synchronous lane validates a request.
+
+    The check (:func:`kfio.service.jobs.check_job_request`: exact validation,
+    whose cost grows with the matrices) runs in a worker of the synchronous
+    lane, within :data:`CHECK_BUDGET_S` (waiting included), never in the server
+    process; only when that lane stays full does it run in the dispatcher's
+    parse threads, as the synchronous endpoints do before they answer 503.  A
+    check that outlasts its budget, or a worker that dies, leaves the job to
+    validate itself (it then fails with the 422 problem).
+
+    Raises
+    ------
+    ProblemError
+        The 422 problem (or 503 while shutting down) the synchronous twin would give.
+    """
+    from ..jobs import check_job_request
+    from ..pool import PoolBusy, PoolError, PoolShuttingDown
+
+    settings = dispatcher.settings
+    try:
+        budget = min(settings.time_budget_s, CHECK_BUDGET_S)
+        outcome = await dispatcher.pool.run(("check-job", body, settings, {"kind": kind}), budget)
+    except PoolShuttingDown as exc:
+        raise ProblemError(problem_from_exception(exc)) from None
+    except PoolBusy:
+        try:
+            await dispatcher._off_loop(check_job_request, kind, body, settings)
+        except Exception as exc:  # noqa: BLE001 - InvalidInput and friends become their problem document
+            problem = problem_from_exception(exc)
+            if problem.status >= 500:
+                raise
+            raise ProblemError(problem) from None
+        return
+    except PoolError:
+        return  # past a request's budget, or the worker died: the job has its own budget and validates itself
+    if outcome[0] != "ok":
+        problem = Problem.from_dict(outcome[1])
+        if problem.status == 422:
+            raise ProblemError(problem)
+
+
+def _submit_route(kind: str) -> None:
+    async def submit(body: BodyDep, store: JobStoreDep, dispatcher: DispatcherDep) -> Response:
+        await checked_in_worker(dispatcher, kind, body)
+        tree = await dispatcher._off_loop(load_json, body) if len(body) > INLINE_PARSE_BYTES else None
+        job = store.submit(kind, body, tree=tree)
         return Response(
             store.document(job),
             status_code=202,
@@ -104,8 +152,10 @@ def _submit_route(kind: str) -> None:
             f"Same body as `POST /v1/{kind}`.  Answers 202 with `Location: /v1/jobs/{{id}}` at once; poll that URL. "
             "The job runs in a separate lane of worker processes, with the deployment's job budget "
             "(`KFIO_JOB_TIME_BUDGET_S`, an hour by default) or less if `options.time_budget_s` asks for less.  "
-            "The request is validated before it is queued (422 naming the field); option values that only the "
-            "computation checks end the job `failed` with a 422 problem.  "
+            "The request is validated and sized before it is queued (422 naming the field), with the job lane's "
+            "limits (a simulation job may do `KFIO_JOB_MAX_TRAJECTORY_STEPS` trajectory-steps, 10^8 by default, "
+            "where a request may do 10^6); option values that only the computation checks end the job `failed` "
+            "with a 422 problem.  "
             "Jobs are kept in memory: a restart forgets them."
         ),
         response_class=Response,

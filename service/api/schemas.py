@@ -1,7 +1,7 @@
 """Hand-written JSON Schemas of the HTTP contract, with examples from the seeds.
 
 The routes read the raw body themselves (numbers must stay exact, so pydantic
-never sees them); these schemas document what :func:`analyzer.parse_request`
+never sees them); these schemas document what :func:`kfio.parse_request`
 accepts.  The validator stays the single source of truth: a body that passes
 the schema can still be refused with a 422 naming the field (``A`` not
 square, ``Q`` not semidefinite, ...).
@@ -52,11 +52,11 @@ def _channel(
 
 # -- examples: the reference cases of the papers (docs/theory.md) -----------
 
-_SEED004_SCALAR = {
+_SEED004_SCALAR: dict[str, Any] = {
     "system": {"A": [[-1.25]], "C": [[1]], "Q": [[1]], "R": [[2.5]]},
     "channel": {"model": "bernoulli", "arrival_probability": 0.5},
 }
-_SEED004_3X3 = {
+_SEED004_3X3: dict[str, Any] = {
     "system": {
         "A": [[1.25, 1, 0], [0, 0.9, 7], [0, 0, 0.6]],
         "C": [[1, 0, 2]],
@@ -65,15 +65,15 @@ _SEED004_3X3 = {
     },
     "channel": {"model": "bernoulli", "arrival_probability": 0.5},
 }
-_SEED002_2X2 = {
+_SEED002_2X2: dict[str, Any] = {
     "system": {"A": [[1.25, 0], [1, 1.1]], "C": [[1, 1]], "Q": [[20, 0], [0, 20]], "R": [[2.5]]},
     "channel": {"model": "bernoulli", "arrival_probability": 0.5},
 }
-_SEED001_DEGENERATE_GE = {
+_SEED001_DEGENERATE_GE: dict[str, Any] = {
     "system": {"A": [[1.1, 0], [0, -1.1]], "C": [[1, 1]], "Q": [[1, 0], [0, 1]], "R": [[1]]},
     "channel": {"model": "gilbert_elliott", "failure_rate": "1/10", "recovery_rate": "3/5"},
 }
-_SEED001_MARKOV = {
+_SEED001_MARKOV: dict[str, Any] = {
     "system": {"A": [[1.25, 0], [1, 1.1]], "C": [[1, 1]], "Q": [[20, 0], [0, 20]], "R": [[2.5]]},
     "channel": {
         "model": "markov",
@@ -82,7 +82,7 @@ _SEED001_MARKOV = {
     },
     "options": {"time_budget_s": 10},
 }
-_SEED000_TWO_SENSORS = {
+_SEED000_TWO_SENSORS: dict[str, Any] = {
     "system": {
         "A": [[2.5, 0], [0, 1.5]],
         "C": [[1, 0], [0, 1]],
@@ -100,7 +100,7 @@ _SEED000_TWO_SENSORS = {
 }
 
 #: ``kfio analyze --json`` on ``_SEED004_SCALAR`` (lambda_c = 9/25, as Sinopoli et al. (2004) finds).
-_SEED004_SCALAR_REPORT = {
+_SEED004_SCALAR_REPORT: dict[str, Any] = {
     "kfio_version": __version__,
     "verdict": "stable",
     "theorem": "Rohr, Marelli and Fu 2014, Theorem 1",
@@ -132,7 +132,7 @@ _SEED004_SCALAR_REPORT = {
 }
 
 #: ``kfio bounds --json`` on ``_SEED004_SCALAR`` (abbreviated: P_hat_N for N = 1 and 8 only).
-_SEED004_SCALAR_BOUNDS = {
+_SEED004_SCALAR_BOUNDS: dict[str, Any] = {
     "kfio_version": __version__,
     "command": "bounds",
     "packets": [{"name": None, "rows": [0], "arrival_probability": 0.5, "arrival_probability_exact": "1/2"}],
@@ -172,7 +172,7 @@ _SEED004_SCALAR_BOUNDS = {
 }
 
 #: ``kfio simulate --json`` on ``_SEED004_SCALAR`` with steps 4, 1000 trajectories, seed 1 (rounded).
-_SEED004_SCALAR_SIMULATION = {
+_SEED004_SCALAR_SIMULATION: dict[str, Any] = {
     "kfio_version": __version__,
     "steps": 4,
     "trajectories": 1000,

@@ -1,12 +1,16 @@
 """``POST /v1/sweeps``: a sweep (``kfio sweep``'s request) run as a job.
 
-The sweep is validated in full before it is queued (every axis pointer, every
-point), so a bad point is a 422 naming ``/points/<index>/<field>`` at once.
+The sweep's shape (axes, pointers, point count) is checked before it is
+queued, in time linear in the body: a 422 at once.  The points themselves are
+validated by the job's worker process, never by the server: a bad point fails
+the job with a 422 problem naming ``/points/<index>/<field>``.
 The job is then polled at ``/v1/jobs/{id}`` (status, ``progress.fraction`` =
 points done), and its result is the table as JSON.
 """
 
 from __future__ import annotations
+
+from typing import TYPE_CHECKING
 
 from fastapi import APIRouter
 from fastapi.responses import Response
@@ -14,6 +18,9 @@ from fastapi.responses import Response
 from .deps import BodyDep
 from .jobs import _STATUS_RESPONSE, JobStoreDep, validated
 from .schemas import problem_responses
+
+if TYPE_CHECKING:
+    from kfio.sweep import SweepSpec
 
 router = APIRouter(prefix="/v1/sweeps", tags=["sweeps"])
 
@@ -66,15 +73,16 @@ SWEEP_SCHEMA = {
 }
 
 
-def _validate(body: bytes, max_points: int, limits) -> int:
-    from kfio.errors import LimitExceeded
-    from kfio.sweep import load_sweep, validate_points
+def _check_shape(body: bytes, max_points: int) -> SweepSpec:
+    """The sweep's shape and size: O(body) work, safe in the server process.
 
-    spec = load_sweep(body)
-    if spec.size > max_points:
-        raise LimitExceeded("/axes", f"the sweep has {spec.size} points; this service runs at most {max_points}")
-    validate_points(spec, limits)
-    return spec.size
+    The point count comes from the axes' sizes before anything is built
+    (:func:`kfio.sweep.sweep_size`); the points themselves are validated by
+    the job's worker, under the job's budget and memory limit.
+    """
+    from kfio.sweep import load_sweep
+
+    return load_sweep(body, max_points)
 
 
 @router.post(
@@ -84,8 +92,10 @@ def _validate(body: bytes, max_points: int, limits) -> int:
     description=(
         "The body is a sweep: `command` (`analyze`, `bounds` or `simulate`), `base` (a request) and `axes` "
         "(each a JSON pointer into the request with `values`, or `from`, `to`, `num` for exactly spaced rationals), "
-        "`combine` (`grid` or `zip`); or `requests` (a list of whole requests).  Every point is validated before "
-        "the job is queued: a bad one is a 422 naming `/points/<index>/<field>`.  Answers 202 with "
+        "`combine` (`grid` or `zip`); or `requests` (a list of whole requests), or JSON Lines of requests.  "
+        "The shape and point count are checked before the job is queued (422 at once); every point is then "
+        "validated by the job's worker before any work starts: a bad one fails the job with a 422 problem "
+        "naming `/points/<index>/<field>`.  Answers 202 with "
         "`Location: /v1/jobs/{id}`; poll it for `progress.fraction` (points done) and the result: "
         "`{command, points, errors, columns, rows: [...]}`, one row per point with its coordinates and the "
         "report's key fields (or its error).  Runs in the job lane, or on the Dask cluster the deployment "
@@ -94,7 +104,7 @@ def _validate(body: bytes, max_points: int, limits) -> int:
     response_class=Response,
     responses={
         202: {"description": "The sweep was queued", **_STATUS_RESPONSE},
-        **problem_responses(413, 422, 429, 503),
+        **problem_responses(413, 422, 429, 503),  # 503 server-misconfigured: KFIO_DASK_SCHEDULER does not work
     },
     openapi_extra={
         "requestBody": {
@@ -115,8 +125,16 @@ def _validate(body: bytes, max_points: int, limits) -> int:
 )
 async def submit_sweep(body: BodyDep, store: JobStoreDep) -> Response:
     settings = store.settings
-    await validated(_validate, body, settings.max_sweep_points, settings.limits())
-    job = store.submit("sweep", body)
+    if settings.dask_scheduler:
+        from ..sweep_jobs import dask_missing, misconfigured
+
+        missing = dask_missing()
+        if missing is not None:
+            raise misconfigured("KFIO_DASK_SCHEDULER", missing)
+    spec = await validated(_check_shape, body, settings.max_sweep_points)
+    # the body may be JSON Lines of requests (as for `kfio sweep`): the store is given the options, not the text
+    options = {} if spec.time_budget_s is None else {"time_budget_s": repr(spec.time_budget_s)}
+    job = store.submit("sweep", body, tree={"options": options})
     return Response(
         store.document(job), status_code=202, media_type="application/json", headers={"Location": f"/v1/jobs/{job.id}"}
     )

@@ -5,7 +5,8 @@ worker pool: requests waiting for a worker are refused at once, running ones
 get ``shutdown_grace_s`` (``KFIO_SHUTDOWN_GRACE_S``) to finish, and whatever is
 still running then is answered 503 ``shutting-down`` with ``Retry-After``
 (problem+json, never Uvicorn's bare ``500 text/plain``).  If the server cannot
-start (the port is taken, ...), the exit code is 6, ``CANNOT_SERVE``.
+start (the port is taken, ``KFIO_DASK_SCHEDULER`` names a scheduler that
+cannot be reached, ...), the exit code is 6, ``CANNOT_SERVE``.
 """
 
 from __future__ import annotations
@@ -82,6 +83,13 @@ def _run(args: argparse.Namespace) -> int:
         reason = port_in_use(settings.host, settings.port)
         if reason is not None:  # checked before the worker pool starts, for a clear message
             print(f"kfio: {reason}", file=sys.stderr)
+            return exitcodes.CANNOT_SERVE
+    if settings.dask_scheduler:
+        from ..sweep_jobs import dask_scheduler_problem
+
+        reason = dask_scheduler_problem(settings.dask_scheduler)
+        if reason is not None:  # every sweep would fail: say so now, naming the setting
+            print(f"kfio: setting KFIO_DASK_SCHEDULER: {reason}", file=sys.stderr)
             return exitcodes.CANNOT_SERVE
     app = create_app(settings)
 

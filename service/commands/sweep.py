@@ -5,7 +5,8 @@ combined as a grid or zipped), or JSON Lines of whole requests.  Rows stream
 to standard output as JSON Lines as they finish; ``--out`` writes the whole
 table (CSV, Parquet or JSON Lines, by its suffix) in index order.
 Exit 0 every point answered, 8 some points have an error row, 4 the sweep's
-time budget ran out, 2 invalid input (before any work starts).
+time budget ran out, 2 invalid input (before any work starts), 9 a package
+is missing (a broken install; ``--serial`` needs no Dask).
 """
 
 from __future__ import annotations
@@ -29,7 +30,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="Run one command over many points: a base request and axes (grid or zip), or JSON Lines "
         "of requests. Every point is validated before any work starts. Rows stream to stdout as JSON Lines. "
         "Exit 0 all points answered, 8 some points failed (their rows say why), 4 sweep budget ran out, "
-        "2 invalid input.",
+        "2 invalid input, 9 a package is missing (--serial needs no Dask). Example: kfio sweep "
+        "examples/sweeps/arrival_probability.json",
     )
     p.add_argument("file", metavar="FILE", help="sweep JSON (or JSON Lines of requests), or - for standard input")
     p.add_argument("--out", metavar="TABLE", help="write the table: .csv, .parquet or .jsonl")

@@ -7,7 +7,7 @@ integers of hundreds of digits, lone surrogates in keys and values, non-ASCII
 digits and whitespace, wrong types, deep nesting within the parser's limits,
 unknown and escaped keys.  Every run must end with an exit code in
 ``{0, 1, 2, 3, 4, 5}`` (no 70, the internal-error code) and print no traceback.
-Figures (cases, time) are in docs/hardening.md.
+Figures (cases, time) are in docs/input-limits.md.
 """
 
 from __future__ import annotations

@@ -63,11 +63,16 @@ def test_every_post_documents_body_examples_and_errors(path: str) -> None:
             assert validate_points(load_sweep(json.dumps(example["value"])))  # the sweep validator accepts it
         assert {"202", "413", "422", "429", "503"} <= set(op["responses"])
         return
-    assert content["schema"] == {"$ref": "#/components/schemas/AnalysisRequest"}
+    kind, load = "AnalysisRequest", load_request
+    if path in ("/v1/loop", "/v1/jobs/loop"):
+        from kfio.loop import load_loop_request
+
+        kind, load = "LoopRequest", load_loop_request
+    assert content["schema"] == {"$ref": f"#/components/schemas/{kind}"}
     assert content["examples"], path
     for example in content["examples"].values():
-        validator("AnalysisRequest").validate(example["value"])
-        load_request(json.dumps(example["value"]))  # the one validator accepts it too
+        validator(kind).validate(example["value"])
+        load(json.dumps(example["value"]))  # the one validator accepts it too
     # a job answers 202 at once (429 when the queue is full); its budget is reported when it is polled
     expected = (
         ("202", "413", "422", "429", "503") if path.startswith("/v1/jobs/") else ("200", "413", "422", "503", "504")

@@ -380,3 +380,36 @@ def test_generic_front_of_period_21_is_the_whole_front() -> None:
     proof.seed_generic(space, front, groups, largest_flats(groups, margins), margins)
     g = [0, 1, 3, 4, 6, 7, 9, 10, 12, 13, 15, 17]
     assert vectors(space, front.masks) == sorted((21 - g[r], 21 - g[11 - r]) for r in range(12))
+
+
+@pytest.mark.parametrize("i", range(12))
+def test_front_proof_invariant_passed_flats_hold_nothing_beyond_the_front(i: int) -> None:
+    """:class:`FrontProof`'s invariant, by brute force: every passed flat ``F`` of a side holds no
+    kernel vector zeroing ``B(|F|) + 1`` slots of the other group (all subsets of those slots tried);
+    a second :meth:`run` checks no flat and changes nothing; the passes are within the finite bound."""
+    rng = np.random.default_rng([SEED, 9900 + i])
+    space = SlotSpace.from_block(random_block(rng, int(rng.integers(2, 7)), 2, rows=1, real=i % 2 == 0))
+    margins = Margins(space.tol)
+    budget = Budget(max_steps=200_000)
+    lower, seeds = pareto.group_extremes(space, budget, margins)
+    front = Front(space, lower)
+    if seeds:
+        front.offer(np.array(seeds))
+    run = proof.FrontProof(real_space(space), front, budget, margins)
+    checked = run.run()
+    assert vectors(space, tuple(front.masks)) == subsets_front(space)
+    assert len(run.passes) <= (run.most[0] + 1) * (run.most[1] + 1)
+    before = front.vectors.copy()
+    assert run.run() == checked  # everything passed stays passed: nothing is checked again
+    assert np.array_equal(before, front.vectors)
+    counts = {side: proof._blind_counts(front, side) for side in (0, 1)}
+    for side in (0, 1):
+        own, other = run.groups[side], run.groups[1 - side]
+        for key in run.passed[side]:
+            mask = np.frombuffer(key, dtype=bool).reshape(own.rows.shape[:-2] if own.rows.ndim > 2 else (-1,))
+            K = proof._kernel(own.rows[mask].reshape(-1, own.n_columns), margins)
+            if K.shape[1] == 0:
+                continue
+            m = proof._beyond_floor(counts[side], int(mask.sum())) + 1
+            P = other.rows.reshape(other.rows.shape[0], -1, other.n_columns) @ K
+            assert most_zeros_by_subsets(P) < m, (side, int(mask.sum()), m)

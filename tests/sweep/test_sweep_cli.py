@@ -40,7 +40,7 @@ def test_serial_sweep_writes_table_plot_and_streams_rows(tmp_path, capsys):
     lines = [json.loads(x) for x in captured.out.splitlines()]
     assert sorted(x["index"] for x in lines) == list(range(13))
     rows = list(csv.DictReader(out.open()))
-    assert [r["/channel/arrival_probability"] for r in rows][:3] == ["3/10", "7/20", "2/5"]
+    assert [r["axis:/channel/arrival_probability"] for r in rows][:3] == ["3/10", "7/20", "2/5"]
     assert [r["verdict"] for r in rows][:2] == ["unstable", "unstable"] and rows[2]["verdict"] == "stable"
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert "13/13" in captured.err and "pt" in captured.err  # the progress bar (tqdm) with its counts

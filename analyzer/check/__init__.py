@@ -1,0 +1,44 @@
+"""Requirements as code: ``kfio check FILE`` judges plants and channels against stated requirements.
+
+A check file (JSON or TOML) lists entries, each a plant file and a channel
+file (paths relative to the check file) and requirements on them: the exact
+verdict, a margin on the worst rate, the critical arrival probability, a
+certified bound on ``trace(V_bar)``, the tail exponent, a stationary outage
+probability (:mod:`kfio.check._requirements` gives the maths and papers).
+Every requirement is judged on the JSON report of ``kfio analyze``,
+``bounds`` or ``simulate`` for that entry, the runs in parallel.
+
+Examples
+--------
+>>> from kfio.check import parse_check, run_check
+>>> import json, pathlib, tempfile
+>>> d = pathlib.Path(tempfile.mkdtemp())
+>>> _ = (d / "plant.json").write_text(json.dumps({"system": {"A": [[-1.25]], "C": [[1]]}}))
+>>> _ = (d / "radio.json").write_text(json.dumps({"model": "bernoulli", "arrival_probability": "1/2"}))
+>>> spec = parse_check({"checks": [{"name": "scalar", "plant": "plant.json", "channel": "radio.json",
+...     "requirements": {"verdict": "stable", "critical_arrival_probability_at_most": "2/5"}}]}, d)
+>>> [(o.requirement, o.status, o.measured) for o in run_check(spec, workers=1).outcomes]
+[('verdict', 'pass', 'stable'), ('critical_arrival_probability_at_most', 'pass', '9/25')]
+"""
+
+from ._requirements import COMMAND_OF, Judgement, Requirement, judge, parse_requirements
+from ._run import ERROR_KINDS, CheckResult, Outcome, run_check, run_one
+from ._spec import CheckEntry, CheckSpec, load_check, load_tree, parse_check
+
+__all__ = [
+    "COMMAND_OF",
+    "ERROR_KINDS",
+    "CheckEntry",
+    "CheckResult",
+    "CheckSpec",
+    "Judgement",
+    "Outcome",
+    "Requirement",
+    "judge",
+    "load_check",
+    "load_tree",
+    "parse_check",
+    "parse_requirements",
+    "run_check",
+    "run_one",
+]

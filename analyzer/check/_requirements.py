@@ -1,0 +1,228 @@
+"""The requirements a check file may state, and how each is judged against a report.
+
+Each requirement is read off the JSON report that ``kfio analyze|bounds|simulate
+--json`` prints for the entry's plant and channel, so ``kfio check`` and the
+single commands agree by construction:
+
+=========================================  =========  ==================================================
+key                                        command    holds when
+=========================================  =========  ==================================================
+``verdict``                                analyze    the exact verdict (Rohr, Marelli and Fu 2014,
+                                                      Theorem 1) is the one named
+``margin: m``                              analyze    the worst rate ``max_k |alpha_k|^2 sigma_k <= 1 - m``
+``critical_arrival_probability_at_most``   analyze    the exact critical arrival probability ``<= v``
+``tail_exponent_above: k``                 analyze    the tail exponent ``kappa > k`` (Mo and Sinopoli
+                                                      2012: ``P(trace P > M) ~ M^-kappa``; the moment of
+                                                      order ``r`` is finite iff ``kappa > r``)
+``trace_V_bar_at_most: T``                 bounds     ``trace(V_bar) <= T``, ``V_bar`` the upper end of
+                                                      the certified bracket of the MARE fixed point
+                                                      (Sinopoli et al. 2004, Theorem 4)
+``outage: {threshold: M, epsilon: e}``     simulate   the upper end of the Wilson 95% interval of the
+                                                      stationary ``P(trace P > M)`` is ``<= e``
+                                                      (Monte Carlo evidence, not a certificate)
+=========================================  =========  ==================================================
+
+Comparisons are exact where kfio has the exact value (a rational worst rate,
+a rational critical probability) and otherwise in floating point; a float
+within a relative ``1e-9`` of the limit is not decided (status ``error``)
+rather than guessed.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from fractions import Fraction
+from typing import Any, Mapping
+
+from ..errors import InvalidInput
+from ..model._exact import fraction_text, parse_integer, parse_number
+
+VERDICTS = ("stable", "unstable", "boundary")
+
+#: Requirement key -> the command whose report judges it.
+COMMAND_OF = {
+    "verdict": "analyze",
+    "margin": "analyze",
+    "critical_arrival_probability_at_most": "analyze",
+    "tail_exponent_above": "analyze",
+    "trace_V_bar_at_most": "bounds",
+    "outage": "simulate",
+}
+
+#: Keys of an ``outage`` requirement (the last three set the Monte Carlo run).
+OUTAGE_KEYS = ("threshold", "epsilon", "trajectories", "steps", "seed")
+
+#: Relative distance to a limit below which a floating-point comparison is not trusted.
+FLOAT_TIE = 1e-9
+
+
+@dataclass(frozen=True)
+class Requirement:
+    """One requirement of one check entry: its key and its exact limit."""
+
+    key: str
+    value: Any  # str (verdict), Fraction, or a dict for outage
+    command: str
+
+    @property
+    def required(self) -> str:
+        """The requirement as text, e.g. ``'<= 1/2'``."""
+        v = self.value
+        if self.key == "verdict":
+            return f"= {v}"
+        if self.key == "margin":
+            return f"worst rate <= {fraction_text(1 - v)} (margin {fraction_text(v)})"
+        if self.key == "tail_exponent_above":
+            return f"> {fraction_text(v)}"
+        if self.key == "outage":
+            return f"P(trace P > {fraction_text(v['threshold'])}) <= {fraction_text(v['epsilon'])}"
+        return f"<= {fraction_text(v)}"
+
+
+@dataclass(frozen=True)
+class Judgement:
+    """How one requirement fared: ``status`` is ``pass``, ``fail`` or ``error``."""
+
+    status: str
+    measured: str
+    detail: str
+
+
+def parse_requirements(obj: Any, where: str) -> tuple[Requirement, ...]:
+    """Validate the ``requirements`` object of a check entry (``where`` is its JSON pointer)."""
+    if not isinstance(obj, Mapping) or not obj:
+        raise InvalidInput(where, f"expected a non-empty object with keys among {sorted(COMMAND_OF)}")
+    out = []
+    for key, raw in obj.items():
+        field = f"{where}/{key}"
+        if key not in COMMAND_OF:
+            raise InvalidInput(field, f"unknown requirement; expected one of {sorted(COMMAND_OF)}")
+        out.append(Requirement(key, _parse_value(key, raw, field), COMMAND_OF[key]))
+    return tuple(out)
+
+
+def _parse_value(key: str, raw: Any, field: str) -> Any:
+    if key == "verdict":
+        if raw not in VERDICTS:
+            raise InvalidInput(field, f"expected one of {list(VERDICTS)}")
+        return raw
+    if key == "outage":
+        if not isinstance(raw, Mapping):
+            raise InvalidInput(
+                field, f"expected an object with keys threshold, epsilon (and optionally {OUTAGE_KEYS[2:]})"
+            )
+        unknown = sorted(set(raw) - set(OUTAGE_KEYS))
+        if unknown:
+            raise InvalidInput(f"{field}/{unknown[0]}", f"unknown key; an outage requirement has {list(OUTAGE_KEYS)}")
+        for need in ("threshold", "epsilon"):
+            if need not in raw:
+                raise InvalidInput(f"{field}/{need}", "required")
+        value: dict[str, Any] = {
+            "threshold": parse_number(raw["threshold"], f"{field}/threshold"),
+            "epsilon": parse_number(raw["epsilon"], f"{field}/epsilon"),
+        }
+        if value["threshold"] <= 0:
+            raise InvalidInput(f"{field}/threshold", "the threshold M of P(trace P > M) must be positive")
+        if not 0 < value["epsilon"] < 1:
+            raise InvalidInput(f"{field}/epsilon", "epsilon must be in (0, 1)")
+        for name, lo in (("trajectories", 2), ("steps", 1), ("seed", 0)):
+            if name in raw:
+                value[name] = parse_integer(raw[name], f"{field}/{name}", lo, name=name)
+        return value
+    number = parse_number(raw, field)
+    if key == "margin" and not 0 <= number < 1:
+        raise InvalidInput(field, "a margin m asks worst rate <= 1 - m; m must be in [0, 1)")
+    if key == "critical_arrival_probability_at_most" and not 0 <= number <= 1:
+        raise InvalidInput(field, "a probability must be in [0, 1]")
+    if key in ("trace_V_bar_at_most", "tail_exponent_above") and number <= 0:
+        raise InvalidInput(field, "must be positive")
+    return number
+
+
+def _compare(measured: float, exact: Fraction | None, limit: Fraction, strict: bool, upper: bool) -> bool | None:
+    """``measured <= limit`` (``upper``) or ``measured > limit``; ``None`` if a float is too close to tell."""
+    if exact is not None:
+        a, b = exact, limit
+    else:
+        if abs(measured - float(limit)) <= FLOAT_TIE * max(1.0, abs(float(limit))):
+            return None
+        a, b = Fraction(measured), limit
+    if upper:
+        return a < b if strict else a <= b
+    return a > b if strict else a >= b
+
+
+def _exact_or_none(text: Any) -> Fraction | None:
+    if not isinstance(text, str):
+        return None
+    try:
+        return parse_number(text, "/")
+    except InvalidInput:
+        return None
+
+
+def _verdict(ok: bool | None, measured: str, detail: str) -> Judgement:
+    if ok is None:
+        return Judgement("error", measured, "too close to the limit to decide in floating point; " + detail)
+    return Judgement("pass" if ok else "fail", measured, detail)
+
+
+def judge(req: Requirement, payload: Mapping[str, Any]) -> Judgement:
+    """Judge ``req`` on a worker's payload: ``{"report": <report JSON>, ...exact extras}``."""
+    report = payload["report"]
+    if req.key == "verdict":
+        verdict = report.get("verdict")
+        return Judgement(
+            "pass" if verdict == req.value else "fail", str(verdict), f"exact verdict ({report.get('theorem')})"
+        )
+    if req.key == "margin":
+        rate, exact = payload.get("worst_rate"), _exact_or_none(payload.get("worst_rate_exact"))
+        if rate is None:
+            return Judgement("pass", "no unstable block", "no block has |alpha| >= 1: every rate is 0")
+        measured = fraction_text(exact) if exact is not None else f"{rate:.6g}"
+        basis = "exact" if exact is not None else "floating point"
+        return _verdict(
+            _compare(rate, exact, 1 - req.value, False, True),
+            f"worst rate {measured}",
+            f"worst |alpha_k|^2 sigma_k ({basis})",
+        )
+    if req.key == "critical_arrival_probability_at_most":
+        value = report.get("critical_arrival_probability")
+        text = report.get("critical_arrival_probability_exact")
+        if value is None:
+            return Judgement("error", "none", "kfio gives a critical arrival probability for one Bernoulli packet only")
+        exact = _exact_or_none(text)
+        return _verdict(
+            _compare(value, exact, req.value, False, True), str(text or value), "exact critical arrival probability"
+        )
+    if req.key == "tail_exponent_above":
+        tail = report.get("tail") or {}
+        kappa = tail.get("kappa")
+        if kappa is None:
+            return Judgement("error", "none", "no tail exponent in the report (the filter is not stable)")
+        measured = f"{kappa:.6g}" + (f" = {tail['kappa_exact']}" if tail.get("kappa_exact") else "")
+        return _verdict(
+            _compare(kappa, None, req.value, True, False), measured, tail.get("statement") or "tail exponent"
+        )
+    if req.key == "trace_V_bar_at_most":
+        v_bar = (report.get("covariance") or {}).get("V_bar") or {}
+        if not v_bar.get("exists"):
+            return Judgement("fail", "V_bar does not exist", v_bar.get("reason") or "the MARE has no fixed point here")
+        trace = v_bar["trace"]
+        detail = "upper end of the certified bracket of V_bar (Sinopoli et al. 2004, Theorem 4)"
+        return _verdict(_compare(trace, None, req.value, False, True), f"{trace:.6g}", detail)
+    if req.key == "outage":
+        stationary = report.get("stationary") or {}
+        rows = stationary.get("outage") or []
+        if not rows:
+            return Judgement("error", "none", "the simulation gave no stationary outage estimate")
+        row = rows[0]
+        lo, hi = row["ci95"]
+        measured = f"{row['probability']:.4g} (95% CI [{lo:.4g}, {hi:.4g}], {stationary.get('samples')} samples)"
+        ok = Fraction(hi) <= req.value["epsilon"]
+        why = "Monte Carlo evidence: the upper end of the Wilson 95% interval must be <= epsilon"
+        return Judgement("pass" if ok else "fail", measured, why)
+    raise AssertionError(req.key)  # pragma: no cover - parse_requirements admits only the keys above
+
+
+__all__ = ["COMMAND_OF", "OUTAGE_KEYS", "Judgement", "Requirement", "judge", "parse_requirements"]

@@ -1,0 +1,247 @@
+"""Evaluate a check file: one analyze / bounds / simulate run per entry and command, in parallel.
+
+The runs are the same functions as ``kfio analyze|bounds|simulate`` (each
+entry's requirements are judged on that command's JSON report, see
+:mod:`kfio.check._requirements`), in a pool of forked worker processes.  Each
+run has the check's ``point_budget_s`` as its cooperative :class:`kfio.Budget`;
+the whole check has ``time_budget_s``, after which the pool is terminated
+(a run stuck in C code cannot outlive it) and the requirements not yet
+judged are errors of kind ``budget-exceeded``.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import os
+import time
+from dataclasses import dataclass
+from fractions import Fraction
+from typing import Any, Callable
+
+from .._budget import Budget
+from .._reporting import Report, ReportPart
+from ..errors import AnalyzerError, BudgetExceeded, InvalidInput, MissingDependency, NumericalFailure
+from ..model._exact import fraction_text
+from ._requirements import judge
+from ._spec import CheckSpec
+
+#: Error kinds of a requirement that could not be judged.
+ERROR_KINDS = (
+    "budget-exceeded",
+    "numerical-failure",
+    "invalid-input",
+    "missing-dependency",
+    "analysis-error",
+    "internal",
+)
+
+
+@dataclass(frozen=True)
+class Outcome(ReportPart):
+    """One requirement of one entry, judged.
+
+    ``status`` is ``pass``, ``fail`` or ``error`` (``error_kind`` then says
+    which of :data:`ERROR_KINDS`); ``measured`` and ``required`` are texts.
+    """
+
+    entry: str
+    requirement: str
+    status: str
+    measured: str
+    required: str
+    detail: str
+    seconds: float
+    error_kind: str | None = None
+
+
+@dataclass(frozen=True)
+class CheckResult(Report):
+    """All outcomes of a check, in the file's order (entries, then requirements)."""
+
+    outcomes: tuple[Outcome, ...]
+    seconds: float
+    workers: int
+    source: str = "<check>"
+
+    @property
+    def status(self) -> str:
+        """``pass`` (every requirement holds), ``fail`` (one fails, or could not be judged for a reason
+        other than the budget), or ``budget`` (none fails, but the budget stopped some)."""
+        if any(o.status == "fail" for o in self.outcomes):
+            return "fail"
+        if any(o.status == "error" and o.error_kind != "budget-exceeded" for o in self.outcomes):
+            return "fail"
+        if any(o.status == "error" for o in self.outcomes):
+            return "budget"
+        return "pass"
+
+    @property
+    def tally(self) -> dict[str, int]:
+        """How many requirements passed, failed, could not be judged."""
+        return {s: sum(1 for o in self.outcomes if o.status == s) for s in ("pass", "fail", "error")}
+
+
+def _worst_rate(report: Any) -> tuple[float | None, str | None]:
+    """The largest ``|alpha_k|^2 sigma_k`` of a :class:`StabilityReport`, exactly when both factors are rational."""
+    import sympy
+
+    from ..model._exact import parse_number
+
+    best: tuple[float, Fraction | None] | None = None
+    for b in report.blocks:
+        if b.rate is None:
+            continue
+        exact = None
+        beta = b.modulus_sq_expr
+        if isinstance(beta, sympy.Rational) and b.sigma_exact is not None:
+            try:
+                exact = Fraction(int(beta.p), int(beta.q)) * parse_number(b.sigma_exact, "/")
+            except InvalidInput:  # an algebraic sigma ("sqrt(30)/10"): the float is what there is
+                exact = None
+        if best is None or b.rate > best[0]:
+            best = (b.rate, exact)
+    if best is None:
+        return None, None
+    return best[0], (fraction_text(best[1]) if best[1] is not None else None)
+
+
+def run_one(command: str, tree: dict[str, Any], seconds: float) -> tuple[str, Any, float]:
+    """Run ``command`` on the request ``tree``: ``("ok", payload, s)`` or ``("error", (kind, message), s)``.
+
+    Never raises for an analysis failure (it travels back from a worker as data).
+    """
+    from ..model._request import parse_request
+
+    t0 = time.perf_counter()
+    try:
+        request = parse_request(tree)
+        budget = Budget(seconds=seconds)
+        if command == "analyze":
+            from ..stability import analyze
+
+            report = analyze(request, budget)
+            rate, rate_exact = _worst_rate(report)
+            payload = {"report": report.to_dict(), "worst_rate": rate, "worst_rate_exact": rate_exact}
+        elif command == "bounds":
+            from ..mare import compute_bounds
+
+            payload = {"report": compute_bounds(request, budget=budget).to_dict()}
+        else:
+            from ..simulation import simulate
+
+            payload = {"report": simulate(request, budget=budget).to_dict()}
+        return "ok", payload, time.perf_counter() - t0
+    except BudgetExceeded as exc:
+        error = ("budget-exceeded", str(exc))
+    except NumericalFailure as exc:
+        error = ("numerical-failure", str(exc))
+    except InvalidInput as exc:
+        error = ("invalid-input", f"{exc.field}: {exc.rule}")
+    except MissingDependency as exc:
+        error = ("missing-dependency", str(exc))
+    except AnalyzerError as exc:
+        error = ("analysis-error", str(exc))
+    except MemoryError:
+        error = ("budget-exceeded", "the run needs more memory than its limit")
+    except Exception as exc:  # noqa: BLE001 - one bad entry must not end the check; the outcome says it is a bug
+        error = ("internal", f"{type(exc).__name__}: {exc}")
+    return "error", error, time.perf_counter() - t0
+
+
+def _limit_memory(memory_bytes: int | None) -> None:
+    if memory_bytes:
+        import resource
+
+        _soft, hard = resource.getrlimit(resource.RLIMIT_AS)
+        limit = memory_bytes if hard == resource.RLIM_INFINITY else min(memory_bytes, hard)
+        resource.setrlimit(resource.RLIMIT_AS, (limit, hard))
+
+
+def _preload(commands: set[str]) -> None:
+    """Import what the runs need before forking, so every worker shares it."""
+    if "analyze" in commands:
+        import kfio.stability  # noqa: F401
+    if "bounds" in commands:
+        import kfio.mare  # noqa: F401
+    if "simulate" in commands:
+        import kfio.simulation  # noqa: F401
+
+
+def run_check(
+    spec: CheckSpec,
+    *,
+    workers: int | None = None,
+    time_budget_s: float | None = None,
+    memory_bytes: int | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> CheckResult:
+    """Judge every requirement of ``spec``.
+
+    Parameters
+    ----------
+    workers:
+        Worker processes (default: cores, at most one per run); ``1`` runs in
+        this process, with the cooperative budgets only.
+    time_budget_s:
+        The whole check's budget (default ``spec.time_budget_s``).
+    memory_bytes:
+        Address-space limit of each worker process.
+    progress:
+        Called with ``(runs done, runs)`` as runs finish.
+    """
+    t0 = time.perf_counter()
+    tasks = [(i, c) for i, e in enumerate(spec.entries) for c in e.commands]
+    budget = time_budget_s if time_budget_s is not None else spec.time_budget_s
+    deadline = time.monotonic() + budget
+    point = min(spec.point_budget_s, budget)
+    n = max(1, min(workers or os.cpu_count() or 1, len(tasks)))
+    results: dict[tuple[int, str], tuple[str, Any, float]] = {}
+    if n == 1 and workers == 1:
+        for k, (i, c) in enumerate(tasks):
+            left = deadline - time.monotonic()
+            if left <= 0:
+                break
+            results[(i, c)] = run_one(c, spec.entries[i].request_for(c), min(point, left))
+            if progress:
+                progress(k + 1, len(tasks))
+    else:
+        _preload({c for _, c in tasks})
+        ctx = multiprocessing.get_context("fork")
+        pool = ctx.Pool(n, initializer=_limit_memory, initargs=(memory_bytes,))
+        try:
+            pending = {(i, c): pool.apply_async(run_one, (c, spec.entries[i].request_for(c), point)) for i, c in tasks}
+            while pending and time.monotonic() < deadline:
+                for key in [k for k, r in pending.items() if r.ready()]:
+                    try:
+                        results[key] = pending.pop(key).get()
+                    except Exception as exc:  # noqa: BLE001 - a worker that died (e.g. in C code at its memory limit)
+                        results[key] = ("error", ("internal", f"the worker failed: {type(exc).__name__}: {exc}"), 0.0)
+                    if progress:
+                        progress(len(results), len(tasks))
+                if pending:
+                    next(iter(pending.values())).wait(min(0.05, max(0.0, deadline - time.monotonic())))
+        finally:
+            pool.terminate()
+            pool.join()
+    outcomes = []
+    for i, entry in enumerate(spec.entries):
+        for req in entry.requirements:
+            got = results.get((i, req.command))
+            if got is None:
+                message = f"the check's time budget of {budget:g} s ran out before this run finished"
+                outcomes.append(
+                    Outcome(entry.name, req.key, "error", "none", req.required, message, 0.0, "budget-exceeded")
+                )
+                continue
+            status, payload, seconds = got
+            if status == "error":
+                kind, message = payload
+                outcomes.append(Outcome(entry.name, req.key, "error", "none", req.required, message, seconds, kind))
+                continue
+            j = judge(req, payload)
+            kind = "numerical-failure" if j.status == "error" else None
+            outcomes.append(Outcome(entry.name, req.key, j.status, j.measured, req.required, j.detail, seconds, kind))
+    return CheckResult(tuple(outcomes), time.perf_counter() - t0, n, spec.source)
+
+
+__all__ = ["ERROR_KINDS", "CheckResult", "Outcome", "run_check", "run_one"]

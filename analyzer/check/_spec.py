@@ -1,0 +1,253 @@
+"""Check files: plants and channels by file, and the requirements each pair must meet.
+
+A check file is JSON (numbers keep their decimal text, as in a request) or
+TOML (read by :mod:`tomllib` with floats as :class:`decimal.Decimal`, so
+``0.1`` is ``1/10`` exactly)::
+
+    {
+      "options": {"time_budget_s": 300, "point_budget_s": 60},
+      "checks": [
+        {"name": "pendulum on the shop-floor radio",
+         "plant": "plants/pendulum.json",
+         "channel": "channels/radio.json",
+         "requirements": {"verdict": "stable", "margin": "1/10"}}
+      ]
+    }
+
+``plant`` and ``channel`` are paths relative to the check file.  A plant file
+holds ``{"system": {...}}`` (a whole request is fine: its channel is used when
+the entry names none) or the bare system object; a channel file holds
+``{"channel": {...}}`` or the bare channel object.  ``options`` of an entry are
+the request's ``options`` (e.g. ``{"bounds": {"horizon": 4}}``).  Every entry
+is validated as a request before any work starts; an error names the field of
+the check file (``/checks/2/plant``) and, inside the named file, its field.
+"""
+
+from __future__ import annotations
+
+import tomllib
+from dataclasses import dataclass, field
+from decimal import Decimal
+from pathlib import Path
+from typing import Any, Mapping
+
+from ..errors import InvalidInput
+from ..model._exact import fraction_text, load_json, parse_number
+from ..model._request import parse_request
+from ._requirements import OUTAGE_KEYS, Requirement, parse_requirements
+
+_TOP_KEYS = {"$schema", "description", "options", "checks"}
+_ENTRY_KEYS = {"name", "description", "plant", "channel", "options", "requirements"}
+_OPTION_KEYS = {"time_budget_s", "point_budget_s"}
+
+#: Defaults of the whole check's budget and of each evaluation's (seconds).
+DEFAULT_TIME_BUDGET_S = 600.0
+DEFAULT_POINT_BUDGET_S = 120.0
+
+#: Largest check file, plant file or channel file read (bytes).
+MAX_FILE_BYTES = 1 << 20
+MAX_ENTRIES = 1000
+
+
+@dataclass(frozen=True)
+class CheckEntry:
+    """One plant and channel and the requirements on them.
+
+    ``request`` is the JSON tree of the request (``system``, ``channel``,
+    ``options``), already validated by :func:`kfio.parse_request`.
+    """
+
+    name: str
+    request: dict[str, Any]
+    requirements: tuple[Requirement, ...]
+
+    @property
+    def commands(self) -> tuple[str, ...]:
+        """The commands whose reports judge this entry's requirements, in a fixed order."""
+        needed = {r.command for r in self.requirements}
+        return tuple(c for c in ("analyze", "bounds", "simulate") if c in needed)
+
+    def request_for(self, command: str) -> dict[str, Any]:
+        """The request tree ``command`` runs: for simulate, with the outage requirement's threshold and settings."""
+        tree = dict(self.request)
+        if command != "simulate":
+            return tree
+        outage = next(r.value for r in self.requirements if r.key == "outage")
+        options = dict(tree.get("options") or {})
+        sim = dict(options.get("simulate") or {})
+        sim["outage_thresholds"] = [fraction_text(outage["threshold"])]
+        sim.update({k: outage[k] for k in ("trajectories", "steps", "seed") if k in outage})
+        options["simulate"] = sim
+        tree["options"] = options
+        return tree
+
+
+def _validate_options(entry: CheckEntry, where: str) -> None:
+    """Check each command's options now (a Monte Carlo too large is a bad file, exit 2, not a failed run)."""
+    for command in entry.commands:
+        try:
+            request = parse_request(entry.request_for(command))
+            if command == "simulate":
+                from ..simulation._setup import parse_options
+
+                parse_options(request)
+            elif command == "bounds":
+                from ..mare._options import parse_bounds_options
+
+                parse_bounds_options(request)
+        except InvalidInput as exc:
+            key = exc.field.removeprefix("/options/simulate/").split("/")[0]
+            if command == "simulate" and exc.field.startswith("/options/simulate/") and key in OUTAGE_KEYS:
+                raise InvalidInput(f"{where}/requirements/outage", f"{exc.field}: {exc.rule}") from None
+            raise InvalidInput(f"{where}/options", f"{exc.field}: {exc.rule}") from None
+
+
+@dataclass(frozen=True)
+class CheckSpec:
+    """A validated check file."""
+
+    entries: tuple[CheckEntry, ...]
+    time_budget_s: float = DEFAULT_TIME_BUDGET_S
+    point_budget_s: float = DEFAULT_POINT_BUDGET_S
+    source: str = field(default="<check>")
+
+    @property
+    def size(self) -> int:
+        """The number of requirements."""
+        return sum(len(e.requirements) for e in self.entries)
+
+
+def _read(path: Path, field_: str, what: str) -> bytes:
+    try:
+        with open(path, "rb") as fh:
+            data = fh.read(MAX_FILE_BYTES + 1)
+    except OSError as exc:
+        raise InvalidInput(field_, f"cannot read the {what} {str(path)!r}: {exc.strerror}") from None
+    if len(data) > MAX_FILE_BYTES:
+        raise InvalidInput(field_, f"the {what} {str(path)!r} is larger than {MAX_FILE_BYTES} bytes")
+    return data
+
+
+def load_tree(data: bytes, name: str) -> Any:
+    """The JSON tree of a JSON or TOML file's bytes (TOML when ``name`` ends in ``.toml``); numbers exact."""
+    if name.lower().endswith(".toml"):
+        try:
+            return tomllib.loads(data.decode("utf-8"), parse_float=Decimal)
+        except UnicodeDecodeError as exc:
+            raise InvalidInput("/", f"not UTF-8 text ({exc.reason})") from None
+        except tomllib.TOMLDecodeError as exc:
+            raise InvalidInput("/", f"not valid TOML: {exc}") from None
+    return load_json(data)
+
+
+def _part(ref: Any, base: Path, field_: str, what: str, key: str) -> tuple[Any, Any]:
+    """The object under ``key`` in the file ``ref`` names (or the bare object), and the whole file."""
+    if not isinstance(ref, str) or not ref.strip():
+        raise InvalidInput(field_, f"expected the path of a {what} file, relative to the check file")
+    path = base / ref
+    try:
+        tree = load_tree(_read(path, field_, f"{what} file"), ref)
+    except InvalidInput as exc:
+        if exc.field == field_:
+            raise
+        raise InvalidInput(field_, f"{ref}: {exc.rule}") from None
+    if not isinstance(tree, dict):
+        raise InvalidInput(field_, f"{ref}: expected a JSON object")
+    return (tree[key] if key in tree else tree), tree
+
+
+def _budget(opts: Mapping[str, Any], key: str, default: float) -> float:
+    if key not in opts:
+        return default
+    value = parse_number(opts[key], f"/options/{key}")
+    if not 0 < value <= 86400:
+        raise InvalidInput(f"/options/{key}", "must be in (0, 86400] seconds")
+    return float(value)
+
+
+def parse_check(tree: Any, base: str | Path = ".", source: str = "<check>") -> CheckSpec:
+    """Validate a check file's tree; plant and channel paths are relative to ``base``.
+
+    Raises
+    ------
+    InvalidInput
+        Naming the field of the check file (``/checks/0/requirements/margin``)
+        and, for a plant or channel file, the field inside it.
+    """
+    base = Path(base)
+    if not isinstance(tree, dict):
+        raise InvalidInput("/", "a check file is an object with 'checks' (and optionally 'options')")
+    unknown = sorted(set(tree) - _TOP_KEYS)
+    if unknown:
+        raise InvalidInput(f"/{unknown[0]}", f"unknown key; a check file has {sorted(_TOP_KEYS)}")
+    opts = tree.get("options", {})
+    if not isinstance(opts, dict):
+        raise InvalidInput("/options", "expected an object")
+    unknown = sorted(set(opts) - _OPTION_KEYS)
+    if unknown:
+        raise InvalidInput(f"/options/{unknown[0]}", f"unknown key; options has {sorted(_OPTION_KEYS)}")
+    checks = tree.get("checks")
+    if not isinstance(checks, list) or not checks:
+        raise InvalidInput("/checks", "expected a non-empty list of entries")
+    if len(checks) > MAX_ENTRIES:
+        raise InvalidInput("/checks", f"at most {MAX_ENTRIES} entries")
+    entries = []
+    names: set[str] = set()
+    for i, entry in enumerate(checks):
+        where = f"/checks/{i}"
+        if not isinstance(entry, dict):
+            raise InvalidInput(where, "expected an object with plant, requirements and (usually) channel")
+        unknown = sorted(set(entry) - _ENTRY_KEYS)
+        if unknown:
+            raise InvalidInput(f"{where}/{unknown[0]}", f"unknown key; an entry has {sorted(_ENTRY_KEYS)}")
+        for need in ("plant", "requirements"):
+            if need not in entry:
+                raise InvalidInput(f"{where}/{need}", "required")
+        system, plant_file = _part(entry["plant"], base, f"{where}/plant", "plant", "system")
+        if "channel" in entry:
+            channel, _ = _part(entry["channel"], base, f"{where}/channel", "channel", "channel")
+        elif "channel" in plant_file:
+            channel = plant_file["channel"]
+        else:
+            raise InvalidInput(f"{where}/channel", "required (the plant file names no channel)")
+        name = entry.get("name", f"{entry['plant']} / {entry.get('channel', 'its channel')}")
+        if not isinstance(name, str) or not name.strip():
+            raise InvalidInput(f"{where}/name", "expected a non-empty string")
+        if name in names:
+            raise InvalidInput(f"{where}/name", f"the name {name!r} is used by an earlier entry; names must be unique")
+        names.add(name)
+        request: dict[str, Any] = {"system": system, "channel": channel}
+        if "options" in entry:
+            request["options"] = entry["options"]
+        elif isinstance(plant_file.get("options"), dict) and "channel" not in entry:
+            request["options"] = plant_file["options"]
+        try:
+            parse_request(request)
+        except InvalidInput as exc:
+            # the field inside the request maps to the file that holds it
+            top = exc.field.split("/")[1] if exc.field.count("/") else ""
+            owner = {"system": "plant", "channel": "channel" if "channel" in entry else "plant"}.get(top, "options")
+            raise InvalidInput(f"{where}/{owner}", f"{exc.field}: {exc.rule}") from None
+        requirements = parse_requirements(entry["requirements"], f"{where}/requirements")
+        if any(r.command in ("bounds", "simulate") for r in requirements) and not {"Q", "R"} <= set(system):
+            keys = [r.key for r in requirements if r.command != "analyze"]
+            raise InvalidInput(f"{where}/plant", f"the requirements {keys} need Q and R in the plant's system")
+        entry_ = CheckEntry(name=name, request=request, requirements=requirements)
+        _validate_options(entry_, where)
+        entries.append(entry_)
+    return CheckSpec(
+        entries=tuple(entries),
+        time_budget_s=_budget(opts, "time_budget_s", DEFAULT_TIME_BUDGET_S),
+        point_budget_s=_budget(opts, "point_budget_s", DEFAULT_POINT_BUDGET_S),
+        source=source,
+    )
+
+
+def load_check(path: str | Path) -> CheckSpec:
+    """Read and validate the check file at ``path`` (JSON, or TOML by its suffix)."""
+    path = Path(path)
+    tree = load_tree(_read(path, "/", "check file"), path.name)
+    return parse_check(tree, path.parent, str(path))
+
+
+__all__ = ["CheckEntry", "CheckSpec", "load_check", "load_tree", "parse_check"]

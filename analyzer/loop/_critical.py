@@ -1,0 +1,207 @@
+"""The critical value of one link's parameter, the other links fixed: exact for rational data.
+
+For a Bernoulli link with arrival probability ``x`` (or a Gilbert-Elliott
+link's recovery rate ``x``) every transition probability of the joint chain
+is affine in ``x``, so the second-moment operator is ``T(x) = T(x0) + (x - x0) T1``.
+``rho(T(x))`` is continuous in ``x`` and is an eigenvalue of ``T(x)`` (a
+positive map: Costa, Fragoso and Marques 2005, Ch. 3), so it can cross 1
+only at a root of ``f(x) = det(I - T(x))``.  With ``A0 = I - T(x0)``
+invertible, ``f(x) = det(A0) det(I - (x - x0) A0^(-1) T1)``: the reversed
+characteristic polynomial of ``A0^(-1) T1`` (FLINT), shifted.  Its real
+roots in ``(0, 1)`` are isolated with certified Arb balls, and the verdict
+on each interval between consecutive roots is decided exactly at a rational
+point (:func:`kfio.loop._verdict.decide`).  The critical value is the left
+end of the stable interval that reaches 1.
+
+This is a computation on the given design (fixed gains), not a theorem about
+the optimal design (Schenato, Sinopoli, Franceschetti, Poolla and Sastry
+2007, Sec. V, give the latter for TCP-like LQG).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from fractions import Fraction
+from typing import Any, Callable
+
+import flint
+
+from ..errors import NumericalFailure
+from ..model._types import MarkovChannel
+from ._algebraic import root_text
+from ._mjls import Mjls
+from ._operator import operator_matrix
+from ._verdict import decide
+
+#: Largest operator size for which the exact critical value is computed.
+MAX_CRITICAL_SIZE = 160
+
+
+@dataclass(frozen=True)
+class Critical:
+    """The critical value of one parameter and the exact labels of the intervals of ``(0, 1)``.
+
+    ``polynomial`` (integer coefficients, constant first) is the irreducible
+    polynomial over Q of which the critical value is a root, ``enclosure`` a
+    certified interval around it holding no other root: together an exact
+    description, also when ``exact`` (a rational or quadratic text) is ``None``.
+    """
+
+    link: str
+    parameter: str
+    value: float | None
+    exact: str | None
+    intervals: tuple[tuple[float, float, str], ...]
+    note: str
+    polynomial: tuple[str, ...] | None = None
+    enclosure: tuple[float, float] | None = None
+
+    def as_dict(self) -> dict[str, object]:
+        return {
+            "link": self.link,
+            "parameter": self.parameter,
+            "value": self.value,
+            "value_exact": self.exact,
+            "value_minimal_polynomial": list(self.polynomial) if self.polynomial is not None else None,
+            "value_enclosure": list(self.enclosure) if self.enclosure is not None else None,
+            "intervals": [{"from": a, "to": b, "verdict": v} for a, b, v in self.intervals],
+            "note": self.note,
+        }
+
+
+def parameter_of(pointer: str, ch: MarkovChannel) -> tuple[str, Callable[[Fraction], MarkovChannel]] | None:
+    """The parameter varied for a link, and the channel at a value; ``None`` when not defined."""
+    if ch.model == "bernoulli":
+        return f"{pointer}/arrival_probability", lambda x: MarkovChannel(
+            "bernoulli", 0, (x,), {"arrival_probability": x}
+        )
+    if ch.model == "gilbert_elliott":
+        p = ch.params["failure_rate"]
+        return f"{pointer}/recovery_rate", lambda x: MarkovChannel(
+            "gilbert_elliott", 1, (x, 1 - p), {"failure_rate": p, "recovery_rate": x}
+        )
+    return None
+
+
+def _text(f: flint.fmpz_poly, ball: flint.arb) -> str | None:
+    return root_text(f, float(ball.mid()))
+
+
+def _between(a: flint.arb, b: flint.arb) -> Fraction:
+    """A rational strictly between two disjoint real balls ``a < b``."""
+    return (_exact(a.upper()) + _exact(b.lower())) / 2
+
+
+def _exact(x: flint.arb) -> Fraction:
+    """The value of an exact ball (an endpoint), as a Fraction."""
+    man, exp = (int(v) for v in x.man_exp())
+    return Fraction(man) * Fraction(2) ** exp
+
+
+def roots_in_unit(poly: flint.fmpq_poly) -> list[tuple[flint.arb, flint.fmpz_poly]]:
+    """Real roots of ``poly`` strictly inside ``(0, 1)``: certified isolating balls, ascending, with their factor."""
+    out: list[tuple[flint.arb, flint.fmpz_poly]] = []
+    if poly.degree() < 1:
+        return out
+    _, factors = poly.numer().factor()
+    zero, one = flint.arb(0), flint.arb(1)
+    old = flint.ctx.prec
+    try:
+        for f, _ in factors:
+            if f.degree() < 1 or f(0) == 0 or f(1) == 0:
+                continue  # roots 0 and 1 are the ends of the range, not inside it
+            flint.ctx.prec = 128
+            while True:
+                found: list[Any] = f.complex_roots()
+                balls = [z.real for z, _m in found if z.imag.is_exact() and z.imag.is_zero()]
+                if all(r > zero or r < zero for r in balls) and all(r > one or r < one for r in balls):
+                    break
+                if flint.ctx.prec > 1 << 14:
+                    raise NumericalFailure("a root of det(I - T(x)) could not be separated from 0 or 1")
+                flint.ctx.prec *= 4
+            out += [(r, f) for r in balls if r > zero and r < one]
+    finally:
+        flint.ctx.prec = old
+    out.sort(key=lambda t: float(t[0].mid()))
+    return out
+
+
+def det_polynomial(build: Callable[[Fraction], Mjls]) -> flint.fmpq_poly | None:
+    """``det(I - T(x))`` up to a non-zero constant, as a polynomial in ``x`` (see the module docstring)."""
+    x0, x1 = Fraction(1, 3), Fraction(2, 3)
+    T0 = operator_matrix(build(x0))
+    T1 = (operator_matrix(build(x1)) - T0) * 3  # slope of the affine map
+    size = T0.nrows()
+    eye = flint.fmpq_mat(size, size)
+    for i in range(size):
+        eye[i, i] = 1
+    for base in (x0, Fraction(1, 2), Fraction(1, 5), Fraction(4, 5), Fraction(1, 7), Fraction(6, 7)):
+        A0 = eye - T0 - flint.fmpq((base - x0).numerator, (base - x0).denominator) * T1
+        try:
+            Bm = A0.solve(T1)
+        except ZeroDivisionError:
+            continue
+        chi = Bm.charpoly()  # det(mu I - B), degree size
+        coeffs = list(chi.coeffs()) + [flint.fmpq(0)] * (size + 1 - len(chi.coeffs()))
+        rev = flint.fmpq_poly(list(reversed(coeffs)))  # det(I - y B)
+        shift = flint.fmpq_poly([flint.fmpq(-base.numerator, base.denominator), 1])  # y = x - base
+        return rev(shift)
+    return None
+
+
+def critical_value(label: str, pointer: str, ch: MarkovChannel, build: Callable[[MarkovChannel], Mjls]) -> Critical:
+    """The exact critical value of the link's parameter (see the module docstring)."""
+    par = parameter_of(pointer, ch)
+    if par is None:
+        return Critical(label, pointer, None, None, (), f"not defined for a {ch.model} channel of order {ch.order}")
+    parameter, at = par
+
+    def system(x: Fraction) -> Mjls:
+        return build(at(x))
+
+    size = operator_matrix(system(Fraction(1, 2))).nrows()
+    if size > MAX_CRITICAL_SIZE:
+        return Critical(
+            label,
+            parameter,
+            None,
+            None,
+            (),
+            f"not computed: the operator has size {size} > {MAX_CRITICAL_SIZE}, the limit for exact critical values",
+        )
+    poly = det_polynomial(system)
+    if poly is None:
+        return Critical(label, parameter, None, None, (), "not computed: I - T(x) is singular at every base point")
+    roots = roots_in_unit(poly)
+    edges: list[tuple[flint.fmpz_poly | None, float, str | None, flint.arb | None]] = [(None, 0.0, "0", None)]
+    for r, f in roots:
+        edges.append((f, float(r.mid()), _text(f, r), r))
+    edges.append((None, 1.0, "1", None))
+    labels = []
+    for k in range(len(edges) - 1):
+        a, b = edges[k], edges[k + 1]
+        lo = flint.arb(0) if a[3] is None else a[3]
+        hi = flint.arb(1) if b[3] is None else b[3]
+        mid = _between(lo, hi)
+        labels.append(decide(system(mid)).verdict)
+    merged: list[tuple[float, float, str]] = []
+    for k, lab in enumerate(labels):  # spurious roots (another eigenvalue crossing 1) join their neighbours
+        if merged and merged[-1][2] == lab:
+            merged[-1] = (merged[-1][0], edges[k + 1][1], lab)
+        else:
+            merged.append((edges[k][1], edges[k + 1][1], lab))
+    intervals = tuple(merged)
+    if labels[-1] != "stable":
+        return Critical(label, parameter, None, None, intervals, "no value near 1 makes the loop mean-square stable")
+    k = len(labels) - 1
+    while k > 0 and labels[k - 1] == "stable":
+        k -= 1
+    left = edges[k]
+    note = "exact: a root of det(I - T(x)), the stable side decided exactly"
+    minimal = tuple(str(int(c)) for c in left[0].coeffs()) if left[0] is not None else None
+    ball = left[3]
+    box = (float(_exact(ball.lower())), float(_exact(ball.upper()))) if ball is not None else None
+    return Critical(label, parameter, left[1], left[2], intervals, note, minimal, box)
+
+
+__all__ = ["Critical", "MAX_CRITICAL_SIZE", "critical_value", "det_polynomial", "parameter_of", "roots_in_unit"]

@@ -1,0 +1,225 @@
+"""The exact mean-square stability verdict of a loop: ``rho(T)`` below, at or above 1.
+
+``T`` (:mod:`kfio.loop._operator`) is a positive map on ``N`` symmetric
+matrices, so ``rho(T)`` is one of its eigenvalues (Krein-Rutman; Costa,
+Fragoso and Marques 2005, Ch. 3 and Thm 3.9) and:
+
+* ``rho(T) < 1`` iff the coupled Lyapunov equation ``Y - T(Y) = I`` has a
+  solution with every ``Y_i`` positive definite (Thm 3.9).  Solving it
+  exactly over ``Q`` decides the verdict and the solution *is* the
+  certificate, checked exactly;
+* if ``I - T`` is invertible and the solution is not positive definite,
+  ``rho(T) > 1`` (``rho`` is an eigenvalue and 1 is not one);
+* if ``I - T`` is singular, 1 is an eigenvalue and ``rho(T) >= 1``: the
+  characteristic polynomial (FLINT) with the factors ``x - 1`` removed has a
+  real root above 1 (isolated with certified Arb balls) iff ``rho > 1``;
+  otherwise ``rho = 1``, the boundary.
+
+Above :data:`MAX_EXACT_SIZE` the exact solve is not attempted: a float
+solution of ``Y - T(Y) = I`` is rounded to rationals and ``Y > 0``,
+``Y - T(Y) > 0`` are verified exactly (the cheap certificate); when it does
+not verify the report says the verdict is not certified.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from fractions import Fraction
+from typing import Any
+
+import flint
+import numpy as np
+
+from ..errors import NumericalFailure
+from ..model._request import is_psd
+from ._algebraic import root_text
+from ._mjls import Mjls
+from ._operator import (
+    apply_exact,
+    float_operator,
+    noise_vector,
+    operator_matrix,
+    to_numpy,
+    unvech,
+    vech,
+    vech_index,
+)
+
+#: Largest operator size (``modes * d (d + 1) / 2``) solved exactly over Q.
+MAX_EXACT_SIZE = 1200
+#: Largest operator size whose exact spectral radius (rational or quadratic) is reported.
+MAX_EXACT_RADIUS_SIZE = 24
+
+
+@dataclass(frozen=True)
+class Decision:
+    """The verdict, how it was reached, and the exact stationary moments when the loop is stable."""
+
+    verdict: str
+    exact: bool
+    certified: bool
+    certificate: str
+    spectral_radius: float
+    spectral_radius_exact: str | None
+    size: int
+    moments: tuple[flint.fmpq_mat, ...] | None
+
+
+def _fraction(x: flint.fmpq) -> Fraction:
+    return Fraction(int(x.p), int(x.q))
+
+
+def _float_sign(X: flint.fmpq_mat) -> int | None:
+    """Sign of ``lambda_min(X)`` when float64 decides it (as :func:`kfio.model._request._float_filter`), else ``None``.
+
+    Each entry is rounded to float64 (relative error ``eps``), and by
+    Weyl's inequality the eigenvalues move by at most ``d eps``; a computed
+    ``|lambda_min| > 1e-9 ||X||_F`` is far outside that.
+    """
+    d = X.nrows()
+    M = np.array([[float(X[i, j]) for j in range(d)] for i in range(d)])
+    scale = float(np.max(np.abs(M)))
+    if scale == 0 or not np.isfinite(scale):
+        return None if scale else 0
+    M = M / scale
+    lam = float(np.linalg.eigvalsh(M)[0])
+    tol = 1e-9 * float(np.linalg.norm(M))
+    if lam > tol:
+        return 1
+    if lam < -tol:
+        return -1
+    return None
+
+
+def positive_definite(X: flint.fmpq_mat) -> bool:
+    """``X > 0`` exactly: a float filter decides clear cases (Weyl's inequality), else pivoted ``L D L'`` over ``Q``."""
+    if X.nrows() == 0:
+        return True
+    sign = _float_sign(X)
+    if sign is not None:
+        return sign > 0
+    m = tuple(tuple(_fraction(X[i, j]) for j in range(X.ncols())) for i in range(X.nrows()))
+    return is_psd(m, strict=True, exact=True)
+
+
+def _stacked(sys: Mjls, v: flint.fmpq_mat, col: int) -> list[flint.fmpq_mat]:
+    s = len(vech_index(sys.d))
+    return [unvech([v[j * s + r, col] for r in range(s)], sys.d) for j in range(sys.modes)]
+
+
+def _largest_real_root(poly: flint.fmpq_poly) -> tuple[int, str | None]:
+    """Sign of ``rho - 1`` for the largest real root of ``poly`` (>= 1 assumed), and its exact text if simple."""
+    num = poly.numer()
+    _, factors = num.factor()
+    best = None
+    best_factor = None
+    for f, _ in factors:
+        if f.degree() < 1:
+            continue
+        roots: list[Any] = f.complex_roots()
+        for z, _mult in roots:
+            if z.imag.is_exact() and z.imag.is_zero():
+                if best is None or z.real > best:
+                    best, best_factor = z.real, f
+    if best is None:
+        return -1, None
+    one = flint.arb(1)
+    if best > one:
+        sign = 1
+    elif best < one:
+        sign = -1
+    elif best_factor is not None and best_factor.degree() == 1 and best_factor(1) == 0:
+        sign = 0
+    else:
+        raise NumericalFailure("the Perron root could not be separated from 1")
+    return sign, _root_text(best_factor, best)
+
+
+def _root_text(f: flint.fmpz_poly | None, ball: flint.arb) -> str | None:
+    return root_text(f, float(ball.mid()))
+
+
+def exact_radius(sys: Mjls, T: flint.fmpq_mat | None = None) -> tuple[int, str | None]:
+    """Sign of ``rho(T) - 1`` and the exact ``rho`` (rational or quadratic) from the characteristic polynomial."""
+    T = T if T is not None else operator_matrix(sys)
+    return _largest_real_root(T.charpoly())
+
+
+def rounded_certificate(sys: Mjls, digits: int = 12) -> bool:
+    """The cheap certificate: float ``Y = T(Y) + I`` rounded to rationals, ``Y > 0`` and ``Y - T(Y) > 0`` exactly."""
+    Tf = float_operator(sys)
+    s = len(vech_index(sys.d))
+    rhs = np.tile([1.0 if a == b else 0.0 for a, b in vech_index(sys.d)], sys.modes)
+    try:
+        y = np.linalg.solve(np.eye(Tf.shape[0]) - Tf, rhs)
+    except np.linalg.LinAlgError:
+        return False
+    scale = 10**digits
+    Y = []
+    for j in range(sys.modes):
+        v = [flint.fmpq(int(round(float(x) * scale)), scale) for x in y[j * s : (j + 1) * s]]
+        Y.append(unvech(v, sys.d))
+    if not all(positive_definite(X) for X in Y):
+        return False
+    TY = apply_exact(sys, Y)
+    return all(positive_definite(X - TX) for X, TX in zip(Y, TY))
+
+
+def decide(sys: Mjls) -> Decision:
+    """The exact verdict (see the module docstring) and the stationary second moments when stable."""
+    Tf = float_operator(sys)
+    size = Tf.shape[0]
+    rho = float(np.max(np.abs(np.linalg.eigvals(Tf)))) if size else 0.0
+    if size > MAX_EXACT_SIZE:
+        ok = rounded_certificate(sys)
+        verdict = "stable" if ok else ("unstable" if rho > 1 else "stable")
+        return Decision(verdict, False, ok, "rounded Lyapunov certificate" if ok else "none", rho, None, size, None)
+    T = operator_matrix(sys)
+    identity = flint.fmpq_mat(size, size)
+    for i in range(size):
+        identity[i, i] = 1
+    rhs = flint.fmpq_mat(size, 2)
+    s = len(vech_index(sys.d))
+    for j in range(sys.modes):
+        for r, (a, b) in enumerate(vech_index(sys.d)):
+            rhs[j * s + r, 0] = 1 if a == b else 0
+    noise = noise_vector(sys)
+    for i in range(size):
+        rhs[i, 1] = noise[i, 0]
+    rho_text = None
+    try:
+        sol = (identity - T).solve(rhs, algorithm="dixon")  # type: ignore[call-arg]
+    except ZeroDivisionError:
+        sign, rho_text = exact_radius(sys, T)
+        verdict = "boundary" if sign == 0 else ("unstable" if sign > 0 else "stable")
+        if sign < 0:  # cannot happen: 1 is an eigenvalue, so rho >= 1
+            raise NumericalFailure("I - T is singular but no eigenvalue >= 1 was found") from None
+        return Decision(verdict, True, True, "characteristic polynomial", rho, rho_text, size, None)
+    Y = _stacked(sys, sol, 0)
+    stable = all(positive_definite(X) for X in Y)
+    if size <= MAX_EXACT_RADIUS_SIZE:
+        _, rho_text = exact_radius(sys, T)
+    if stable:
+        moments = tuple(_stacked(sys, sol, 1))
+        return Decision("stable", True, True, "exact Lyapunov solution", rho, rho_text, size, moments)
+    return Decision(
+        "unstable", True, True, "I - T invertible, Lyapunov solution not definite", rho, rho_text, size, None
+    )
+
+
+def float_moments(sys: Mjls) -> list[np.ndarray]:
+    """Stationary second moments in float64 (for checks and the rounded route)."""
+    Tf = float_operator(sys)
+    noise = noise_vector(sys)
+    y = np.linalg.solve(np.eye(Tf.shape[0]) - Tf, to_numpy(noise)[:, 0])
+    s = len(vech_index(sys.d))
+    out = []
+    for j in range(sys.modes):
+        X = np.zeros((sys.d, sys.d))
+        for r, (a, b) in enumerate(vech_index(sys.d)):
+            X[a, b] = X[b, a] = y[j * s + r]
+        out.append(X)
+    return out
+
+
+__all__ = ["Decision", "decide", "exact_radius", "float_moments", "positive_definite", "rounded_certificate", "vech"]

@@ -1,0 +1,166 @@
+"""OpenAPI component schemas of ``kfio loop`` (merged into the service's components on import)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from ..._version import __version__
+from .schemas import COMPONENTS, _ref
+
+LOOP_EXAMPLE: dict[str, Any] = {
+    "system": {"A": [[1.25]], "B": [[1]], "C": [[1]], "Q": [[1]], "R": [[0.5]]},
+    "channel": {"model": "bernoulli", "arrival_probability": 0.8},
+    "actuator_channel": {"model": "bernoulli", "arrival_probability": 0.9},
+    "controller": {"gains": {"K": [[0.5]], "L": [[0.6]]}, "form": "predictor"},
+    "cost": {"W": [[1]], "U": [[0.5]]},
+    "options": {"loop": {"protocol": "tcp", "on_loss": "zero"}},
+}
+
+LOOP_EXAMPLES = {"scalar-loop": {"summary": "A scalar loop, Bernoulli links on both sides", "value": LOOP_EXAMPLE}}
+
+_WEIGHTS = {
+    "type": "object",
+    "properties": {
+        "W": {**_ref("Matrix"), "description": "n x n state weight, symmetric positive semidefinite (default I)"},
+        "U": {**_ref("Matrix"), "description": "m x m input weight, symmetric positive semidefinite (default 0)"},
+    },
+    "additionalProperties": False,
+}
+
+LOOP_COMPONENTS: dict[str, dict[str, Any]] = {
+    "LoopRequest": {
+        "type": "object",
+        "description": (
+            "A closed loop over lossy links (Schenato, Sinopoli, Franceschetti, Poolla and Sastry 2007): "
+            "x[t+1] = A x + B a + w, y = C x + v; the sensor packets travel over `channel`, the actuator packets "
+            "over `actuator_channel`; u = -L x_hat with the estimator gain K in predictor form (python-control's "
+            "dlqe) or filter form.  See docs/loop.md."
+        ),
+        "properties": {
+            "system": {
+                "type": "object",
+                "description": "The System fields (A, C, Q, R and sensors; Q and R required) plus B (n x m).",
+                "properties": {
+                    "A": _ref("Matrix"),
+                    "B": _ref("Matrix"),
+                    "C": _ref("Matrix"),
+                    "Q": _ref("Matrix"),
+                    "R": _ref("Matrix"),
+                    "sensors": {"type": "array", "minItems": 1, "maxItems": 8, "items": _ref("Sensor")},
+                },
+                "required": ["A", "B", "C", "Q", "R"],
+                "additionalProperties": False,
+            },
+            "channel": _ref("Channel"),
+            "actuator_channel": {
+                "anyOf": [_ref("BernoulliChannel"), _ref("GilbertElliottChannel"), _ref("MarkovChannel")]
+            },
+            "controller": {
+                "anyOf": [
+                    {
+                        "type": "object",
+                        "properties": {
+                            "gains": {
+                                "type": "object",
+                                "properties": {
+                                    "K": {**_ref("Matrix"), "description": "n x p estimator gain"},
+                                    "L": {**_ref("Matrix"), "description": "m x n feedback gain, u = -L x_hat"},
+                                },
+                                "required": ["K", "L"],
+                                "additionalProperties": False,
+                            },
+                            "form": {"enum": ["predictor", "filter"]},
+                        },
+                        "required": ["gains"],
+                        "additionalProperties": False,
+                    },
+                    {
+                        "type": "object",
+                        "properties": {"lqg": _WEIGHTS},
+                        "required": ["lqg"],
+                        "additionalProperties": False,
+                    },
+                ]
+            },
+            "cost": _WEIGHTS,
+            "options": {
+                "type": "object",
+                "properties": {
+                    "loop": {
+                        "type": "object",
+                        "properties": {
+                            "protocol": {"enum": ["tcp", "udp"]},
+                            "on_loss": {"enum": ["zero", "hold"]},
+                            "region": {
+                                "type": "integer",
+                                "minimum": 2,
+                                "maximum": 41,
+                                "description": "add the exact boundary of the stable region in the (sensor, "
+                                "actuator) arrival-probability plane at this many sensor probabilities "
+                                "(Bernoulli links on both sides)",
+                            },
+                        },
+                        "additionalProperties": False,
+                    },
+                    "time_budget_s": {**_ref("ExactNumber"), "description": "seconds, in [0.01, 3600]"},
+                },
+                "additionalProperties": False,
+            },
+        },
+        "required": ["system", "channel", "actuator_channel", "controller"],
+        "additionalProperties": False,
+        "examples": [LOOP_EXAMPLE],
+    },
+    "LoopReport": {
+        "type": "object",
+        "description": (
+            "The report of `kfio loop --json`: the exact mean-square verdict (Costa, Fragoso and Marques 2005, "
+            "Thm 3.9), the stationary cost (null when unbounded) and the critical arrival probability of each "
+            'link alone.  Exact values are strings ("9/16"), their float approximations numbers.'
+        ),
+        "properties": {
+            "kfio_version": {"type": "string"},
+            "verdict": {"type": "string", "enum": ["stable", "unstable", "boundary"]},
+            "exact": {"type": "boolean"},
+            "certified": {"type": "boolean"},
+            "spectral_radius": {"type": ["number", "null"]},
+            "spectral_radius_exact": {"type": ["string", "null"]},
+            "cost": {"type": ["number", "null"]},
+            "cost_exact": {"type": ["string", "null"]},
+            "critical_sensor_arrival_probability": {"type": ["number", "null"]},
+            "critical_sensor_arrival_probability_exact": {"type": ["string", "null"]},
+            "critical_actuator_arrival_probability": {"type": ["number", "null"]},
+            "critical_actuator_arrival_probability_exact": {"type": ["string", "null"]},
+            "critical_values": {"type": "array", "items": {"type": "object"}},
+            "estimator_alone": {"type": "object"},
+            "region": {"type": ["object", "null"]},
+            "lqg": {
+                "type": ["object", "null"],
+                "description": "with controller.lqg: the control MARE's critical actuator probability, at least "
+                "1 - 1/rho(A)^2 and equal to it for square invertible B or a scalar plant",
+            },
+            "loop": {"type": "object"},
+        },
+        "required": ["kfio_version", "verdict", "spectral_radius", "cost", "certified"],
+        "examples": [
+            {  # kfio loop --json examples/loop_scalar.json (abridged)
+                "kfio_version": __version__,
+                "verdict": "stable",
+                "exact": True,
+                "certified": True,
+                "spectral_radius": 0.7625,
+                "spectral_radius_exact": "61/80",
+                "cost": 18.339837542615296,
+                "cost_exact": "256154510/13967109",
+                "critical_sensor_arrival_probability": 0.5625,
+                "critical_sensor_arrival_probability_exact": "9/16",
+                "critical_actuator_arrival_probability": 0.4934210526315789,
+                "critical_actuator_arrival_probability_exact": "75/152",
+            }
+        ],
+    },
+}
+
+COMPONENTS.update(LOOP_COMPONENTS)
+
+__all__ = ["LOOP_COMPONENTS", "LOOP_EXAMPLE", "LOOP_EXAMPLES"]
