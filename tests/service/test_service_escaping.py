@@ -138,3 +138,22 @@ def test_cli_error_line_shows_the_pointer_without_controls(tmp_path: Path, capsy
     assert main(["analyze", str(path)]) == exitcodes.INVALID_INPUT
     err = capsys.readouterr().err
     assert "t\\x9b2J" in err and not controls(err)
+
+
+@pytest.mark.parametrize(
+    ("tree", "field"),
+    [
+        ({"options": {"a/b~c": 1}, "checks": []}, "/options/a~1b~0c"),
+        ({"checks": [{"plant": {}, "requirements": {}, "x/~": 1}]}, "/checks/0/x~1~0"),
+        (
+            {"checks": [{"plant": {"A": [[1]], "C": [[1]]}, "requirements": {"m/e~an": 1}}]},
+            "/checks/0/requirements/m~1e~0an",
+        ),
+    ],
+)
+def test_check_files_name_unknown_keys_by_escaped_pointers(tree: dict, field: str) -> None:
+    from kfio.check import parse_check
+
+    with pytest.raises(InvalidInput) as info:
+        parse_check(tree)
+    assert info.value.field == field
