@@ -144,16 +144,15 @@ def test_cli_error_line_shows_the_pointer_without_controls(tmp_path: Path, capsy
     ("tree", "field"),
     [
         ({"options": {"a/b~c": 1}, "checks": []}, "/options/a~1b~0c"),
-        ({"checks": [{"plant": {}, "requirements": {}, "x/~": 1}]}, "/checks/0/x~1~0"),
-        (
-            {"checks": [{"plant": {"A": [[1]], "C": [[1]]}, "requirements": {"m/e~an": 1}}]},
-            "/checks/0/requirements/m~1e~0an",
-        ),
+        ({"checks": [{"plant": "p.json", "requirements": {}, "x/~": 1}]}, "/checks/0/x~1~0"),
+        ({"checks": [{"plant": "p.json", "requirements": {"m/e~an": 1}}]}, "/checks/0/requirements/m~1e~0an"),
     ],
 )
-def test_check_files_name_unknown_keys_by_escaped_pointers(tree: dict, field: str) -> None:
+def test_check_files_name_unknown_keys_by_escaped_pointers(tree: dict, field: str, tmp_path: Path) -> None:
     from kfio.check import parse_check
 
+    plant = {"system": {"A": [[2]], "C": [[1]]}, "channel": {"model": "bernoulli", "arrival_probability": "1/2"}}
+    (tmp_path / "p.json").write_text(json.dumps(plant))
     with pytest.raises(InvalidInput) as info:
-        parse_check(tree)
+        parse_check(tree, base=tmp_path)
     assert info.value.field == field
