@@ -61,5 +61,9 @@ EXPOSE 8000
 # Shell form, so the check follows KFIO_PORT (docker run -e KFIO_PORT=9000); python's urllib, no curl.
 HEALTHCHECK --interval=30s --timeout=3s --start-period=30s --retries=3 \
     CMD python -c "import urllib.request; urllib.request.urlopen('http://127.0.0.1:${KFIO_PORT:-8000}/healthz', timeout=2)" || exit 1
+# Inside the container every name is trusted: the host name clients use is only known where the
+# container is published.  A deployment should name it, e.g. -e KFIO_TRUSTED_HOSTS=kfio.example.org
+# (any other Host header is then 421), which also keeps DNS-rebinding pages out (docs/service.md).
+ENV KFIO_TRUSTED_HOSTS="*"
 # kfio serve reads KFIO_HOST and KFIO_PORT (and every other KFIO_ setting) from the environment.
 CMD ["kfio", "serve"]

@@ -14,6 +14,7 @@ CLI's ``--json``, the HTTP body and ``to_json()``).
 from __future__ import annotations
 
 import json
+import re
 from fractions import Fraction
 from typing import Any, ClassVar
 
@@ -98,6 +99,36 @@ class Report(ShortRepr):
         return json_text(self.to_dict())
 
 
+#: Characters a terminal may act on instead of showing: C0 controls but tab and newline, DEL, C1
+#: controls (U+0080 to U+009F, where U+009B is a one-character CSI), and the bidirectional
+#: embeddings, overrides and isolates (U+202A to U+202E, U+2066 to U+2069) that reorder what is shown.
+_TERMINAL_UNSAFE = re.compile("[\x00-\x08\x0b-\x1f\x7f-\x9f\u202a-\u202e\u2066-\u2069]")
+
+
+def _visible(match: re.Match[str]) -> str:
+    code = ord(match.group())
+    return f"\\x{code:02x}" if code <= 0xFF else f"\\u{code:04x}"
+
+
+def terminal_text(text: str) -> str:
+    r"""``text`` with every character a terminal would act on written as a visible escape.
+
+    User text (sensor names, keys, field pointers) reaches terminals through
+    the CLI's summaries and error lines; an ESC there could set the window
+    title, recolour or erase the screen (ECMA-48 escape sequences).  Newline
+    and tab are kept; every other control character, and the Unicode
+    bidirectional controls, become ``\xHH`` or ``\uHHHH``.  Lone surrogates
+    are left to :func:`kfio.model._exact.escaped`.
+
+    Examples
+    --------
+    >>> print(terminal_text("sensor \x1b]0;pwned\x07 ok\n"))
+    sensor \x1b]0;pwned\x07 ok
+    <BLANKLINE>
+    """
+    return _TERMINAL_UNSAFE.sub(_visible, text)
+
+
 def _short(value: Any) -> str:
     if isinstance(value, float):
         return f"{value:.6g}"
@@ -106,4 +137,4 @@ def _short(value: Any) -> str:
     return repr(value)
 
 
-__all__ = ["Report", "ReportPart", "ShortRepr", "json_text", "stamp"]
+__all__ = ["Report", "ReportPart", "ShortRepr", "json_text", "stamp", "terminal_text"]

@@ -15,6 +15,7 @@ from fastapi import FastAPI
 from fastapi.exceptions import RequestValidationError
 from fastapi.openapi.utils import get_openapi
 from starlette.exceptions import HTTPException as StarletteHTTPException
+from starlette.requests import ClientDisconnect
 
 from kfio._version import __version__
 from kfio.errors import AnalyzerError
@@ -22,8 +23,9 @@ from kfio.errors import AnalyzerError
 from .api import api_router, web
 from .api.schemas import COMPONENTS
 from .dispatch import Dispatcher
+from .host_check import HostCheck, parse_hosts
 from .jobstore import JobStore
-from .problems import ProblemError, problem_handler
+from .problems import ProblemError, disconnect_handler, problem_handler
 from .settings import Settings, get_settings
 
 #: OpenAPI ``info.version``: the package's version (the HTTP contract ships with the package).
@@ -36,7 +38,10 @@ Stability analysis of Kalman filters whose measurements travel over lossy packet
   or a PNG for `/v1/plots/...`.  Numbers are exact: `1.1` means 11/10; strings such as `"11/10"` work too.
 * Errors are `application/problem+json` (RFC 9457).  Invalid input is 422 with `field`
   (a JSON pointer into the request) and `rule`.  Bodies over 1 MiB are refused with 413, bodies
-  not sent as `Content-Type: application/json` with 415.
+  not sent as `Content-Type: application/json` with 415.  Malformed HTTP (a negative `Content-Length`, ...)
+  is 400 `malformed-http`; a request whose headers or body arrive too slowly is 408 `request-timeout`
+  (`KFIO_HEADER_TIMEOUT_S`, `KFIO_BODY_TIMEOUT_S`), and a connection past `KFIO_MAX_CONNECTIONS` is 503
+  `busy`; all three close the connection.
 * Each request has a time budget (30 s by default, set per deployment with `KFIO_TIME_BUDGET_S`;
   a request may ask for less with `options.time_budget_s`, at least 0.01 s).  Past it the answer
   is 504; when no worker becomes free in time, 503 with `Retry-After` (an invalid body is 422 even
@@ -49,6 +54,8 @@ Stability analysis of Kalman filters whose measurements travel over lossy packet
   202 with a `Location` to poll; budgets up to an hour (`KFIO_JOB_TIME_BUDGET_S`), a separate lane of
   worker processes (`KFIO_JOB_WORKERS`), at most `KFIO_MAX_JOBS` waiting (429 beyond), `DELETE` cancels.
   Jobs live in the server's memory: a restart forgets them.
+* Requests are answered only for the host names the deployment trusts (`KFIO_TRUSTED_HOSTS`, loopback names
+  by default); any other `Host` header is 421 `misdirected-request` (a defence against DNS rebinding).
 * A web page for all of this is at `/`; these docs and the page load nothing from other hosts.
 """
 
@@ -67,6 +74,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         jobs = JobStore(settings)
         app.state.dispatcher, app.state.jobs = dispatcher, jobs
         starting = [asyncio.create_task(dispatcher.pool.start()), asyncio.create_task(jobs.start())]
+        app.state.starting = starting  # kfio serve stops (exit 6) if a pool cannot start
         try:
             yield
         finally:
@@ -80,10 +88,12 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app = FastAPI(
         title="kfio", version=API_VERSION, description=DESCRIPTION, lifespan=lifespan, docs_url=None, redoc_url=None
     )
+    app.add_middleware(HostCheck, hosts=parse_hosts(settings.trusted_hosts))  # 421 for untrusted Host names
     app.include_router(api_router)
     web.install(app)  # /, /docs, /redoc: every asset from the package, none from another host
     for exc in (ProblemError, AnalyzerError, RequestValidationError, StarletteHTTPException, Exception):
         app.add_exception_handler(exc, problem_handler)
+    app.add_exception_handler(ClientDisconnect, disconnect_handler)  # an info line, not "internal error"
 
     def openapi() -> dict[str, Any]:
         if app.openapi_schema is None:

@@ -13,7 +13,7 @@ if TYPE_CHECKING:  # the analyzer is imported when a command runs, not for `kfio
     from kfio import Budget, Request
 
 from . import exitcodes
-from .watchdog import DEFAULT_MEMORY_MB, memory_message, run_supervised
+from .watchdog import DEFAULT_MEMORY_MB, MAX_MEMORY_MB, memory_message, run_supervised
 
 #: Budget of a command whose request and flags name none (seconds).
 DEFAULT_TIME_BUDGET_S = 120.0
@@ -82,12 +82,19 @@ def request_budget(data: bytes) -> float | None:
 
 def memory_limit(args: argparse.Namespace) -> int | None:
     """The ``--memory-mb`` limit in bytes (``None``: no limit)."""
-    mb = args.memory_mb
+    rule = f"must be a whole number of MiB in [0, {MAX_MEMORY_MB}] (0: no limit)"
+    mb, name = args.memory_mb, "--memory-mb"
     if mb is None:
-        text = os.environ.get("KFIO_MEMORY_MB", "").strip()
-        mb = int(text) if text.isdigit() else DEFAULT_MEMORY_MB
-    if mb < 0:
-        raise InvalidInput("--memory-mb", "must be a whole number of MiB, at least 0")
+        name = "KFIO_MEMORY_MB"
+        text = os.environ.get(name, "").strip()
+        if not text:
+            mb = DEFAULT_MEMORY_MB
+        elif text.isascii() and text.isdigit() and len(text) <= 12:
+            mb = int(text)
+        else:
+            raise InvalidInput(name, rule)
+    if not 0 <= mb <= MAX_MEMORY_MB:
+        raise InvalidInput(name, rule)
     return mb << 20 if mb else None
 
 
@@ -127,15 +134,17 @@ def dump_json(report: dict[str, Any]) -> str:
 def emit(text: str, stream: TextIO | None = None) -> None:
     """Print ``text`` so that no user string can make printing fail.
 
-    Sensor names and keys are user text; whatever the terminal's encoding,
-    a character it cannot show is written as a backslash escape instead of
-    raising ``UnicodeEncodeError``.
+    Sensor names and keys are user text: a control character a terminal would
+    act on (ESC, ...) is written as a visible escape (:func:`kfio._reporting.terminal_text`),
+    and whatever the terminal's encoding, a character it cannot show is
+    written as a backslash escape instead of raising ``UnicodeEncodeError``.
     """
+    from kfio._reporting import terminal_text
     from kfio.model._exact import escaped
 
     stream = stream if stream is not None else sys.stdout
     encoding = getattr(stream, "encoding", None) or "utf-8"
-    print(escaped(text).encode(encoding, "backslashreplace").decode(encoding), file=stream)
+    print(terminal_text(escaped(text)).encode(encoding, "backslashreplace").decode(encoding), file=stream)
 
 
 def run_guarded(body: Callable[[], int]) -> int:

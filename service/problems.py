@@ -33,8 +33,9 @@ from typing import Any
 
 from fastapi import Request
 from fastapi.exceptions import RequestValidationError
-from fastapi.responses import JSONResponse
+from fastapi.responses import JSONResponse, Response
 from starlette.exceptions import HTTPException as StarletteHTTPException
+from starlette.routing import Match
 
 from kfio.errors import (
     AnalyzerError,
@@ -45,6 +46,7 @@ from kfio.errors import (
     MissingDependency,
     NumericalFailure,
 )
+from kfio.model import json_pointer
 from kfio.model._exact import escaped
 
 from .pool import PoolBusy, PoolShuttingDown, PoolTimeout, WorkerCrashed, WorkerOutOfMemory
@@ -187,8 +189,29 @@ def problem_from_exception(exc: BaseException) -> Problem:
     )
 
 
-def _pointer(parts: tuple[Any, ...]) -> str:
-    return "/" + "/".join(str(p).replace("~", "~0").replace("/", "~1") for p in parts) if parts else "/"
+#: Methods a 405's ``Allow`` may list.
+_METHODS = ("DELETE", "GET", "HEAD", "PATCH", "POST", "PUT")
+
+
+def allowed_methods(request: Request) -> str:
+    """The ``Allow`` header of a 405: every method some route answers on the request's path (RFC 9110, 15.5.6).
+
+    Starlette's own header names the methods of the first route on the path
+    only (``GET`` for ``/v1/jobs/{id}``, which ``DELETE`` serves too), so each
+    method is tried against the app's routes with Starlette's own matching.
+    """
+    routes = request.app.router.routes
+    allowed = [m for m in _METHODS if any(r.matches({**request.scope, "method": m})[0] is Match.FULL for r in routes)]
+    return ", ".join(allowed)
+
+
+async def disconnect_handler(request: Request, exc: Exception) -> Response:
+    """A client that went away before its body was read: one info line, no traceback (it is not a bug).
+
+    The answer goes nowhere; it is there because a handler must return one.
+    """
+    log.info("client disconnected before its request body was read: %s %s", request.method, request.url.path)
+    return Response(status_code=400)
 
 
 async def problem_handler(request: Request, exc: Exception) -> JSONResponse:
@@ -201,15 +224,17 @@ async def problem_handler(request: Request, exc: Exception) -> JSONResponse:
             422,
             "invalid-input",
             "Invalid request",
-            f"{_pointer(rest)}: {err.get('msg')}",
-            field=_pointer(rest),
+            f"{json_pointer(rest)}: {err.get('msg')}",
+            field=json_pointer(rest),
             rule=str(err.get("msg")),
             location=where,
         )
     elif isinstance(exc, StarletteHTTPException):
         problem = Problem(exc.status_code, f"http-{exc.status_code}", str(exc.detail), str(exc.detail))
         response = problem.response()
-        response.headers.update(exc.headers or {})  # e.g. Allow on 405
+        response.headers.update(exc.headers or {})
+        if exc.status_code == 405:  # Starlette names the methods of one route only; a path may have several
+            response.headers["Allow"] = allowed_methods(request)
         return response
     else:
         problem = problem_from_exception(exc)

@@ -24,7 +24,10 @@ from kfio.model._limits import Limits
 if TYPE_CHECKING:
     from kfio.simulation._setup import SimulationLimits
 
-from .watchdog import DEFAULT_MEMORY_MB
+from .watchdog import DEFAULT_MEMORY_MB, MAX_MEMORY_MB
+
+#: The names a local server answers for unless ``KFIO_TRUSTED_HOSTS`` says otherwise (:mod:`kfio.service.host_check`).
+LOOPBACK_HOSTS = "localhost,127.0.0.1,[::1]"
 
 
 def _default_workers() -> int:
@@ -83,34 +86,54 @@ class Settings(BaseSettings):
     job_max_trajectory_steps:
         Cap on a simulation job's ``steps * trajectories`` (a synchronous
         request has :class:`kfio.SimulationLimits`' 10^6: a job may run an hour).
+    header_timeout_s, body_timeout_s:
+        A request's headers must arrive within ``header_timeout_s`` of the
+        connection opening (or of the request's first byte on a kept-alive
+        connection), its body within ``body_timeout_s`` of its headers; the
+        connection is closed otherwise (:mod:`kfio.service.connection_guard`).
+    keep_alive_s:
+        How long an idle kept-alive connection stays open.
+    max_connections:
+        Open connections at most (lowered to fit the descriptor limit); past
+        it a new connection displaces the oldest one still owing its headers,
+        or is answered 503.
+    trusted_hosts:
+        Comma-separated host names the server answers for (``*.example.org``
+        for subdomains, ``*`` for any); any other ``Host`` is answered 421
+        (:mod:`kfio.service.host_check`, against DNS rebinding).
     """
 
-    model_config = SettingsConfigDict(env_prefix="KFIO_", frozen=True, extra="ignore")
+    model_config = SettingsConfigDict(env_prefix="KFIO_", frozen=True, extra="ignore", allow_inf_nan=False)
 
     host: str = "127.0.0.1"
     port: int = Field(8000, ge=0, le=65535)
     workers: int = Field(default_factory=_default_workers, ge=1, le=64)
     time_budget_s: float = Field(30.0, gt=0, le=3600)
     kill_grace_s: float = Field(0.25, ge=0, le=60)
-    memory_mb: int = Field(DEFAULT_MEMORY_MB, ge=0)
+    memory_mb: int = Field(DEFAULT_MEMORY_MB, ge=0, le=MAX_MEMORY_MB)
     shutdown_grace_s: float = Field(3.0, ge=0, le=600)
-    max_queue: int = Field(64, ge=0)
-    max_body_bytes: int = Field(1 << 20, ge=1)
-    cache_entries: int = Field(512, ge=0)
-    cache_bytes: int = Field(64 << 20, ge=0)
-    max_states: int = Field(Limits.max_states, ge=1)
-    max_markov_order: int = Field(Limits.max_markov_order, ge=0)
-    max_digits: int = Field(Limits.max_digits, ge=1)
-    max_outputs: int = Field(Limits.max_outputs, ge=1)
-    max_sensors: int = Field(Limits.max_sensors, ge=1)
+    max_queue: int = Field(64, ge=0, le=100_000)
+    max_body_bytes: int = Field(1 << 20, ge=1, le=1 << 30)
+    cache_entries: int = Field(512, ge=0, le=10_000_000)
+    cache_bytes: int = Field(64 << 20, ge=0, le=1 << 40)
+    max_states: int = Field(Limits.max_states, ge=1, le=400)
+    max_markov_order: int = Field(Limits.max_markov_order, ge=0, le=100)
+    max_digits: int = Field(Limits.max_digits, ge=1, le=4000)  # below Python's 4300-digit int parsing limit
+    max_outputs: int = Field(Limits.max_outputs, ge=1, le=400)
+    max_sensors: int = Field(Limits.max_sensors, ge=1, le=64)
     job_workers: int = Field(1, ge=1, le=64)
     job_time_budget_s: float = Field(3600.0, gt=0, le=86400)
-    max_jobs: int = Field(16, ge=0)
-    job_retention: int = Field(64, ge=1)
-    job_retention_bytes: int = Field(256 << 20, ge=0)
+    max_jobs: int = Field(16, ge=0, le=100_000)
+    job_retention: int = Field(64, ge=1, le=100_000)
+    job_retention_bytes: int = Field(256 << 20, ge=0, le=1 << 40)
     dask_scheduler: str | None = Field(None, pattern=r"^(tcp|tls|inproc)://[^\s]+$")
     max_sweep_points: int = Field(100_000, ge=1, le=1_000_000)
     job_max_trajectory_steps: int = Field(100_000_000, ge=1, le=10_000_000_000)
+    header_timeout_s: float = Field(10.0, gt=0, le=600)
+    body_timeout_s: float = Field(60.0, gt=0, le=3600)
+    keep_alive_s: float = Field(5.0, gt=0, le=600)
+    max_connections: int = Field(1000, ge=1, le=100_000)
+    trusted_hosts: str = Field(LOOPBACK_HOSTS, max_length=4096, pattern=r"[^\s,]")  # at least one name
 
     def memory_bytes(self) -> int | None:
         """:attr:`memory_mb` in bytes, ``None`` for no limit."""

@@ -34,6 +34,9 @@ from . import exitcodes
 #: (``KFIO_MEMORY_MB``, ``--memory-mb``; the figures behind it are in docs/service.md).
 DEFAULT_MEMORY_MB = 3072
 
+#: Largest memory limit accepted (MiB): 16 TiB, above any machine's memory and within ``RLIMIT_AS``'s range.
+MAX_MEMORY_MB = 1 << 24
+
 #: Seconds past the budget before the child is killed (it may raise ``BudgetExceeded`` itself first).
 DEFAULT_GRACE_S = 2.0
 

@@ -3,11 +3,16 @@
 from __future__ import annotations
 
 import json
+import os
 from typing import Any
 
 import pytest
 
 from kfio import load_request
+
+# Starlette's TestClient sends "Host: testserver": the tests trust it beside the loopback names
+# (a deployment trusts only these by default, kfio.service.host_check).
+os.environ.setdefault("KFIO_TRUSTED_HOSTS", "localhost,127.0.0.1,[::1],testserver")
 
 
 def make_request(A: Any, C: Any, channel: Any = None, **system: Any):

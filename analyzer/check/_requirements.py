@@ -36,6 +36,7 @@ from typing import Any, Mapping
 
 from ..errors import InvalidInput
 from ..model._exact import fraction_text, parse_integer, parse_number
+from ..model._pointer import json_pointer
 
 VERDICTS = ("stable", "unstable", "boundary")
 
@@ -94,7 +95,7 @@ def parse_requirements(obj: Any, where: str) -> tuple[Requirement, ...]:
         raise InvalidInput(where, f"expected a non-empty object with keys among {sorted(COMMAND_OF)}")
     out = []
     for key, raw in obj.items():
-        field = f"{where}/{key}"
+        field = where + json_pointer((key,))
         if key not in COMMAND_OF:
             raise InvalidInput(field, f"unknown requirement; expected one of {sorted(COMMAND_OF)}")
         out.append(Requirement(key, _parse_value(key, raw, field), COMMAND_OF[key]))

@@ -33,6 +33,7 @@ from typing import Any, Mapping
 
 from ..errors import InvalidInput
 from ..model._exact import fraction_text, load_json, parse_number
+from ..model._pointer import json_pointer
 from ..model._request import parse_request
 from ._requirements import OUTAGE_KEYS, Requirement, parse_requirements
 
@@ -185,7 +186,7 @@ def parse_check(tree: Any, base: str | Path = ".", source: str = "<check>") -> C
         raise InvalidInput("/options", "expected an object")
     unknown = sorted(set(opts) - _OPTION_KEYS)
     if unknown:
-        raise InvalidInput(f"/options/{unknown[0]}", f"unknown key; options has {sorted(_OPTION_KEYS)}")
+        raise InvalidInput(json_pointer(("options", unknown[0])), f"unknown key; options has {sorted(_OPTION_KEYS)}")
     checks = tree.get("checks")
     if not isinstance(checks, list) or not checks:
         raise InvalidInput("/checks", "expected a non-empty list of entries")
@@ -199,7 +200,7 @@ def parse_check(tree: Any, base: str | Path = ".", source: str = "<check>") -> C
             raise InvalidInput(where, "expected an object with plant, requirements and (usually) channel")
         unknown = sorted(set(entry) - _ENTRY_KEYS)
         if unknown:
-            raise InvalidInput(f"{where}/{unknown[0]}", f"unknown key; an entry has {sorted(_ENTRY_KEYS)}")
+            raise InvalidInput(where + json_pointer((unknown[0],)), f"unknown key; an entry has {sorted(_ENTRY_KEYS)}")
         for need in ("plant", "requirements"):
             if need not in entry:
                 raise InvalidInput(f"{where}/{need}", "required")

@@ -16,7 +16,8 @@ from typing import Any, Mapping
 
 from ..errors import InvalidInput, LimitExceeded
 from ..model._exact import parse_integer, parse_number
-from ..model._request import option_group
+from ..model._pointer import json_pointer
+from ..model._request import OPTION_KEYS, option_group
 from ..model._types import MarkovChannel, Packet, Request, packets_of
 from ._phat import max_horizon
 
@@ -31,7 +32,7 @@ MAX_LMI_ROWS = 200
 MAX_FLOAT_EXPONENT = 30
 MAX_FLOAT_ENTRY = Fraction(10) ** MAX_FLOAT_EXPONENT
 
-_KEYS = ("tolerance", "horizon", "grid", "arrival_probability", "trace_target")
+_KEYS = OPTION_KEYS["bounds"]
 _WHERE = "/options/bounds"
 
 
@@ -132,8 +133,8 @@ def _arrival_overrides(raw: Any, packets: tuple[Packet, ...], lams: tuple[Fracti
     out = list(lams)
     for key, val in raw.items():
         if key not in names:
-            raise InvalidInput(f"{where}/{key}", f"unknown sensor {key!r}; sensors are {names}")
-        out[names.index(key)] = prob(val, f"{where}/{key}")
+            raise InvalidInput(where + json_pointer((key,)), f"unknown sensor {key[:64]!r}; sensors are {names}")
+        out[names.index(key)] = prob(val, where + json_pointer((key,)))
     return tuple(out)
 
 

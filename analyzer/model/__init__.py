@@ -9,6 +9,7 @@ is given); the validator's own frozen record of a plant, the type of
 
 from ._exact import fraction_text, load_json, parse_number
 from ._limits import DEFAULT_LIMITS, Limits
+from ._pointer import json_pointer, pointer_tokens
 from ._request import load_request, parse_request
 from ._types import MarkovChannel, PerSensorChannel, Request, Sensor
 
@@ -20,8 +21,10 @@ __all__ = [
     "Request",
     "Sensor",
     "fraction_text",
+    "json_pointer",
     "load_json",
     "load_request",
     "parse_number",
     "parse_request",
+    "pointer_tokens",
 ]

@@ -25,6 +25,7 @@ import numpy as np
 
 from ..errors import InvalidInput
 from ._exact import fraction_text
+from ._pointer import pointer_tokens
 
 
 def python_leaf(x: Any) -> Any:
@@ -99,8 +100,7 @@ def python_name(pointer: str, tree: Any, name: str, attribute: bool = False) -> 
     "channel['arrival_probability']['01']"
     """
     out, node = name, tree
-    for i, token in enumerate(pointer.split("/")[1:] if pointer else []):
-        key = token.replace("~1", "/").replace("~0", "~")
+    for i, key in enumerate(pointer_tokens(pointer)):
         if isinstance(node, list) and key.isdigit() and int(key) < len(node):
             out, node = f"{out}[{key}]", node[int(key)]
             continue

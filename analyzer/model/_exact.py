@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import re
+import sys
 from decimal import Decimal
 from fractions import Fraction
 from typing import Any
@@ -243,6 +244,11 @@ def load_json(text: str | bytes) -> Any:
     except ValueError as exc:  # int() digit limit of CPython
         if isinstance(exc, InvalidInput):
             raise
+        if "digits" in str(exc):  # CPython's text names its own setting, which a client cannot change
+            raise LimitExceeded(
+                "/",
+                f"a JSON integer has more than {sys.get_int_max_str_digits()} digits; numbers are limited to far fewer",
+            ) from None
         raise InvalidInput("/", f"not valid JSON: {exc}") from None
     if _may_hold_surrogates(text):
         _reject_lone_surrogates(tree)
@@ -318,7 +324,9 @@ _SURROGATE_RULE = (
 
 
 def _path_pointer(path: tuple[str, ...]) -> str:
-    return "".join("/" + escaped(p).replace("~", "~0").replace("/", "~1") for p in path) or "/"
+    from ._pointer import json_pointer
+
+    return json_pointer(escaped(p) for p in path)
 
 
 def fraction_text(x: Fraction) -> str:

@@ -15,10 +15,29 @@ from typing import Any, Iterable, Mapping, Optional
 from ..errors import InvalidInput, LimitExceeded
 from ._exact import load_json, parse_number, value_text
 from ._limits import DEFAULT_LIMITS, Limits
+from ._pointer import json_pointer
 from ._types import Channel, MarkovChannel, Matrix, PerSensorChannel, Request, Sensor, System
 
-#: Option groups a request may carry, one per command.  Commands validate their own group.
-OPTION_GROUPS = ("analyze", "bounds", "simulate")
+#: Option groups a request may carry, one per command, and the keys of each.  Every command
+#: refuses an unknown key in any group (the contract says so), and validates the values of its own.
+OPTION_KEYS: dict[str, frozenset[str]] = {
+    "analyze": frozenset({"ge_grid", "critical_parameter"}),
+    "bounds": frozenset({"tolerance", "horizon", "grid", "arrival_probability", "trace_target"}),
+    "simulate": frozenset(
+        {
+            "steps",
+            "trajectories",
+            "seed",
+            "P0",
+            "exact_steps",
+            "initial_channel",
+            "percentiles",
+            "outage_thresholds",
+            "outage_target",
+        }
+    ),
+}
+OPTION_GROUPS = tuple(OPTION_KEYS)
 
 _TOP_KEYS = {"system", "channel", "options"}
 _SYSTEM_KEYS = {"A", "C", "Q", "R", "sensors"}
@@ -26,20 +45,22 @@ _SYSTEM_KEYS = {"A", "C", "Q", "R", "sensors"}
 
 def pointer(where: str, key: str) -> str:
     """``where`` extended by one object key, escaped as RFC 6901 requires (``~0``, ``~1``)."""
-    return f"{where}/{key.replace('~', '~0').replace('/', '~1')}"
+    return where + json_pointer((key,))
 
 
-def _check_keys(obj: Any, where: str, allowed: set[str], required: set[str]) -> Mapping[str, Any]:
+def _check_keys(
+    obj: Any, where: str, allowed: Iterable[str], required: set[str], what: str = "field"
+) -> Mapping[str, Any]:
     if not isinstance(obj, dict):
         raise InvalidInput(where, "expected a JSON object")
     for key in obj:
         if key not in allowed:
             raise InvalidInput(
-                pointer(where, key), f"unknown field {key[:64]!r}; allowed: {', '.join(sorted(allowed))}"
+                pointer(where, key), f"unknown {what} {key[:64]!r}; allowed: {', '.join(sorted(allowed))}"
             )
     for key in sorted(required):
         if key not in obj:
-            raise InvalidInput(f"{where}/{key}", "required field is missing")
+            raise InvalidInput(pointer(where, key), "required field is missing")
     return obj
 
 
@@ -356,6 +377,7 @@ def parse_request(obj: Any, limits: Limits = DEFAULT_LIMITS) -> Request:
             elif not isinstance(val, dict):
                 raise InvalidInput(f"/options/{key}", "expected a JSON object")
             else:
+                _check_keys(val, f"/options/{key}", OPTION_KEYS[key], set(), "option")
                 options[key] = val
     return Request(system=system, channel=channel, options=options, time_budget_s=time_budget)
 
@@ -392,7 +414,7 @@ def require_assumption_1(channel: Channel) -> None:
 
     chans = channel.channels if isinstance(channel, PerSensorChannel) else (("", channel),)
     for name, ch in chans:
-        base = f"/channel/channels/{name}" if name else "/channel"
+        base = json_pointer(("channel", "channels", name)) if name else "/channel"
         for h, x in enumerate(ch.table):
             if x in (0, 1):
                 if ch.model == "bernoulli":

@@ -12,6 +12,8 @@ from typing import Any, Mapping, Union
 
 import numpy as np
 
+from ._pointer import json_pointer
+
 Matrix = tuple[tuple[Fraction, ...], ...]
 
 
@@ -197,7 +199,8 @@ def packets_of(request: Request) -> tuple[Packet, ...]:
     if isinstance(ch, PerSensorChannel):
         assert system.sensors is not None  # guaranteed by the validator
         return tuple(
-            Packet(s.name, s.rows, ch.for_sensor(s.name), f"/channel/channels/{s.name}") for s in system.sensors
+            Packet(s.name, s.rows, ch.for_sensor(s.name), json_pointer(("channel", "channels", s.name)))
+            for s in system.sensors
         )
     if system.sensors:  # then a single sensor, carrying every row
         return (Packet(system.sensors[0].name, system.sensors[0].rows, ch, "/channel"),)

@@ -49,23 +49,13 @@ import numpy as np
 from ..errors import InvalidInput, LimitExceeded
 from ..model._exact import parse_integer
 from ..model._limits import DEFAULT_LIMITS
-from ..model._request import check_symmetric, is_psd, option_group, parse_matrix
+from ..model._request import OPTION_KEYS, check_symmetric, is_psd, option_group, parse_matrix
 from ..model._types import Matrix, Packet, Request, packets_of, to_float
 
 OPTIONS_FIELD = "/options/simulate"
 PERCENTILES = (50, 90, 99)
 INITIAL_CHANNELS = ("stationary", "all_arrived", "all_lost")
-_KEYS = {
-    "steps",
-    "trajectories",
-    "seed",
-    "P0",
-    "exact_steps",
-    "initial_channel",
-    "percentiles",
-    "outage_thresholds",
-    "outage_target",
-}
+_KEYS = OPTION_KEYS["simulate"]
 
 
 @dataclass(frozen=True)

@@ -35,6 +35,7 @@ from sympy.polys.matrices import DomainMatrix
 from .._budget import Budget
 from .._reporting import ReportPart
 from ..errors import InvalidInput
+from ..model._pointer import pointer_tokens
 from ..model._types import MarkovChannel, PerSensorChannel, Request
 from ..structure._display import readable
 from ..structure._fmo import FmoBlock
@@ -83,7 +84,7 @@ def parse_parameter(request: Request, pointer: str) -> Parameter:
         raise InvalidInput(
             where, "critical_parameter must be a JSON pointer into channel, such as /channel/recovery_rate"
         )
-    rest = [p.replace("~1", "/").replace("~0", "~") for p in parts[2:]]
+    rest = pointer_tokens(pointer)[1:]
     group = 0
     if isinstance(ch, PerSensorChannel):
         names = [n for n, _ in ch.channels]

@@ -13,7 +13,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ..errors import InvalidInput
-from ..model._request import option_group
+from ..model._request import OPTION_KEYS, option_group
 from ..model._types import MarkovChannel, Request
 
 #: Largest ``ge_grid``: 101 x 101 exact labels stay within a second or two.
@@ -34,7 +34,7 @@ def analyze_options(request: Request) -> AnalyzeOptions:
     InvalidInput
         Naming ``/options/analyze/<key>`` and the rule.
     """
-    raw = option_group(request, "analyze", {"ge_grid", "critical_parameter"})
+    raw = option_group(request, "analyze", OPTION_KEYS["analyze"])
     grid = raw.get("ge_grid")
     if grid is not None:
         where = "/options/analyze/ge_grid"

@@ -12,8 +12,12 @@ from __future__ import annotations
 from typing import Any
 
 from kfio._version import __version__
+from kfio.model._exact import _DECIMAL, _WS
+from kfio.model._request import OPTION_KEYS
 
-_NUMBER_PATTERN = r"^\s*[+-]?(\d+(\.\d*)?|\.\d+)([eE][+-]?\d+)?\s*(/\s*[+-]?(\d+(\.\d*)?|\.\d+)([eE][+-]?\d+)?\s*)?$"
+#: The grammar of :func:`kfio.model.parse_number`, from its own pieces: JSON's four whitespace characters
+#: (not ``\s``, which also matches form feed and vertical tab) and ASCII digits.
+_NUMBER_PATTERN = rf"^{_WS}{_DECIMAL}{_WS}(?:/{_WS}{_DECIMAL}{_WS})?$"
 
 
 _KFIO_VERSION = {"type": "string", "description": "The version of kfio that made the report", "examples": [__version__]}
@@ -392,6 +396,7 @@ COMPONENTS: dict[str, dict[str, Any]] = {
                     "gives the smallest arrival probability at which the certified upper bound trace(V_bar) is at "
                     "most T (one Bernoulli packet; bisection, V_bar decreases with lambda: Sinopoli et al. 2004)."
                 ),
+                "propertyNames": {"enum": sorted(OPTION_KEYS["bounds"])},
             },
             "simulate": {
                 "type": "object",
@@ -404,6 +409,7 @@ COMPONENTS: dict[str, dict[str, Any]] = {
                     "straddles e (one Bernoulli packet; bisection over lambda with common random numbers; "
                     "estimated, not certified)."
                 ),
+                "propertyNames": {"enum": sorted(OPTION_KEYS["simulate"])},
             },
         },
         "additionalProperties": False,
@@ -572,7 +578,12 @@ COMPONENTS: dict[str, dict[str, Any]] = {
             "detail": {"type": "string"},
             "field": {"type": "string", "description": "JSON pointer (RFC 6901) to the offending value"},
             "rule": {"type": "string", "description": "The rule that was broken"},
-            "in": {"type": "string", "enum": ["body", "query"], "description": "Where `field` points"},
+            "in": {
+                "type": "string",
+                "enum": ["body", "query", "path", "header"],
+                "description": "Where `field` points: a JSON pointer into the body, or the name of a query "
+                "parameter, path parameter or header",
+            },
         },
         "required": ["type", "title", "status", "detail"],
         "examples": [
@@ -630,9 +641,11 @@ def problem_responses(*statuses: int) -> dict[int | str, dict[str, Any]]:
         503: "No worker became free in time, a worker died, or the server is shutting down; retry later",
         504: "The computation did not finish within its time budget",
     }
+    if 413 in statuses and 415 not in statuses:  # a route that reads a body refuses other media types too
+        statuses = (*statuses, 415)
     return {
         s: {"description": texts[s], "content": {"application/problem+json": {"schema": _ref("Problem")}}}
-        for s in statuses
+        for s in sorted(statuses)
     }
 
 

@@ -60,7 +60,7 @@ def install(app: FastAPI) -> None:
     app.mount("/docs-assets", StaticFiles(directory=_docs_assets()), name="docs-assets")
     openapi_url = app.openapi_url or "/openapi.json"
 
-    @app.get("/", include_in_schema=False)
+    @app.api_route("/", methods=["GET", "HEAD"], include_in_schema=False)  # HEAD: link checkers, uptime probes
     async def index() -> FileResponse:
         return FileResponse(STATIC / "index.html", media_type="text/html")
 

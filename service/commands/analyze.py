@@ -6,7 +6,7 @@ import argparse
 import dataclasses
 
 from .. import exitcodes
-from ..io import add_request_arguments, dump_json, run_request_command
+from ..io import add_request_arguments, dump_json, emit, run_request_command
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -45,7 +45,7 @@ def _run(args: argparse.Namespace) -> int:
 
             with open(args.ge_plot, "wb") as fh:
                 fh.write(_draw_ge_region(report.gilbert_elliott, report.verdict, request))
-        print(dump_json(report.to_dict()) if args.json else report.summary())
+        emit(dump_json(report.to_dict()) if args.json else report.summary())  # emit: user text made safe
         return exitcodes.BY_VERDICT[report.verdict]
 
     return run_request_command(args, work)

@@ -10,7 +10,7 @@ from __future__ import annotations
 import argparse
 
 from .. import exitcodes
-from ..io import add_request_arguments, dump_json, run_request_command
+from ..io import add_request_arguments, dump_json, emit, run_request_command
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -35,7 +35,7 @@ def _run(args: argparse.Namespace) -> int:
     def work(request: Request, budget: Budget) -> int:
         flags = {k: getattr(args, k) for k in ("grid", "horizon", "tolerance") if getattr(args, k) is not None}
         report = compute_bounds(request, flags=flags, budget=budget)
-        print(dump_json(report.to_dict()) if args.json else report.summary())
+        emit(dump_json(report.to_dict()) if args.json else report.summary())  # emit: user text made safe
         return exitcodes.STABLE
 
     return run_request_command(args, work)

@@ -92,7 +92,7 @@ def _run(args: argparse.Namespace) -> int:
         if args.markdown:
             _write(args.markdown, markdown(result), "--markdown")
         if args.json:
-            print(dump_json(result.to_dict()))
+            emit(dump_json(result.to_dict()))
         else:
             emit(table(result))
         if result.status != "pass":

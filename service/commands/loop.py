@@ -15,6 +15,7 @@ from ..io import (
     DEFAULT_TIME_BUDGET_S,
     add_request_arguments,
     dump_json,
+    emit,
     memory_limit,
     read_request_text,
     request_budget,
@@ -66,7 +67,7 @@ def _run(args: argparse.Namespace) -> int:
                 from kfio.loop import analyze_loop, load_loop_request  # here: `kfio --help` stays fast
 
                 report = analyze_loop(load_loop_request(data)).to_dict()
-                print(dump_json(report) if args.json else summary(report))
+                emit(dump_json(report) if args.json else summary(report))  # emit: user text made safe
                 return exitcodes.BY_VERDICT[report["verdict"]]
 
             return run_guarded(work)

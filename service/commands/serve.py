@@ -29,7 +29,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="run the HTTP service",
         description="Serve the kfio HTTP API (docs at /docs). Every option also reads KFIO_<NAME> from the "
         "environment (KFIO_TIME_BUDGET_S, KFIO_MAX_QUEUE, KFIO_MEMORY_MB, ...); command-line options win. "
-        "Exit 6 when the server cannot start (e.g. the port is in use).",
+        "Exit 2 when a setting is out of range (the message names it), 6 when the server cannot start (the port is in use, a worker pool cannot start).",
     )
     p.add_argument("--host", help="interface to listen on (default 127.0.0.1)")
     p.add_argument("--port", type=int, help="TCP port (default 8000)")
@@ -54,19 +54,30 @@ def port_in_use(host: str, port: int) -> str | None:
     return None
 
 
+def setting_error(exc: Any, flags: dict[str, Any]) -> str:
+    """One line naming the setting (its flag, or its ``KFIO_`` variable) and the rule it broke.
+
+    ``exc`` is the ``pydantic.ValidationError`` of :class:`kfio.service.settings.Settings`.
+    """
+    err = exc.errors()[0]
+    name = str(err["loc"][0]) if err.get("loc") else "settings"
+    where = f"--{name.replace('_', '-')}" if name in flags else f"KFIO_{name.upper()}"
+    return f"invalid setting {where}: {err['msg']}"
+
+
 def _run(args: argparse.Namespace) -> int:
     import uvicorn
     from pydantic import ValidationError
 
     from ..app import create_app
+    from ..connection_guard import install_accept_error_log, uvicorn_options
     from ..settings import Settings
 
     overrides = {k: getattr(args, k) for k in ("host", "port", "workers") if getattr(args, k) is not None}
     try:
         settings = Settings(**overrides)
     except ValidationError as exc:
-        err = exc.errors()[0]
-        print(f"kfio: invalid setting {'.'.join(map(str, err['loc']))}: {err['msg']}", file=sys.stderr)
+        print(f"kfio: {setting_error(exc, overrides)}", file=sys.stderr)
         return exitcodes.INVALID_INPUT
     if settings.port != 0:
         reason = port_in_use(settings.host, settings.port)
@@ -84,6 +95,22 @@ def _run(args: argparse.Namespace) -> int:
 
     class DrainingServer(uvicorn.Server):
         """Uvicorn's server, draining the worker pool while it waits for connections to finish."""
+
+        start_error: BaseException | None = None
+
+        async def startup(self, sockets: Any = None) -> None:
+            install_accept_error_log(asyncio.get_running_loop())  # out of descriptors: one line, not a flood
+            await super().startup(sockets)
+            starting = getattr(app.state, "starting", None)
+            if starting:
+                self._watch = asyncio.create_task(self._stop_if_pools_fail(starting))
+
+        async def _stop_if_pools_fail(self, starting: list[asyncio.Task[None]]) -> None:
+            """A pool that cannot start stops the server (exit 6): never serve 503 forever."""
+            for outcome in await asyncio.gather(*starting, return_exceptions=True):
+                if isinstance(outcome, Exception) and not self.should_exit:
+                    self.start_error = outcome
+                    self.should_exit = True
 
         async def shutdown(self, sockets: Any = None) -> None:
             dispatcher = getattr(app.state, "dispatcher", None)
@@ -104,13 +131,18 @@ def _run(args: argparse.Namespace) -> int:
         # The standard loop, even where uvloop is installed: uvloop's add_reader makes the worker
         # pipes non-blocking, and a large answer (a plot) would then be read as a crashed worker.
         loop="asyncio",
+        **uvicorn_options(settings),  # slow, idle and excess connections are cut off
         timeout_graceful_shutdown=int(settings.shutdown_grace_s + UVICORN_MARGIN_S),
     )
+    server = DrainingServer(config)
     try:
-        DrainingServer(config).run()
+        server.run()
     except SystemExit as exc:  # Uvicorn exits 3 when it cannot bind or the app does not start
         if exc.code in (0, None):
             return exitcodes.STABLE
         print("kfio: the server could not start (see the log above)", file=sys.stderr)
+        return exitcodes.CANNOT_SERVE
+    if server.start_error is not None:
+        print(f"kfio: the worker pool could not start ({server.start_error}); stopped", file=sys.stderr)
         return exitcodes.CANNOT_SERVE
     return exitcodes.STABLE

@@ -14,7 +14,7 @@ import dataclasses
 from typing import TYPE_CHECKING, Any
 
 from .. import exitcodes
-from ..io import add_request_arguments, dump_json, run_request_command
+from ..io import add_request_arguments, dump_json, emit, run_request_command
 
 if TYPE_CHECKING:
     from kfio import Budget
@@ -68,7 +68,7 @@ def _run(args: argparse.Namespace) -> int:
 
     def work(request: Request, budget: Budget) -> int:
         report = simulate(with_overrides(request, args), budget=budget)
-        print(dump_json(report.to_dict()) if args.json else report.summary())
+        emit(dump_json(report.to_dict()) if args.json else report.summary())  # emit: user text made safe
         return exitcodes.STABLE
 
     return run_request_command(args, work)

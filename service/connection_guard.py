@@ -1,0 +1,293 @@
+"""Slow, idle and excess connections are cut off before they can hold the server.
+
+Uvicorn waits forever for a request's headers and body: a client that opens a
+connection and sends nothing, or sends one byte a second, holds a file
+descriptor until it goes away, and a few hundred such clients exhaust the
+process's descriptors (then ``/healthz`` stops answering too).
+:func:`guarded_protocol` wraps Uvicorn's HTTP protocol class with three rules:
+
+* **Header deadline** (``KFIO_HEADER_TIMEOUT_S``): a request's headers must be
+  complete this long after the connection opens, or after the first byte of a
+  later request on a kept-alive connection.  A connection that sends nothing
+  is closed then too.
+* **Body deadline** (``KFIO_BODY_TIMEOUT_S``): the body must be complete this
+  long after the headers.
+* **Connection cap** (``KFIO_MAX_CONNECTIONS``, lowered to fit the process's
+  descriptor limit): a new connection past it takes the place of the oldest
+  connection that has not sent its request's headers yet (that one gets
+  ``408``); when every connection has, the new one is answered ``503 busy`` at
+  once and closed, without reading its request.  So clients that hold
+  connections without sending requests cannot lock out the ones that do.
+
+A deadline that passes before the response has started is answered ``408``
+(problem+json, ``Connection: close``); the connection is closed either way.
+Idle kept-alive connections are closed by Uvicorn after ``KFIO_KEEP_ALIVE_S``.
+Malformed HTTP (a negative ``Content-Length``, ...) is answered ``400``
+problem+json instead of Uvicorn's ``text/plain``.
+
+When the process runs out of descriptors anyway, asyncio stops accepting for a
+second and retries; :func:`install_accept_error_log` turns its traceback per
+retry into one log line per :data:`LOG_INTERVAL_S`.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import logging
+import resource
+import time
+from typing import Any, Callable, cast
+
+from .problems import MEDIA_TYPE, Problem
+
+log = logging.getLogger("kfio.service")
+
+#: Descriptors kept free for the worker pools' pipes, the log and the app's own files.
+RESERVED_FDS = 64
+
+#: At most one log line per this many seconds for each kind of refusal.
+LOG_INTERVAL_S = 10.0
+
+_REASONS = {400: b"Bad Request", 408: b"Request Timeout", 503: b"Service Unavailable"}
+
+
+class RateLimitedLog:
+    """Log the first event of a kind, then at most one line per ``interval`` seconds with a count.
+
+    Examples
+    --------
+    >>> clock = iter([0.0, 1.0, 2.0, 20.0]).__next__
+    >>> lines = []
+    >>> rl = RateLimitedLog(10.0, emit=lines.append, clock=clock)
+    >>> for _ in range(4):
+    ...     rl.note("refused")
+    >>> lines
+    ['refused', 'refused (3 times in the last 10 s)']
+    """
+
+    def __init__(
+        self,
+        interval: float = LOG_INTERVAL_S,
+        emit: Callable[[str], None] | None = None,
+        clock: Callable[[], float] = time.monotonic,
+    ) -> None:
+        self.interval = interval
+        self.emit = emit if emit is not None else log.warning
+        self.clock = clock
+        self._last: dict[str, float] = {}
+        self._count: dict[str, int] = {}
+
+    def note(self, message: str) -> None:
+        """Count one event; log it if the last line of this message is older than the interval."""
+        now = self.clock()
+        self._count[message] = self._count.get(message, 0) + 1
+        last = self._last.get(message)
+        if last is not None and now - last < self.interval:
+            return
+        count = self._count.pop(message)
+        self._last[message] = now
+        self.emit(message if last is None else f"{message} ({count} times in the last {self.interval:g} s)")
+
+
+def raw_problem(status: int, kind: str, title: str, detail: str) -> bytes:
+    """A complete ``HTTP/1.1`` problem+json response with ``Connection: close``, as bytes.
+
+    For answers written straight to a transport, outside any ASGI cycle.
+    """
+    body = json.dumps(Problem(status, kind, title, detail).to_dict()).encode()
+    head = (
+        f"HTTP/1.1 {status} ".encode()
+        + _REASONS.get(status, b"Error")
+        + f"\r\ncontent-type: {MEDIA_TYPE}\r\ncontent-length: {len(body)}\r\nconnection: close\r\n\r\n".encode()
+    )
+    return head + body
+
+
+def connection_cap(wanted: int, reserved: int = RESERVED_FDS) -> int:
+    """``wanted``, lowered so that the connections fit in the descriptor limit (``RLIMIT_NOFILE``) with ``reserved`` spare."""
+    soft, _ = resource.getrlimit(resource.RLIMIT_NOFILE)
+    if soft == resource.RLIM_INFINITY:
+        return wanted
+    return max(1, min(wanted, soft - reserved))
+
+
+class Guard:
+    """The rules shared by every connection of one server (see the module docstring)."""
+
+    def __init__(self, header_timeout_s: float, body_timeout_s: float, max_connections: int) -> None:
+        self.header_timeout_s = header_timeout_s
+        self.body_timeout_s = body_timeout_s
+        self.max_connections = max_connections
+        self.open = 0
+        self.log = RateLimitedLog()
+        #: Connections still waiting for a request's headers, oldest first (a dict as an ordered set).
+        self.waiting: dict[Any, None] = {}
+
+
+def guarded_protocol(base: type[asyncio.Protocol], guard: Guard) -> type[asyncio.Protocol]:
+    """A subclass of Uvicorn's HTTP protocol class ``base`` that enforces ``guard``.
+
+    It relies on what Uvicorn's two HTTP protocols (h11 and httptools) share:
+    ``self.cycle`` is the current request, created when its headers are
+    complete, and ``cycle.more_body`` turns false when its body is.
+    """
+
+    class GuardedProtocol(base):  # type: ignore[valid-type, misc]
+        _refused = False
+        _counted = False
+        _deadline: asyncio.TimerHandle | None = None
+        _waiting_for: str | None = None
+
+        def connection_made(self, transport: asyncio.BaseTransport) -> None:
+            while guard.open >= guard.max_connections and guard.waiting:
+                next(iter(guard.waiting))._evict()  # the oldest connection still owing its headers makes room
+            if guard.open >= guard.max_connections:
+                self._refused = True
+                self.transport = transport
+                guard.log.note(
+                    f"connection refused: {guard.max_connections} connections are open (KFIO_MAX_CONNECTIONS)"
+                )
+                transport.write(  # type: ignore[attr-defined]
+                    raw_problem(
+                        503,
+                        "busy",
+                        "Service busy",
+                        f"the server holds its maximum of {guard.max_connections} connections; retry shortly",
+                    )
+                )
+                transport.close()
+                return
+            guard.open += 1
+            self._counted = True
+            super().connection_made(transport)
+            self._arm("headers", guard.header_timeout_s)
+
+        def connection_lost(self, exc: Exception | None) -> None:
+            self._disarm()
+            if self._refused:
+                return
+            if self._counted:
+                guard.open -= 1
+                self._counted = False
+            super().connection_lost(exc)
+
+        def data_received(self, data: bytes) -> None:
+            if self._refused:
+                return
+            before = self.cycle
+            super().data_received(data)
+            self._follow(before)
+
+        def _follow(self, before: Any) -> None:
+            """Arm or disarm the deadline after the parser has read new bytes."""
+            if self.transport is None or self.transport.is_closing():
+                self._disarm()
+                return
+            cycle = self.cycle
+            if cycle is not None and cycle is not before:  # a request's headers are complete
+                if cycle.more_body:
+                    self._arm("body", guard.body_timeout_s)
+                else:
+                    self._disarm()  # the whole request is here: the app's turn
+            elif cycle is not None and cycle.more_body:
+                pass  # more of the body: its deadline runs on
+            elif self._waiting_for == "body":
+                self._disarm()  # the body is complete
+            elif self._waiting_for is None and (cycle is None or cycle.response_complete):
+                self._arm("headers", guard.header_timeout_s)  # the first bytes of the next request
+
+        def _arm(self, what: str, seconds: float) -> None:
+            self._disarm()
+            self._waiting_for = what
+            self._deadline = self.loop.call_later(seconds, self._expired, what, seconds)
+            if what == "headers":
+                guard.waiting[self] = None
+
+        def _disarm(self) -> None:
+            if self._deadline is not None:
+                self._deadline.cancel()
+            self._deadline = None
+            self._waiting_for = None
+            guard.waiting.pop(self, None)
+
+        def _evict(self) -> None:
+            """Close this connection, which owes its request's headers, to make room for a new one."""
+            self._disarm()
+            if self._counted:  # counted out now: the new connection takes its place at once
+                guard.open -= 1
+                self._counted = False
+            if self.transport.is_closing():
+                return
+            guard.log.note("connection closed: it had sent no complete request when the connection cap was reached")
+            detail = (
+                "the request's headers had not arrived when the server, at its connection cap, needed the connection"
+            )
+            cast("asyncio.Transport", self.transport).write(
+                raw_problem(408, "request-timeout", "Request timeout", detail)
+            )
+            self.transport.close()
+
+        def _expired(self, what: str, seconds: float) -> None:
+            self._deadline = None
+            self._waiting_for = None
+            guard.waiting.pop(self, None)
+            if self.transport is None or self.transport.is_closing():
+                return
+            guard.log.note(f"connection closed: request {what} not received within {seconds:g} s")
+            cycle = self.cycle
+            if what == "headers" or not cycle.response_started:  # nothing was answered yet: say why
+                detail = f"the request's {what} did not arrive within {seconds:g} s"
+                cast("asyncio.Transport", self.transport).write(
+                    raw_problem(408, "request-timeout", "Request timeout", detail)
+                )
+            self.transport.close()
+
+        def send_400_response(self, msg: str) -> None:
+            guard.log.note("malformed HTTP request refused (400)")
+            cast("asyncio.Transport", self.transport).write(
+                raw_problem(400, "malformed-http", "Malformed HTTP request", msg)
+            )
+            self.transport.close()
+
+    GuardedProtocol.__name__ = GuardedProtocol.__qualname__ = f"Guarded{base.__name__}"
+    return GuardedProtocol
+
+
+def install_accept_error_log(loop: asyncio.AbstractEventLoop, limiter: RateLimitedLog | None = None) -> None:
+    """Turn asyncio's traceback per failed ``accept()`` (out of descriptors) into one rate-limited line.
+
+    asyncio already stops accepting for a second when ``accept()`` fails with
+    ``EMFILE``/``ENFILE``; the waiting clients stay in the listen backlog.
+    Every other error goes to the handler that was there before.
+    """
+    limiter = limiter or RateLimitedLog()
+    previous = loop.get_exception_handler()
+
+    def handler(loop: asyncio.AbstractEventLoop, context: dict[str, Any]) -> None:
+        if context.get("message") == "socket.accept() out of system resource":
+            exc = context.get("exception")
+            limiter.note(f"cannot accept connections: {getattr(exc, 'strerror', None) or exc}; retrying every second")
+            return
+        if previous is not None:
+            previous(loop, context)
+        else:
+            loop.default_exception_handler(context)
+
+    loop.set_exception_handler(handler)
+
+
+def uvicorn_options(settings: Any) -> dict[str, Any]:
+    """The ``uvicorn.Config`` options that apply the guard of ``settings`` (:class:`kfio.service.settings.Settings`).
+
+    The cap answers 503 problem+json at accept time, so Uvicorn's own
+    ``limit_concurrency`` (a ``text/plain`` 503 after reading the request, and
+    a warning per refusal) is not used.
+    """
+    from uvicorn.protocols.http.auto import AutoHTTPProtocol
+
+    cap = connection_cap(settings.max_connections)
+    if cap < settings.max_connections:
+        log.warning("at most %d connections: the process's descriptor limit allows no more", cap)
+    guard = Guard(settings.header_timeout_s, settings.body_timeout_s, cap)
+    return {"http": guarded_protocol(AutoHTTPProtocol, guard), "timeout_keep_alive": settings.keep_alive_s}
