@@ -64,7 +64,7 @@ def test_every_post_documents_body_examples_and_errors(path: str) -> None:
         assert {"202", "413", "422", "429", "503"} <= set(op["responses"])
         return
     kind, load = "AnalysisRequest", load_request
-    if path in ("/v1/loop", "/v1/jobs/loop"):
+    if path in ("/v1/loop", "/v1/jobs/loop", "/v1/plots/loop-region"):
         from kfio.loop import load_loop_request
 
         kind, load = "LoopRequest", load_loop_request
