@@ -146,3 +146,28 @@ def test_http_plot_is_png_and_bad_bodies_are_422(client: TestClient) -> None:
     markov = {**EXAMPLE, "actuator_channel": {"model": "markov", "order": 1, "arrival_probability": table}}
     r = client.post("/v1/plots/loop-region", json=markov)
     assert r.status_code == 422 and r.json()["field"] == "/actuator_channel/model", r.text
+
+
+def test_gilbert_elliott_actuator_is_a_map_of_exact_verdicts_with_the_reports_critical_rate() -> None:
+    body = {
+        **EXAMPLE,
+        "channel": {"model": "bernoulli", "arrival_probability": "7/10"},  # a cell centre of the map
+        "actuator_channel": {"model": "gilbert_elliott", "failure_rate": "1/10", "recovery_rate": "3/5"},
+        "options": {"loop": {"protocol": "udp", "on_loss": "zero"}},
+    }
+    req = load_loop_request(json.dumps(body))
+    data = loop_region_data(req, POINTS)
+    fig = loop_region_figure(data)
+    report = analyze_loop(req).to_dict()
+    assert data["boundary"] is None and not [ln for ln in fig.axes[0].get_lines() if ln.get_gid() == BOUNDARY_GID]
+    (actuator,) = [c for c in report["critical_values"] if c["link"] == "actuator"]
+    assert actuator["parameter"].endswith("recovery_rate") and actuator["value"] is not None
+    dashed = [np.asarray(ln.get_xydata()) for ln in fig.axes[0].get_lines() if ln.get_linestyle() == "--"]
+    assert {float(d[0, 1]) for d in dashed if d[0, 1] == d[1, 1]} == {actuator["value"]}
+    assert "critical actuator recovery rate" in fig._suptitle.get_text()
+    # the column of cells through the request's sensor probability switches at the report's critical rate
+    codes = np.asarray(fig.axes[0].images[0].get_array()).T
+    i = data["centres"].index(0.7)
+    assert set(codes[i]) == {1.0, -1.0}  # both sides are on the map
+    for j, q in enumerate(data["centres"]):
+        assert codes[i][j] == (1.0 if q > actuator["value"] else -1.0)
