@@ -178,7 +178,7 @@ class Dispatcher:
     def _validate(self, body: bytes, job: str = "analyze") -> None:
         """Raise the 422 problem of an invalid ``body`` (nothing if it is valid); a loop body is a loop request."""
         try:
-            if job == "loop":
+            if job in ("loop", "plot-loop-region"):
                 from kfio.loop import load_loop_request
 
                 load_loop_request(body, self.settings.limits())

@@ -156,6 +156,15 @@ def _loop_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[s
     return report_json(analyze_loop(load_loop_request(body, settings.limits())))
 
 
+def _loop_region_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[str, Any]) -> JobOutput:
+    """PNG from :func:`kfio.service.loop_plot.loop_region` (a loop request)."""
+    from kfio.loop import load_loop_request
+
+    from .loop_plot import loop_region
+
+    return loop_region(load_loop_request(body, settings.limits()), budget, params), PNG
+
+
 JOBS: dict[str, JobFn] = {
     "analyze": analyze_job,
     "bounds": bounds_job,
@@ -168,6 +177,7 @@ JOBS: dict[str, JobFn] = {
     "sweep": _sweep_job,
     "plot-ge-region": _plot_job("ge_region"),
     "loop": _loop_job,
+    "plot-loop-region": _loop_region_job,
 }
 
 

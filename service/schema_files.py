@@ -61,6 +61,16 @@ def _check_components() -> dict[str, dict[str, Any]]:
             "trace(V_bar), the certified upper bound of lim E[P], must be at most this (needs Q and R)",
             exclusiveMinimum=0,
         ),
+        "loop_verdict": {"enum": list(VERDICTS), "description": "the exact mean-square verdict the loop must have"},
+        "loop_cost_at_most": _exact(
+            "the loop's exact stationary cost lim E[x'Wx + a'Ua] must be at most this", exclusiveMinimum=0
+        ),
+        "critical_sensor_arrival_probability_at_most": _exact(
+            "the loop's exact critical sensor arrival probability must be at most this", minimum=0, maximum=1
+        ),
+        "critical_actuator_arrival_probability_at_most": _exact(
+            "the loop's exact critical actuator arrival probability must be at most this", minimum=0, maximum=1
+        ),
         "outage": {
             "type": "object",
             "description": "the upper end of the Wilson 95% interval of the stationary P(trace P > threshold) must "
@@ -81,7 +91,8 @@ def _check_components() -> dict[str, dict[str, Any]]:
     budget = _exact("seconds, in (0, 86400]", exclusiveMinimum=0, maximum=86400)
     entry: dict[str, Any] = {
         "type": "object",
-        "description": "One plant and channel and the requirements on them.",
+        "description": "One plant and channel and the requirements on them, or one loop request file and the "
+        "loop requirements on it.",
         "properties": {
             "name": {"type": "string", "minLength": 1, "description": "unique label (default: the two paths)"},
             "description": {"type": "string"},
@@ -92,6 +103,12 @@ def _check_components() -> dict[str, dict[str, Any]]:
                 "description": "channel file, relative to the check file "
                 "(default: the channel of the plant file, if it is a whole request)",
             },
+            "loop": {
+                "type": "string",
+                "minLength": 1,
+                "description": "loop request file (kfio loop FILE), relative to the check file; instead of plant "
+                "and channel, with the loop requirements",
+            },
             "options": {**_ref("Options"), "description": "the request's options"},
             "requirements": {
                 "type": "object",
@@ -100,7 +117,8 @@ def _check_components() -> dict[str, dict[str, Any]]:
                 "additionalProperties": False,
             },
         },
-        "required": ["plant", "requirements"],
+        "required": ["requirements"],
+        "oneOf": [{"required": ["plant"]}, {"required": ["loop"]}],
         "additionalProperties": False,
     }
     assert set(entry["properties"]) == _ENTRY_KEYS

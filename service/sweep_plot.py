@@ -20,8 +20,8 @@ from kfio.sweep._engine import SweepResult
 from .plots import GE_BOUNDARY_GID, _figure, _headline, _legend_beside, _png
 
 _COLORS = {"stable": "#2a9d8f", "boundary": "#e9c46a", "unstable": "#e76f51", None: "#bbbbbb"}
-_METRIC = {"analyze": "worst_rate", "bounds": "trace_V_bar", "simulate": "final_mean_trace"}
-_LABEL = {"analyze": "verdict", "bounds": "verdict_by_bounds", "simulate": "diverged"}
+_METRIC = {"analyze": "worst_rate", "bounds": "trace_V_bar", "simulate": "final_mean_trace", "loop": "cost"}
+_LABEL = {"analyze": "verdict", "bounds": "verdict_by_bounds", "simulate": "diverged", "loop": "verdict"}
 
 
 def _coordinate(value: Any, name: str) -> float:
@@ -45,6 +45,7 @@ _WHAT = {
     "analyze": "exact verdict per point (Rohr, Marelli and Fu 2014, Theorem 1)",
     "bounds": "verdict of the bounds per point (Sinopoli et al. 2004); no exact verdict computed",
     "simulate": "Monte Carlo divergence per point; no exact verdict computed (sweep analyze for it)",
+    "loop": "exact verdict of the loop per point (Costa, Fragoso and Marques 2005, Theorem 3.9)",
 }
 
 
@@ -104,7 +105,12 @@ def sweep_figure(result: SweepResult) -> Any:
             ax.set_yscale("log")
         ax.set_xlabel(a.name, parse_math=False)
         ax.set_ylabel(
-            {"analyze": "worst rate |alpha|^2 sigma", "bounds": "trace V_bar", "simulate": "final mean trace P"}[cmd]
+            {
+                "analyze": "worst rate |alpha|^2 sigma",
+                "bounds": "trace V_bar",
+                "simulate": "final mean trace P",
+                "loop": "stationary cost (none: unbounded)",
+            }[cmd]
         )
         _legend_beside(ax)
     else:

@@ -20,7 +20,19 @@ key                                        command    holds when
 ``outage: {threshold: M, epsilon: e}``     simulate   the upper end of the Wilson 95% interval of the
                                                       stationary ``P(trace P > M)`` is ``<= e``
                                                       (Monte Carlo evidence, not a certificate)
+``loop_verdict``                           loop       the loop's exact mean-square verdict (Costa,
+                                                      Fragoso and Marques 2005, Thm 3.9) is the one named
+``loop_cost_at_most: J``                   loop       the exact stationary cost ``lim E[x'Wx + a'Ua] <= J``
+                                                      (unbounded: fails)
+``critical_sensor_arrival_probability_     loop       the loop's exact critical sensor arrival
+at_most: v``                                          probability ``<= v`` (the actuator at its value)
+``critical_actuator_arrival_probability_   loop       the loop's exact critical actuator arrival
+at_most: v``                                          probability ``<= v`` (the sensor at its value)
 =========================================  =========  ==================================================
+
+The ``loop`` requirements are judged on the report of ``kfio loop --json``
+for the entry's loop request (Schenato, Sinopoli, Franceschetti, Poolla and
+Sastry 2007, Sec. II, for the model).
 
 Comparisons are exact where kfio has the exact value (a rational worst rate,
 a rational critical probability) and otherwise in floating point; a float
@@ -48,6 +60,17 @@ COMMAND_OF = {
     "tail_exponent_above": "analyze",
     "trace_V_bar_at_most": "bounds",
     "outage": "simulate",
+    "loop_verdict": "loop",
+    "loop_cost_at_most": "loop",
+    "critical_sensor_arrival_probability_at_most": "loop",
+    "critical_actuator_arrival_probability_at_most": "loop",
+}
+
+#: The loop report's field judged by each ``*_at_most`` loop requirement.
+LOOP_LIMITS = {
+    "loop_cost_at_most": "cost",
+    "critical_sensor_arrival_probability_at_most": "critical_sensor_arrival_probability",
+    "critical_actuator_arrival_probability_at_most": "critical_actuator_arrival_probability",
 }
 
 #: Keys of an ``outage`` requirement (the last three set the Monte Carlo run).
@@ -69,7 +92,7 @@ class Requirement:
     def required(self) -> str:
         """The requirement as text, e.g. ``'<= 1/2'``."""
         v = self.value
-        if self.key == "verdict":
+        if self.key in ("verdict", "loop_verdict"):
             return f"= {v}"
         if self.key == "margin":
             return f"worst rate <= {fraction_text(1 - v)} (margin {fraction_text(v)})"
@@ -103,7 +126,7 @@ def parse_requirements(obj: Any, where: str) -> tuple[Requirement, ...]:
 
 
 def _parse_value(key: str, raw: Any, field: str) -> Any:
-    if key == "verdict":
+    if key in ("verdict", "loop_verdict"):
         if raw not in VERDICTS:
             raise InvalidInput(field, f"expected one of {list(VERDICTS)}")
         return raw
@@ -133,9 +156,9 @@ def _parse_value(key: str, raw: Any, field: str) -> Any:
     number = parse_number(raw, field)
     if key == "margin" and not 0 <= number < 1:
         raise InvalidInput(field, "a margin m asks worst rate <= 1 - m; m must be in [0, 1)")
-    if key == "critical_arrival_probability_at_most" and not 0 <= number <= 1:
+    if key.startswith("critical_") and not 0 <= number <= 1:
         raise InvalidInput(field, "a probability must be in [0, 1]")
-    if key in ("trace_V_bar_at_most", "tail_exponent_above") and number <= 0:
+    if key in ("trace_V_bar_at_most", "tail_exponent_above", "loop_cost_at_most") and number <= 0:
         raise InvalidInput(field, "must be positive")
     return number
 
@@ -212,6 +235,13 @@ def judge(req: Requirement, payload: Mapping[str, Any]) -> Judgement:
         trace = v_bar["trace"]
         detail = "upper end of the certified bracket of V_bar (Sinopoli et al. 2004, Theorem 4)"
         return _verdict(_compare(trace, None, req.value, False, True), f"{trace:.6g}", detail)
+    if req.key == "loop_verdict":
+        verdict = report.get("verdict")
+        return Judgement(
+            "pass" if verdict == req.value else "fail", str(verdict), f"exact loop verdict ({report.get('theorem')})"
+        )
+    if req.key in LOOP_LIMITS:
+        return _judge_loop_limit(req, report)
     if req.key == "outage":
         stationary = report.get("stationary") or {}
         rows = stationary.get("outage") or []
@@ -224,6 +254,27 @@ def judge(req: Requirement, payload: Mapping[str, Any]) -> Judgement:
         why = "Monte Carlo evidence: the upper end of the Wilson 95% interval must be <= epsilon"
         return Judgement("pass" if ok else "fail", measured, why)
     raise AssertionError(req.key)  # pragma: no cover - parse_requirements admits only the keys above
+
+
+def _judge_loop_limit(req: Requirement, report: Mapping[str, Any]) -> Judgement:
+    """``cost``, or a link's critical arrival probability, of a loop report at most the limit (exactly)."""
+    field = LOOP_LIMITS[req.key]
+    value, text = report.get(field), report.get(f"{field}_exact")
+    if value is None:
+        if field == "cost":
+            return Judgement("fail", "unbounded", "the loop is not mean-square stable: its stationary cost is infinite")
+        link = "actuator" if "actuator" in field else "sensor"
+        found = [
+            c for c in report.get("critical_values") or [] if (c.get("link") == "actuator") == (link == "actuator")
+        ]
+        note = found[0].get("note", "") if found else f"no critical {link} arrival probability in the report"
+        if note.startswith("no value"):  # no arrival probability of this link stabilizes the loop
+            return Judgement("fail", "none", note)
+        return Judgement("error", "none", note)
+    exact = _exact_or_none(text)
+    what = "exact stationary cost" if field == "cost" else f"exact critical {field.split('_')[1]} arrival probability"
+    measured = str(text) if exact is not None and len(str(text)) <= 40 else f"{value:.6g}"
+    return _verdict(_compare(value, exact, req.value, False, True), measured, what)
 
 
 __all__ = ["COMMAND_OF", "OUTAGE_KEYS", "Judgement", "Requirement", "judge", "parse_requirements"]

@@ -114,6 +114,10 @@ def run_one(command: str, tree: dict[str, Any], seconds: float) -> tuple[str, An
 
     t0 = time.perf_counter()
     try:
+        if command == "loop":  # the report of ``kfio loop --json`` (kfio.loop)
+            from ..loop import analyze_loop, parse_loop_request
+
+            return "ok", {"report": analyze_loop(parse_loop_request(tree)).to_dict()}, time.perf_counter() - t0
         request = parse_request(tree)
         budget = Budget(seconds=seconds)
         if command == "analyze":
@@ -165,6 +169,8 @@ def _preload(commands: set[str]) -> None:
         import kfio.mare  # noqa: F401
     if "simulate" in commands:
         import kfio.simulation  # noqa: F401
+    if "loop" in commands:
+        import kfio.loop  # noqa: F401
 
 
 def run_check(

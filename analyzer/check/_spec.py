@@ -21,6 +21,13 @@ the entry names none) or the bare system object; a channel file holds
 the request's ``options`` (e.g. ``{"bounds": {"horizon": 4}}``).  Every entry
 is validated as a request before any work starts; an error names the field of
 the check file (``/checks/2/plant``) and, inside the named file, its field.
+
+An entry may instead name a loop request file (``"loop": "loops/pendulum.json"``,
+the file of ``kfio loop``, ``docs/loop.md``) with the loop requirements
+(``loop_verdict``, ``loop_cost_at_most``,
+``critical_sensor_arrival_probability_at_most``,
+``critical_actuator_arrival_probability_at_most``); it then names no plant
+or channel.
 """
 
 from __future__ import annotations
@@ -38,7 +45,7 @@ from ..model._request import parse_request
 from ._requirements import OUTAGE_KEYS, Requirement, parse_requirements
 
 _TOP_KEYS = {"$schema", "description", "options", "checks"}
-_ENTRY_KEYS = {"name", "description", "plant", "channel", "options", "requirements"}
+_ENTRY_KEYS = {"name", "description", "plant", "channel", "loop", "options", "requirements"}
 _OPTION_KEYS = {"time_budget_s", "point_budget_s"}
 
 #: Defaults of the whole check's budget and of each evaluation's (seconds).
@@ -66,7 +73,7 @@ class CheckEntry:
     def commands(self) -> tuple[str, ...]:
         """The commands whose reports judge this entry's requirements, in a fixed order."""
         needed = {r.command for r in self.requirements}
-        return tuple(c for c in ("analyze", "bounds", "simulate") if c in needed)
+        return tuple(c for c in ("analyze", "bounds", "simulate", "loop") if c in needed)
 
     def request_for(self, command: str) -> dict[str, Any]:
         """The request tree ``command`` runs: for simulate, with the outage requirement's threshold and settings."""
@@ -141,8 +148,8 @@ def load_tree(data: bytes, name: str) -> Any:
     return load_json(data)
 
 
-def _part(ref: Any, base: Path, field_: str, what: str, key: str) -> tuple[Any, Any]:
-    """The object under ``key`` in the file ``ref`` names (or the bare object), and the whole file."""
+def _part(ref: Any, base: Path, field_: str, what: str, key: str | None) -> tuple[Any, Any]:
+    """The object under ``key`` in the file ``ref`` names (or the bare object; ``key`` None: the file), and the file."""
     if not isinstance(ref, str) or not ref.strip():
         raise InvalidInput(field_, f"expected the path of a {what} file, relative to the check file")
     path = base / ref
@@ -154,7 +161,7 @@ def _part(ref: Any, base: Path, field_: str, what: str, key: str) -> tuple[Any, 
         raise InvalidInput(field_, f"{ref}: {exc.rule}") from None
     if not isinstance(tree, dict):
         raise InvalidInput(field_, f"{ref}: expected a JSON object")
-    return (tree[key] if key in tree else tree), tree
+    return (tree[key] if key is not None and key in tree else tree), tree
 
 
 def _budget(opts: Mapping[str, Any], key: str, default: float) -> float:
@@ -201,6 +208,9 @@ def parse_check(tree: Any, base: str | Path = ".", source: str = "<check>") -> C
         unknown = sorted(set(entry) - _ENTRY_KEYS)
         if unknown:
             raise InvalidInput(where + json_pointer((unknown[0],)), f"unknown key; an entry has {sorted(_ENTRY_KEYS)}")
+        if "loop" in entry:
+            entries.append(_loop_entry(entry, base, where, names))
+            continue
         for need in ("plant", "requirements"):
             if need not in entry:
                 raise InvalidInput(f"{where}/{need}", "required")
@@ -230,6 +240,12 @@ def parse_check(tree: Any, base: str | Path = ".", source: str = "<check>") -> C
             owner = {"system": "plant", "channel": "channel" if "channel" in entry else "plant"}.get(top, "options")
             raise InvalidInput(f"{where}/{owner}", f"{exc.field}: {exc.rule}") from None
         requirements = parse_requirements(entry["requirements"], f"{where}/requirements")
+        looped = [r.key for r in requirements if r.command == "loop"]
+        if looped:
+            raise InvalidInput(
+                f"{where}/requirements/{looped[0]}",
+                "a loop requirement needs an entry naming a loop request file ('loop')",
+            )
         if any(r.command in ("bounds", "simulate") for r in requirements) and not {"Q", "R"} <= set(system):
             keys = [r.key for r in requirements if r.command != "analyze"]
             raise InvalidInput(f"{where}/plant", f"the requirements {keys} need Q and R in the plant's system")
@@ -242,6 +258,39 @@ def parse_check(tree: Any, base: str | Path = ".", source: str = "<check>") -> C
         point_budget_s=_budget(opts, "point_budget_s", DEFAULT_POINT_BUDGET_S),
         source=source,
     )
+
+
+def _loop_entry(entry: Mapping[str, Any], base: Path, where: str, names: set[str]) -> CheckEntry:
+    """An entry naming a loop request file: validated as ``kfio loop`` validates it, loop requirements only."""
+    from ..loop import parse_loop_request
+
+    for key in ("plant", "channel", "options"):
+        if key in entry:
+            raise InvalidInput(
+                f"{where}/{key}", "an entry naming a loop file takes its plant, channels and options from it"
+            )
+    if "requirements" not in entry:
+        raise InvalidInput(f"{where}/requirements", "required")
+    request, _ = _part(entry["loop"], base, f"{where}/loop", "loop", None)  # the whole file is the request
+    name = entry.get("name", str(entry["loop"]))
+    if not isinstance(name, str) or not name.strip():
+        raise InvalidInput(f"{where}/name", "expected a non-empty string")
+    if name in names:
+        raise InvalidInput(f"{where}/name", f"the name {name!r} is used by an earlier entry; names must be unique")
+    names.add(name)
+    try:
+        parse_loop_request(request)
+    except InvalidInput as exc:
+        raise InvalidInput(f"{where}/loop", f"{exc.field}: {exc.rule}") from None
+    requirements = parse_requirements(entry["requirements"], f"{where}/requirements")
+    other = [r.key for r in requirements if r.command != "loop"]
+    if other:
+        raise InvalidInput(
+            f"{where}/requirements/{other[0]}",
+            "an entry naming a loop file takes the loop requirements only (loop_verdict, loop_cost_at_most, "
+            "critical_sensor_arrival_probability_at_most, critical_actuator_arrival_probability_at_most)",
+        )
+    return CheckEntry(name=name, request=dict(request), requirements=requirements)
 
 
 def load_check(path: str | Path) -> CheckSpec:

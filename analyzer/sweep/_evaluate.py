@@ -54,6 +54,10 @@ def _without_noise(tree: Any) -> Any:
 def evaluate_point(command: str, tree: Any, budget_s: float, *, reuse: bool = True) -> dict[str, Any]:
     """The row of one point (never raises for an analysis failure: the row names it)."""
     try:
+        if command == "loop":  # a closed loop (kfio.loop): the same report as ``kfio loop --json``
+            from ..loop import analyze_loop, parse_loop_request
+
+            return row_from_report(command, analyze_loop(parse_loop_request(tree)).to_dict())
         request = parse_request(tree)
         budget = Budget(seconds=budget_s)
         if command == "analyze":

@@ -1,6 +1,6 @@
 """One table row per sweep point: its coordinates and the report's key fields.
 
-The row is read off the same JSON report that ``kfio analyze|bounds|simulate
+The row is read off the same JSON report that ``kfio analyze|bounds|simulate|loop
 --json`` prints (:meth:`to_dict`), so a sweep row and a single request agree by
 construction; :func:`row_from_report` is the one place that says which fields
 a row carries.
@@ -26,6 +26,17 @@ FIELDS: dict[str, tuple[str, ...]] = {
         "lambda_upper",
         "trace_S_bar",
         "trace_V_bar",
+    ),
+    "loop": (
+        "verdict",
+        "spectral_radius",
+        "cost",
+        "cost_exact",
+        "critical_sensor_arrival_probability",
+        "critical_sensor_arrival_probability_exact",
+        "critical_actuator_arrival_probability",
+        "critical_actuator_arrival_probability_exact",
+        "certified",
     ),
     "simulate": (
         "final_mean_trace",
@@ -89,6 +100,8 @@ def _fields(command: str, report: Mapping[str, Any]) -> dict[str, Any]:
             "final_p99_trace": _last(_dig(report, "percentiles", "99")),
             "diverged": report.get("diverged"),
         }
+    if command == "loop":
+        return {key: report.get(key) for key in FIELDS["loop"]}
     raise ValueError(f"unknown command {command!r}")  # pragma: no cover - validated by parse_sweep
 
 

@@ -20,7 +20,7 @@ from typing import Any, Callable, Iterator, Sequence
 from ..errors import InvalidInput, LimitExceeded
 from ..model import DEFAULT_LIMITS, Limits, fraction_text, load_json, parse_number, parse_request
 
-COMMANDS = ("analyze", "bounds", "simulate")
+COMMANDS = ("analyze", "bounds", "simulate", "loop")
 COMBINES = ("grid", "zip")
 _TOP_KEYS = {"command", "base", "axes", "combine", "requests", "options"}
 _AXIS_KEYS = {"pointer", "values", "from", "to", "num", "name"}
@@ -427,7 +427,10 @@ def check_points(
     keep: Callable[[Point], None] | None = None,
     tick: Callable[[], None] | None = None,
 ) -> int:
-    """Check every point with the single-request validator (:func:`kfio.model.parse_request`), keeping none.
+    """Check every point with the single-request validator, keeping none.
+
+    The validator is :func:`kfio.model.parse_request`, or for a ``loop`` sweep
+    :func:`kfio.loop.parse_loop_request`.
 
     ``keep`` is called with each valid point; ``tick`` after each point (a
     budget's check-in, which may raise: one point's check can take a tenth of
@@ -438,10 +441,15 @@ def check_points(
     SweepPointInvalid
         As :func:`validate_points`.
     """
+    validate: Callable[[Any, Limits], Any] = parse_request
+    if spec.command == "loop":  # each point is a loop request (kfio.loop)
+        from ..loop import parse_loop_request
+
+        validate = parse_loop_request
     n = 0
     for p in points(spec):
         try:
-            parse_request(p.request, limits)
+            validate(p.request, limits)
         except InvalidInput as exc:
             raise SweepPointInvalid(p.index, exc.field if exc.field != "/" else "", exc.rule) from None
         if keep is not None:

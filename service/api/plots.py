@@ -13,11 +13,13 @@ from fastapi.responses import Response
 
 from ..problems import Problem, ProblemError
 from .deps import BodyDep, DispatcherDep
+from .loop_schemas import LOOP_EXAMPLES
 from .schemas import (
     GE_REGION_EXAMPLES,
     PHASE_TRANSITION_EXAMPLES,
     REGION_EXAMPLES,
     REQUEST_EXAMPLES,
+    _ref,
     json_body,
     problem_responses,
 )
@@ -105,6 +107,34 @@ async def ge_region(
     points: Annotated[int, Query(ge=2, le=101, description="cells per axis (options.analyze.ge_grid)")] = 41,
 ) -> Response:
     return await dispatcher.answer("plot-ge-region", body, {"points": points})
+
+
+@router.post(
+    "/loop-region",
+    summary="A closed loop's exact stable region over its two links, and its exact cost along each link",
+    description=(
+        "A loop request (as for `POST /v1/loop`) with one sensor link.  Top: every cell of the (sensor, actuator) "
+        "square coloured by the loop's exact mean-square verdict at its centre (Costa, Fragoso and Marques 2005, "
+        "Thm 3.9), the exact critical actuator arrival probability against the sensor's (Bernoulli links: the "
+        "loop report's `region.boundary`), the report's critical values and the request's point.  Bottom: the "
+        "exact stationary cost against each link's parameter, the other held at the request's value.  The "
+        "title is the exact verdict at the request's point."
+    ),
+    response_class=Response,
+    responses={**_PNG, **_ERRORS},
+    openapi_extra={
+        "requestBody": {
+            "required": True,
+            "content": {"application/json": {"schema": _ref("LoopRequest"), "examples": LOOP_EXAMPLES}},
+        }
+    },
+)
+async def loop_region(
+    body: BodyDep,
+    dispatcher: DispatcherDep,
+    points: Annotated[int, Query(ge=2, le=41, description="cells per axis, and boundary points")] = 21,
+) -> Response:
+    return await dispatcher.answer("plot-loop-region", body, {"points": points})
 
 
 @router.post(

@@ -39,8 +39,11 @@ SWEEP_SCHEMA = {
     "type": "object",
     "description": "A sweep: a base request and axes, or a list of requests (see docs/sweeps.md).",
     "properties": {
-        "command": {"enum": ["analyze", "bounds", "simulate"], "default": "analyze"},
-        "base": {"$ref": "#/components/schemas/AnalysisRequest"},
+        "command": {"enum": ["analyze", "bounds", "simulate", "loop"], "default": "analyze"},
+        "base": {
+            "description": "a request; a loop request (docs/loop.md) when `command` is `loop`",
+            "anyOf": [{"$ref": "#/components/schemas/AnalysisRequest"}, {"$ref": "#/components/schemas/LoopRequest"}],
+        },
         "axes": {
             "type": "array",
             "items": {
@@ -58,7 +61,16 @@ SWEEP_SCHEMA = {
             },
         },
         "combine": {"enum": ["grid", "zip"], "default": "grid"},
-        "requests": {"type": "array", "minItems": 1, "items": {"$ref": "#/components/schemas/AnalysisRequest"}},
+        "requests": {
+            "type": "array",
+            "minItems": 1,
+            "items": {
+                "anyOf": [
+                    {"$ref": "#/components/schemas/AnalysisRequest"},
+                    {"$ref": "#/components/schemas/LoopRequest"},
+                ]
+            },
+        },
         "options": {
             "type": "object",
             "properties": {
@@ -90,7 +102,8 @@ def _check_shape(body: bytes, max_points: int) -> SweepSpec:
     status_code=202,
     summary="Run a sweep (grid or zip of a base request, or a list of requests) as a job",
     description=(
-        "The body is a sweep: `command` (`analyze`, `bounds` or `simulate`), `base` (a request) and `axes` "
+        "The body is a sweep: `command` (`analyze`, `bounds`, `simulate` or `loop`), `base` (a request; a loop "
+        "request for `loop`) and `axes` "
         "(each a JSON pointer into the request with `values`, or `from`, `to`, `num` for exactly spaced rationals), "
         "`combine` (`grid` or `zip`); or `requests` (a list of whole requests), or JSON Lines of requests.  "
         "The shape and point count are checked before the job is queued (422 at once); every point is then "

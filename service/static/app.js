@@ -106,7 +106,11 @@ const FIELD_HELP = {
   "/system/R": "measurement noise covariance R (p x p, positive definite; default identity)",
   "/system/sensors": "sensors: which rows of C each packet carries",
   "/channel": "packet channel: bernoulli, gilbert_elliott, markov, or per_sensor",
-  "/options": "options (time_budget_s, bounds, simulate, ...)",
+  "/system/B": "input matrix B (n x m; loop requests)",
+  "/actuator_channel": "actuator packet channel of a loop: bernoulli, gilbert_elliott or markov",
+  "/controller": "loop controller: {\"gains\": {\"K\": ..., \"L\": ...}, \"form\": ...} or {\"lqg\": {\"W\": ..., \"U\": ...}}",
+  "/cost": "loop cost weights: x' W x + a' U a",
+  "/options": "options (time_budget_s, bounds, simulate, loop, ...)",
 };
 
 function renderFields(fields) {
@@ -333,7 +337,7 @@ async function showReport(endpoint, text, doc, body) {
   }
   const report = $("report");
   report.replaceChildren();
-  const render = { analyze: renderAnalyze, bounds: renderBounds, simulate: renderSimulate }[endpoint];
+  const render = { analyze: renderAnalyze, bounds: renderBounds, simulate: renderSimulate, loop: renderLoop }[endpoint];
   report.append(render(doc, exact));
   setStatus(`Done: ${endpoint}.`);
   showCommands(endpoint, body);

@@ -408,9 +408,58 @@ function renderSimulate(r, exact) {
   return out;
 }
 
+// ---------------------------------------------------------------- loop: a closed loop over lossy sensor and actuator links
+
+const LOOP_THEOREM = "Costa, Fragoso and Marques 2005, Theorem 3.9";
+
+const LOOP_MEANING = {
+  stable: "The loop is mean-square stable: E[x x'] of the plant and the estimate settles, and the average cost is finite.",
+  unstable: "The loop is not mean-square stable: the second moments grow without bound and the average cost is infinite.",
+  boundary: "Exactly on the edge: the second-moment operator has spectral radius 1. Any better link is stable.",
+};
+
+/** A link's critical value: its decimal with the exact text, or why there is none. */
+function loopCritical(value, exact, c) {
+  if (value !== null && value !== undefined) return num(exact, value);
+  return c && c.note ? c.note : "not defined for this link";
+}
+
+function renderLoop(r) {
+  const out = document.createDocumentFragment();
+  out.append(headline(r.verdict, `exact verdict (${LOOP_THEOREM})`, [LOOP_MEANING[r.verdict]]));
+  const crit = (link) => (r.critical_values || []).find((c) => (link === "actuator") === (c.link === "actuator"));
+  const est = r.estimator_alone || {};
+  const d = facts([
+    ["stationary cost lim E[x'Wx + a'Ua]", r.cost === null ? "unbounded (the loop is not mean-square stable)" : num(r.cost_exact, r.cost)],
+    ["critical sensor arrival probability", loopCritical(r.critical_sensor_arrival_probability, r.critical_sensor_arrival_probability_exact, crit("sensor"))],
+    ["critical actuator arrival probability", loopCritical(r.critical_actuator_arrival_probability, r.critical_actuator_arrival_probability_exact, crit("actuator"))],
+    ["spectral radius of the second-moment operator", num(r.spectral_radius_exact, r.spectral_radius)],
+    ["certificate", `${r.certificate}${r.certified ? " (certified)" : ""}; operator size ${r.operator_size}, ${r.modes} channel mode(s)`],
+    ["loop", r.loop ? `${r.loop.protocol === "tcp" ? "TCP-like" : "UDP-like"}, lost input ${r.loop.on_loss === "zero" ? "set to zero" : "held"}, ${r.loop.form} gains` : undefined],
+  ]);
+  d.id = "loop";
+  out.append(d);
+  out.append(el("h3", "The estimator alone, with the same fixed gain (no control)"));
+  const cmp = el("p", est.statement ? `${est.statement.charAt(0).toUpperCase()}${est.statement.slice(1)}.` : (est.optimal_filter_note || "No comparison for this channel."), "advice");
+  cmp.id = "estimator-alone";
+  out.append(cmp);
+  out.append(facts([
+    ["verdict of the estimator alone", est.verdict],
+    ["its stationary error trace", est.stationary_error_trace === null ? "unbounded" : num(est.stationary_error_trace_exact, est.stationary_error_trace)],
+    ["its critical sensor arrival probability", loopCritical(est.critical_sensor_arrival_probability, est.critical_sensor_arrival_probability_exact, est.critical_value)],
+    ["the optimal time-varying filter's (Rohr, Marelli and Fu 2014)", loopCritical(est.optimal_filter_critical_arrival_probability, est.optimal_filter_critical_arrival_probability_exact, { note: est.optimal_filter_note })],
+  ]));
+  if (r.lqg) out.append(el("h3", "LQG gains"), el("pre", JSON.stringify(r.lqg, null, 1), "note"));
+  out.append(list("Notes", [r.theorem, r.model, ...(r.notes || [])]));
+  return out;
+}
+
 // ---------------------------------------------------------------- plots beside the numbers
 
 function plotsFor(endpoint, request) {
+  if (endpoint === "loop") {
+    return [["loop-region", "The loop's exact stable region over the two links' parameters, and its exact cost along each link, the request marked"]];
+  }
   if (endpoint === "simulate") return [["simulation", "Simulated trace(P_t): mean, 95% band and percentiles"]];
   const ch = request && request.channel;
   if (!ch) return [];

@@ -57,14 +57,15 @@ def test_every_post_documents_body_examples_and_errors(path: str) -> None:
         from kfio.sweep import load_sweep, validate_points
 
         assert {"base", "axes", "requests", "combine"} <= set(content["schema"]["properties"])
-        assert content["schema"]["properties"]["base"] == {"$ref": "#/components/schemas/AnalysisRequest"}
+        refs = [{"$ref": "#/components/schemas/AnalysisRequest"}, {"$ref": "#/components/schemas/LoopRequest"}]
+        assert content["schema"]["properties"]["base"]["anyOf"] == refs  # a loop request for "command": "loop"
         for example in content["examples"].values():
             validator("AnalysisRequest").validate(example["value"]["base"])
             assert validate_points(load_sweep(json.dumps(example["value"])))  # the sweep validator accepts it
         assert {"202", "413", "422", "429", "503"} <= set(op["responses"])
         return
     kind, load = "AnalysisRequest", load_request
-    if path in ("/v1/loop", "/v1/jobs/loop"):
+    if path in ("/v1/loop", "/v1/jobs/loop", "/v1/plots/loop-region"):
         from kfio.loop import load_loop_request
 
         kind, load = "LoopRequest", load_loop_request

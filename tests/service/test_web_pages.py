@@ -10,6 +10,7 @@ import pytest
 from fastapi.testclient import TestClient
 
 from kfio import load_request
+from kfio.loop import load_loop_request
 from kfio.service.api import web
 from kfio.service.app import create_app
 from kfio.service.settings import Settings
@@ -113,9 +114,13 @@ def test_shipped_examples_are_valid_requests_matching_the_repository_examples(cl
     ids = {e["id"] for e in index}
     assert {"seed004-2x2", "bursty-gilbert-elliott", "two-sensors", "seed004-scalar"} <= ids
     for example in index:
-        assert example["endpoint"] in {"analyze", "bounds", "simulate"}
+        assert example["endpoint"] in {"analyze", "bounds", "simulate", "loop"}
         body = client.get(f"/static/requests/{example['id']}.json").content
-        load_request(body)  # raises on an invalid request
+        if example["endpoint"] == "loop":  # a loop request (docs/loop.md), the repository example
+            load_loop_request(body)  # raises on an invalid loop request
+            assert json.loads(body) == json.loads((REPO / "examples" / "loop_scalar.json").read_text())
+        else:
+            load_request(body)  # raises on an invalid request
     # the 2x2 example is the one of the browser test: A = [[1.25, 0], [1, 1.1]], C = [1 1], Q = 20 I, R = 2.5
     two_by_two = json.loads(client.get("/static/requests/seed004-2x2.json").content)
     assert two_by_two == json.loads((REPO / "examples" / "bounds_seed004_2x2.json").read_text())

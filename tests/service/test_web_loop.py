@@ -1,0 +1,64 @@
+"""The page's Loop command, read in Chromium and checked against the loop report (issue 24).
+
+The shipped loop example (``examples/loop_scalar.json``) is loaded and run
+with the Loop button: the headline is the exact verdict of the report the
+API returns for the same body, the cost and both critical probabilities are
+shown as the report's decimals with their exact texts, the estimator-alone
+sentence is the report's, and the region plot is drawn.  Server and browser
+are those of ``test_web_browser.py`` (Debian's chromium, loopback only).
+"""
+
+# ruff: noqa: F811  (pytest fixtures imported from test_web_browser are parameters here)
+
+from __future__ import annotations
+
+import json
+from typing import Any
+
+import httpx
+import pytest
+from test_web_answers import dec, headline, run_example
+from test_web_browser import ARTIFACTS, browser_context, open_page, server  # noqa: F401  (fixtures)
+
+from support.live_server import LiveServer
+
+pytestmark = pytest.mark.slow
+
+
+def test_loop_example_headlines_the_exact_verdict_and_shows_the_reports_numbers(
+    server: LiveServer, browser_context: tuple[Any, list[str]]
+) -> None:
+    context, outside = browser_context
+    outside.clear()
+    page = open_page(context, server.url + "/")
+    shown = run_example(page, "loop-scalar", "loop")
+    body = page.evaluate("state.requestText")
+    r = httpx.post(server.url + "/v1/loop", content=body, headers={"Content-Type": "application/json"}, timeout=120)
+    assert r.status_code == 200, r.text
+    report = r.json()
+    assert shown == report  # the page shows the API's report for the body it sent
+    assert json.loads(body)["actuator_channel"]["arrival_probability"] == 0.9
+
+    verdict, word, source = headline(page)
+    assert verdict == word == report["verdict"]
+    assert "exact verdict" in source and "Costa, Fragoso and Marques 2005" in source
+
+    facts = page.locator("#loop").inner_text()
+    cost = report["cost"]
+    assert cost is not None and dec(cost) in facts
+    for key in ("critical_sensor_arrival_probability", "critical_actuator_arrival_probability"):
+        exact, value = report[f"{key}_exact"], report[key]
+        assert f"{exact} = {dec(value)}" in facts  # short exact text beside the decimal
+    # the cost's exact fraction is long: behind the "exact" toggle, in full
+    assert report["cost_exact"] in page.locator("#loop details.exact code").all_text_contents()
+
+    statement = report["estimator_alone"]["statement"]
+    assert statement and statement in page.locator("#estimator-alone").inner_text().lower()
+
+    img = page.locator("#plots figure img")
+    img.wait_for(timeout=180_000)
+    assert page.evaluate("document.querySelector('#plots figure img').naturalWidth") > 0
+    assert page.locator("#kfio-cmd").input_value() == "kfio loop --json request.json"
+    ARTIFACTS.mkdir(parents=True, exist_ok=True)
+    page.locator("#results").screenshot(path=str(ARTIFACTS / "web-loop.png"))
+    assert outside == []
