@@ -18,7 +18,7 @@ from kfio.service import exitcodes
 from kfio.service.cli import main
 from kfio.service.watchdog import run_supervised
 
-from support.live_server import slow_request
+from support.live_server import memory_request
 
 SCALAR = {
     "system": {"A": [[2]], "C": [[1]], "Q": [[1]], "R": [[1]]},
@@ -96,7 +96,7 @@ def test_cli_memory_limit_is_exit_4(tmp_path: Path, capsys: pytest.CaptureFixtur
     # imports; the blocked simulation kernel needs between 300 and 350 MiB in all, the previous
     # one more than 400); see docs/service.md for the measured figures
     path = tmp_path / "slow.json"
-    path.write_bytes(slow_request(time_budget_s=60))
+    path.write_bytes(memory_request(time_budget_s=60))
     r = subprocess.run(
         [sys.executable, "-m", "kfio.service.cli", "simulate", str(path), "--memory-mb", "250"],
         capture_output=True,

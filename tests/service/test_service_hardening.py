@@ -21,7 +21,7 @@ from kfio.service import dispatch
 from kfio.service.app import create_app
 from kfio.service.settings import Settings
 
-from support.live_server import JSON_HEADERS, SLOW_PATH, slow_request
+from support.live_server import JSON_HEADERS, SLOW_PATH, memory_request, slow_request
 
 PROBLEM = "application/problem+json"
 SCALAR = {"system": {"A": [[2]], "C": [[1]]}, "channel": {"model": "bernoulli", "arrival_probability": 0.5}}
@@ -139,7 +139,7 @@ def test_validation_comes_before_the_busy_answer() -> None:
 def test_a_worker_out_of_memory_gives_422_and_is_replaced() -> None:
     # a worker maps about 440 MiB after its imports; Monte Carlo at the size limits needs far more
     with started(Settings(workers=1, memory_mb=600, time_budget_s=30)) as c:
-        r = c.post(SLOW_PATH, content=slow_request(time_budget_s=20, seed=62), headers=JSON_HEADERS)
+        r = c.post(SLOW_PATH, content=memory_request(time_budget_s=20, seed=62), headers=JSON_HEADERS)
         assert r.status_code == 422 and r.headers["content-type"] == PROBLEM, r.text
         assert r.json()["type"] == "urn:kfio:problem:memory-exceeded"
         wait_for(lambda: c.get("/readyz").status_code == 200, "the worker was replaced")

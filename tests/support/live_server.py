@@ -152,5 +152,18 @@ def slow_request(time_budget_s: float | None = None, seed: int = 1) -> bytes:
     return json.dumps(body).encode()
 
 
+def memory_request(time_budget_s: float | None = None, seed: int = 1) -> bytes:
+    """A valid request that needs far more memory than its imports: Monte Carlo with the most covariances.
+
+    ``n = 40`` with every state measured and 20,000 trajectories (near the cap of 2^25 floats)
+    for 50 steps: the packed batch alone is 131 MB and one full batch 256 MB, beside a
+    workspace of the same order. (:func:`slow_request`'s 2,500 trajectories fit in a few
+    hundred MiB since the simulation keeps one full batch at a time.)
+    """
+    body = json.loads(slow_request(time_budget_s, seed))
+    body["options"]["simulate"].update({"steps": 50, "trajectories": 20_000})
+    return json.dumps(body).encode()
+
+
 #: Headers of a JSON POST sent with ``content=`` (the service refuses other media types with 415).
 JSON_HEADERS = {"Content-Type": "application/json"}
