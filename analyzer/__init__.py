@@ -98,13 +98,24 @@ if TYPE_CHECKING:  # what the lazy names are, for type checkers and editors
         NumericalFailure,
     )
     from .mare import BoundsReport
-    from .model._channels import bernoulli, gilbert_elliott, markov, per_sensor
-    from .model._exact import load_json, parse_number
-    from .model._limits import DEFAULT_LIMITS, Limits
-    from .model._request import load_request, parse_request
-    from .model._types import MarkovChannel, PerSensorChannel, Request, Sensor
+    from .model import (
+        DEFAULT_LIMITS,
+        Limits,
+        MarkovChannel,
+        PerSensorChannel,
+        Request,
+        Sensor,
+        bernoulli,
+        gilbert_elliott,
+        load_json,
+        load_request,
+        markov,
+        parse_number,
+        parse_request,
+        per_sensor,
+    )
     from .simulation import DEFAULT_SIMULATION_LIMITS, FiniteHorizonReport, SimulationLimits, SimulationReport
-    from .stability._verdict import BlockReport, StabilityReport
+    from .stability import BlockReport, StabilityReport
 
 
 def __getattr__(name: str) -> Any:

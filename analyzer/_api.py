@@ -17,19 +17,24 @@ from typing import TYPE_CHECKING, Any
 from ._budget import Budget
 from ._system import System
 from .errors import InvalidInput
-from .model import _types
-from .model._channels import channel_tree
-from .model._coerce import Route, json_ready, python_tree, renamed
-from .model._limits import DEFAULT_LIMITS, Limits
-from .model._request import parse_request
-from .model._types import Request
+from .model import (
+    DEFAULT_LIMITS,
+    Limits,
+    Request,
+    Route,
+    SystemRecord,
+    channel_tree,
+    json_ready,
+    parse_request,
+    python_tree,
+    renamed,
+)
 
 if TYPE_CHECKING:
     from ._typing import BudgetLike, ChannelLike, MatrixLike
-    from .mare._report import BoundsReport
-    from .simulation._finite_horizon import FiniteHorizonReport
-    from .simulation._simulate import SimulationReport
-    from .stability._verdict import StabilityReport
+    from .mare import BoundsReport
+    from .simulation import FiniteHorizonReport, SimulationReport
+    from .stability import StabilityReport
 
 
 def _budget_of(budget: Any) -> tuple[Budget | None, Any]:
@@ -73,7 +78,7 @@ def _tree(
     keywords: Mapping[str, Any] = {},
     limits: Limits = DEFAULT_LIMITS,
 ) -> tuple[dict[str, Any], list[Route]]:
-    if not isinstance(system, _types.System):
+    if not isinstance(system, SystemRecord):
         raise InvalidInput("system", f"expected a kfio.System; got a {type(system).__name__}")
     if not isinstance(system, System):
         system = System(system.A, system.C, system.Q, system.R, system.sensors, limits=limits)
@@ -237,7 +242,7 @@ def analyze(
     >>> r.verdict, r.critical_arrival_probability_exact, r.blocks[0].sigma
     ('stable', '9/25', 0.5)
     """
-    from .stability._verdict import analyze as _analyze
+    from .stability import analyze as _analyze
 
     request, work, routes = _build_request(system, channel, command="analyze", options=options, budget=budget)
     return _run(_analyze, routes, request, budget=work)
@@ -278,7 +283,7 @@ def bounds(
     >>> round(b.critical[0].lower, 9), b.verdict
     (0.36, 'stable')
     """
-    from .mare._compute import compute_bounds
+    from .mare import compute_bounds
 
     request, work, routes = _build_request(system, channel, command="bounds", options=options, budget=budget)
     return _run(compute_bounds, routes, request, work)
@@ -330,7 +335,7 @@ def simulate(
     >>> rep.mean_trace.shape, rep.mean_diverged_at
     ((21,), None)
     """
-    from .simulation._simulate import simulate as _simulate
+    from .simulation import simulate as _simulate
 
     given = dict(
         steps=steps,
@@ -385,7 +390,7 @@ def expected_covariance(
     >>> float(rep.mean_trace[1])
     4.0
     """
-    from .simulation._finite_horizon import expected_covariance as _expected
+    from .simulation import expected_covariance as _expected
 
     if isinstance(system, Request) and steps is None and isinstance(channel, int) and not isinstance(channel, bool):
         channel, steps = None, channel  # expected_covariance(request, steps)

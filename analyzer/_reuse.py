@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any, Callable, Hashable, Sequence
 from ._budget import Budget
 
 if TYPE_CHECKING:
-    from .structure._fmo import FmoBlock
+    from .structure import FmoBlock
 
 #: Plants whose blocks each process keeps.
 STRUCTURE_ENTRIES = 256
@@ -76,7 +76,7 @@ def reused_fmo_blocks(system: Any, budget: Budget | None = None) -> Sequence[Fmo
     (:func:`kfio.stability.analyze` takes them as ``fmo=``).  This module
     imports the exact structure code (SymPy, FLINT) only when first asked.
     """
-    from .structure._fmo import fmo_blocks
+    from .structure import fmo_blocks
 
     return _BLOCKS.get(structure_key(system), lambda: fmo_blocks(system, budget))  # type: ignore[no-any-return]
 

@@ -13,12 +13,18 @@ from dataclasses import fields
 from typing import TYPE_CHECKING, Any
 
 from .errors import InvalidInput
-from .model import _types
-from .model._coerce import Route, python_tree, renamed
-from .model._exact import fraction_text
-from .model._limits import DEFAULT_LIMITS, Limits
-from .model._request import parse_system
-from .model._types import Matrix, Sensor
+from .model import (
+    DEFAULT_LIMITS,
+    Limits,
+    Matrix,
+    Route,
+    Sensor,
+    SystemRecord,
+    fraction_text,
+    parse_system,
+    python_tree,
+    renamed,
+)
 
 if TYPE_CHECKING:
     from ._typing import MatrixLike, SensorsLike
@@ -40,7 +46,7 @@ def _readable(x: Any) -> str:
     return text if len(text) <= REPR_TEXT_CHARS else f"~{float(x):.6g}"
 
 
-class System(_types.System):
+class System(SystemRecord):
     """A linear plant observed through lossy packets: ``x[t+1] = A x[t] + w[t]``, ``y[t] = C x[t] + v[t]``.
 
     ``w ~ N(0, Q)`` and ``v ~ N(0, R)`` are white; the measurement ``y[t]``
@@ -119,7 +125,7 @@ class System(_types.System):
             system = parse_system(tree, limits)
         except InvalidInput as exc:
             raise renamed(exc, routes) from None
-        for f in fields(_types.System):
+        for f in fields(SystemRecord):
             object.__setattr__(self, f.name, getattr(system, f.name))
         object.__setattr__(self, "_limits", limits)  # not a field: the requests built from it use them too
 

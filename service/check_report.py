@@ -14,7 +14,7 @@ import xml.etree.ElementTree as ET
 from datetime import UTC, datetime
 from typing import TYPE_CHECKING
 
-from kfio.model._exact import escaped
+from kfio.model import escaped
 
 if TYPE_CHECKING:
     from kfio.check import CheckResult, Outcome

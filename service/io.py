@@ -58,7 +58,7 @@ def add_request_arguments(p: argparse.ArgumentParser) -> None:
 
 def requested_budget(tree: Any) -> float | None:
     """``options.time_budget_s`` if it is a valid number; the worker reports it otherwise."""
-    from kfio.model._exact import parse_number
+    from kfio.model import parse_number
 
     options = tree.get("options") if isinstance(tree, dict) else None
     if not isinstance(options, dict) or "time_budget_s" not in options:
@@ -72,7 +72,7 @@ def requested_budget(tree: Any) -> float | None:
 
 def request_budget(data: bytes) -> float | None:
     """``options.time_budget_s`` of a request's bytes, read leniently (the validator reports bad values)."""
-    from kfio.model._exact import load_json
+    from kfio.model import load_json
 
     try:
         return requested_budget(load_json(data))
@@ -140,7 +140,7 @@ def emit(text: str, stream: TextIO | None = None) -> None:
     written as a backslash escape instead of raising ``UnicodeEncodeError``.
     """
     from kfio._reporting import terminal_text
-    from kfio.model._exact import escaped
+    from kfio.model import escaped
 
     stream = stream if stream is not None else sys.stdout
     encoding = getattr(stream, "encoding", None) or "utf-8"

@@ -68,7 +68,7 @@ def analyze_job(body: bytes, settings: Settings, budget: Budget, params: Mapping
     on the same ``A`` and ``C`` with another channel, ``Q`` or ``R`` skips the eigenstructure.
     """
     from kfio._reuse import reused_fmo_blocks
-    from kfio.stability._verdict import analyze
+    from kfio.stability import analyze
 
     request = parse(body, settings)
     return report_json(analyze(request, budget, fmo=reused_fmo_blocks(request.system, budget)))
@@ -76,14 +76,14 @@ def analyze_job(body: bytes, settings: Settings, budget: Budget, params: Mapping
 
 def bounds_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[str, Any]) -> JobOutput:
     """``kfio bounds``: bounds on the critical probability and on ``E[P]``."""
-    from kfio.mare._compute import compute_bounds
+    from kfio.mare import compute_bounds
 
     return report_json(compute_bounds(parse(body, settings), budget=budget))
 
 
 def simulate_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[str, Any]) -> JobOutput:
     """``kfio simulate``: Monte Carlo error bands."""
-    from kfio.simulation._simulate import simulate
+    from kfio.simulation import simulate
 
     return report_json(simulate(parse(body, settings), budget=budget))
 
@@ -91,7 +91,7 @@ def simulate_job(body: bytes, settings: Settings, budget: Budget, params: Mappin
 def simulate_long_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[str, Any]) -> JobOutput:
     """``POST /v1/jobs/simulate``: Monte Carlo error bands with the job lane's larger work cap
     (:meth:`kfio.service.settings.Settings.job_simulation_limits`)."""
-    from kfio.simulation._simulate import simulate
+    from kfio.simulation import simulate
 
     request = parse(body, settings)
     return report_json(simulate(request, budget=budget, limits=job_simulation_limits(request, settings)))
@@ -103,7 +103,7 @@ def job_simulation_limits(request: Request, settings: Settings) -> Any:
     Without it the default count is the synchronous one (it is fitted to the
     synchronous cap), so a job's report equals its synchronous twin's byte for byte.
     """
-    from kfio.simulation._setup import DEFAULT_SIMULATION_LIMITS
+    from kfio.simulation import DEFAULT_SIMULATION_LIMITS
 
     sim = request.options.get("simulate")
     if isinstance(sim, Mapping) and "trajectories" in sim:
@@ -120,7 +120,7 @@ def check_job_request(kind: str, body: bytes, settings: Settings) -> None:
     """
     request = parse(body, settings)
     if kind == "simulate":
-        from kfio.simulation._setup import parse_options
+        from kfio.simulation import parse_options
 
         parse_options(request, job_simulation_limits(request, settings))
 

@@ -207,7 +207,7 @@ def simulation_fraction(options: Any, progress: Mapping[str, Any]) -> float | No
     """
     if progress.get("stage") != "Monte Carlo simulation":
         return None
-    from kfio.simulation._setup import SimulationLimits
+    from kfio.simulation import SimulationLimits
 
     sim = options.get("simulate") if isinstance(options, dict) else None
     steps = sim.get("steps") if isinstance(sim, dict) else None

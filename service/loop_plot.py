@@ -21,9 +21,9 @@ from typing import Any, Callable, Mapping
 import numpy as np
 
 from kfio import Budget, InvalidInput
-from kfio.model._types import MarkovChannel
+from kfio.model import MarkovChannel
 
-from .plots import _figure, _headline, _legend_beside, _png
+from .plots import figure_headline, legend_beside, new_figure, png_bytes
 
 #: Gids of the drawn artists (tests read them back).
 BOUNDARY_GID = "loop-boundary"
@@ -46,8 +46,7 @@ class _Axis:
 
 
 def _axes(req: Any) -> tuple[_Axis, _Axis]:
-    from kfio.loop._critical import parameter_of
-    from kfio.loop._mjls import sensor_links
+    from kfio.loop import parameter_of, sensor_links
 
     links = sensor_links(req)
     if len(links) != 1:
@@ -70,11 +69,7 @@ def _short(parameter: str) -> str:
 
 def loop_region_data(req: Any, points: int) -> dict[str, Any]:
     """The values drawn by :func:`loop_region_figure`, all from :mod:`kfio.loop` (module docstring)."""
-    from kfio.loop import analyze_loop
-    from kfio.loop._cost import stationary_cost
-    from kfio.loop._mjls import loop_mjls
-    from kfio.loop._region import region
-    from kfio.loop._verdict import decide
+    from kfio.loop import analyze_loop, decide, loop_mjls, region, stationary_cost
 
     sx, ax = _axes(req)
     report = analyze_loop(req).to_dict()
@@ -106,7 +101,7 @@ def loop_region_data(req: Any, points: int) -> dict[str, Any]:
 
 def loop_region(req: Any, budget: Budget, params: Mapping[str, Any]) -> bytes:
     """``POST /v1/plots/loop-region``: the PNG of :func:`loop_region_figure` for a loop request."""
-    return _png(loop_region_figure(loop_region_data(req, int(params.get("points", 21)))))
+    return png_bytes(loop_region_figure(loop_region_data(req, int(params.get("points", 21)))))
 
 
 def _critical(report: Mapping[str, Any], label: str) -> tuple[float | None, str | None]:
@@ -145,7 +140,7 @@ def loop_region_figure(data: Mapping[str, Any]) -> Any:
     from matplotlib.patches import Patch
 
     report, sx, ax_ = data["report"], data["sensor"], data["actuator"]
-    fig = _figure()
+    fig = new_figure()
     fig.set_size_inches(7.0, 8.0)
     top, bottom = fig.subplots(2, 1)
     codes = np.array([[_CODE[v] for v in row] for row in data["labels"]])  # codes[i][j]: sensor i, actuator j
@@ -180,7 +175,7 @@ def loop_region_figure(data: Mapping[str, Any]) -> Any:
     top.set_ylim(0, 1)
     top.set_xlabel(f"sensor {_short(sx.parameter)}")
     top.set_ylabel(f"actuator {_short(ax_.parameter)}")
-    _legend_beside(top, handles)
+    legend_beside(top, handles)
     along = np.array(data["along"])
     for axis, gid, colour in ((sx, SENSOR_COST_GID, "C0"), (ax_, ACTUATOR_COST_GID, "C1")):
         cost = np.array([np.nan if c is None else c for c in data["costs"][axis.label]], dtype=float)
@@ -209,8 +204,8 @@ def loop_region_figure(data: Mapping[str, Any]) -> Any:
     bottom.set_xlabel("the varied link's parameter (the other held at the request's value)")
     bottom.set_ylabel("stationary cost lim E[x'Wx + a'Ua]")
     bottom.grid(alpha=0.3, which="both")
-    _legend_beside(bottom)
-    _headline(fig, headline_text(report, sx, ax_))
+    legend_beside(bottom)
+    figure_headline(fig, headline_text(report, sx, ax_))
     return fig
 
 

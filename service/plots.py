@@ -17,13 +17,13 @@ import numpy as np
 
 from kfio import Budget, InvalidInput, Request
 from kfio.errors import AnalyzerError
-from kfio.model._types import MarkovChannel, PerSensorChannel, to_float
+from kfio.model import MarkovChannel, PerSensorChannel, to_float
 
 _SIZE = (7.0, 4.5)
 _DPI = 100
 
 
-def _figure() -> Any:
+def new_figure() -> Any:
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
@@ -32,13 +32,13 @@ def _figure() -> Any:
     return fig
 
 
-def _png(fig: Any) -> bytes:
+def png_bytes(fig: Any) -> bytes:
     buf = io.BytesIO()
     fig.savefig(buf, format="png", metadata={"Software": None})
     return buf.getvalue()
 
 
-def _headline(fig: Any, text: str, fontsize: float = 10.0) -> Any:
+def figure_headline(fig: Any, text: str, fontsize: float = 10.0) -> Any:
     """The figure's title (the exact verdict first), shrunk until every line fits the figure's width.
 
     A figure title, not an axes title: it is centred on the figure, so a legend
@@ -51,7 +51,7 @@ def _headline(fig: Any, text: str, fontsize: float = 10.0) -> Any:
     return title
 
 
-def _legend_beside(ax: Any, handles: Any = None, fontsize: str = "x-small") -> Any:
+def legend_beside(ax: Any, handles: Any = None, fontsize: str = "x-small") -> Any:
     """The legend right of the axes (outside them): it never covers data."""
     kwargs: dict[str, Any] = {} if handles is None else {"handles": handles}
     return ax.legend(fontsize=fontsize, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, **kwargs)
@@ -96,9 +96,9 @@ def simulation(request: Request, budget: Budget, params: Mapping[str, Any]) -> b
     beside it.  On a log axis the band is drawn only where its lower end is
     positive; elsewhere only its upper edge (a log axis cannot show 0).
     """
-    from kfio.simulation._simulate import simulate
+    from kfio.simulation import simulate
 
-    return _png(simulation_figure(simulate(request, budget=budget).to_dict(), request))
+    return png_bytes(simulation_figure(simulate(request, budget=budget).to_dict(), request))
 
 
 def simulation_figure(report: Mapping[str, Any], request: Request) -> Any:
@@ -108,12 +108,12 @@ def simulation_figure(report: Mapping[str, Any], request: Request) -> Any:
     (``stationary.verdict``, Theorem 1), then what the sample shows
     (:func:`kfio.simulation._stationary.verdict_headline`).
     """
-    from kfio.simulation._stationary import verdict_headline
+    from kfio.simulation import verdict_headline
 
     t = np.arange(report["steps"] + 1)
     stationary = report.get("stationary") or {}
     unreliable = bool(stationary.get("mean_unreliable"))
-    fig = _figure()
+    fig = new_figure()
     ax = fig.subplots()
     mean = _nan(report["mean_trace"])
     low, high = _nan(report["ci95_low"]), _nan(report["ci95_high"])
@@ -160,12 +160,12 @@ def simulation_figure(report: Mapping[str, Any], request: Request) -> Any:
     )
     if stationary.get("verdict") is None:
         exact = _verdict_text(None)
-    _headline(
+    figure_headline(
         fig,
         f"{exact}: n = {request.system.n}, {_channel_text(request)}\n"
         f"{sample}; {report['trajectories']} trajectories, seed {report['seed']}",
     )
-    _legend_beside(ax)
+    legend_beside(ax)
     ax.grid(alpha=0.3)
     return fig
 
@@ -189,7 +189,7 @@ def _value(node: Any) -> float | None:
 def _critical_values(request: Request, budget: Budget) -> dict[str, Any]:
     """Bounds on lambda_c (:func:`kfio.mare._compute.compute_bounds`) and the exact value (:func:`kfio.analyze`)."""
     from kfio import analyze
-    from kfio.mare._compute import compute_bounds
+    from kfio.mare import compute_bounds
 
     report = compute_bounds(request, budget=budget).to_dict()
     crit = report.get("critical_probability") or {}
@@ -220,7 +220,7 @@ def phase_transition(request: Request, budget: Budget, params: Mapping[str, Any]
     """
     lam0 = _bernoulli_lambda(request, "phase transition")
     _require_noise(request, "phase transition")
-    from kfio.mare._sweep import bound_traces
+    from kfio.mare import bound_traces
 
     crit = _critical_values(request, budget)
     A, C, Q, R = (to_float(getattr(request.system, k)) for k in ("A", "C", "Q", "R"))
@@ -233,7 +233,7 @@ def phase_transition(request: Request, budget: Budget, params: Mapping[str, Any]
         A, C, Q, R, np.linspace(lo, hi, int(params.get("points", 100))), v_bar_from=crit["upper"], budget=budget
     )
     lams, s_tr, v_tr = traces.lambdas, traces.s_bar, traces.v_bar
-    fig = _figure()
+    fig = new_figure()
     ax = fig.subplots()
     ax.plot(lams, s_tr, label="trace(S_bar): lower bound on lim E[P_t]")
     ax.plot(lams, v_tr, label="trace(V_bar): upper bound on lim E[P_t]")
@@ -251,14 +251,14 @@ def phase_transition(request: Request, budget: Budget, params: Mapping[str, Any]
     ax.set_xlim(lo, hi)
     ax.set_xlabel("arrival probability lambda")
     ax.set_ylabel("trace")
-    _headline(
+    figure_headline(
         fig,
         f"{_verdict_text(crit['verdict'])} at lambda = {lam0:.4g}\n"
         "Phase transition of lim E[P_t]: bounds (Sinopoli et al. 2004) and exact lambda_c",
     )
-    _legend_beside(ax)
+    legend_beside(ax)
     ax.grid(alpha=0.3, which="both")
-    return _png(fig)
+    return png_bytes(fig)
 
 
 # -- region map for two sensors (Liu and Goldsmith 2004, Figs. 4-5) ------------
@@ -279,8 +279,8 @@ def region(request: Request, budget: Budget, params: Mapping[str, Any]) -> bytes
     import dataclasses
 
     from kfio import analyze
-    from kfio.mare._compute import compute_bounds
-    from kfio.stability._regions import exact_region_grid
+    from kfio.mare import compute_bounds
+    from kfio.stability import exact_region_grid
 
     if not isinstance(request.channel, PerSensorChannel) or len(request.channel.channels) != 2:
         raise InvalidInput("/channel/model", "the region plot needs two sensors with a per_sensor channel")
@@ -299,7 +299,7 @@ def region(request: Request, budget: Budget, params: Mapping[str, Any]) -> bytes
         verdict: str | None = analyze(request, budget=budget).verdict
     except AnalyzerError:  # the title then says no exact verdict was computed; the map is still the bounds'
         verdict = None
-    return _png(region_figure(values, labels, exact, grid.curve, tuple(report["axes"]), request, verdict))
+    return png_bytes(region_figure(values, labels, exact, grid.curve, tuple(report["axes"]), request, verdict))
 
 
 _EXACT_CODE = {"unstable": -1.0, "stable": 1.0, "boundary": 0.0}
@@ -318,7 +318,7 @@ def region_figure(
     from matplotlib.colors import ListedColormap
     from matplotlib.patches import Patch
 
-    fig = _figure()
+    fig = new_figure()
     ax = fig.subplots()
     step = values[1] - values[0] if len(values) > 1 else 1.0
     extent = (values[0] - step / 2, values[-1] + step / 2, values[0] - step / 2, values[-1] + step / 2)
@@ -357,13 +357,13 @@ def region_figure(
     # sensor names are user text: drawn as plain text, never through mathtext or TeX
     ax.set_xlabel(f"lambda_1 ({axes[0]})", parse_math=False, usetex=False)
     ax.set_ylabel(f"lambda_2 ({axes[1]})", parse_math=False, usetex=False)
-    _headline(
+    figure_headline(
         fig,
         f"{_verdict_text(verdict)} at the request (star), lambda = ({point[0]:.4g}, {point[1]:.4g})\n"
         "Two sensors: bounds (colours, Liu and Goldsmith 2004); exact (markers, line: kfio extension of "
         "Rohr, Marelli and Fu 2014)",
     )
-    _legend_beside(ax, handles)
+    legend_beside(ax, handles)
     return fig
 
 
@@ -380,7 +380,7 @@ def ge_region(request: Request, budget: Budget, params: Mapping[str, Any]) -> by
     """
     import dataclasses
 
-    from kfio.stability._verdict import analyze
+    from kfio.stability import analyze
 
     ch = request.channel
     if not isinstance(ch, MarkovChannel) or ch.model != "gilbert_elliott":
@@ -389,11 +389,11 @@ def ge_region(request: Request, budget: Budget, params: Mapping[str, Any]) -> by
     opts = {**request.options.get("analyze", {}), "ge_grid": points}
     gridded = dataclasses.replace(request, options={**request.options, "analyze": opts})
     report = analyze(gridded, budget)
-    return _draw_ge_region(report.gilbert_elliott, report.verdict, request)
+    return draw_ge_region(report.gilbert_elliott, report.verdict, request)
 
 
-def _draw_ge_region(region: Any, verdict: str, request: Request) -> bytes:
-    return _png(ge_region_figure(region, verdict, request))
+def draw_ge_region(region: Any, verdict: str, request: Request) -> bytes:
+    return png_bytes(ge_region_figure(region, verdict, request))
 
 
 #: Gid of the boundary lines in the Gilbert-Elliott and sweep figures (tests find them by it).
@@ -410,15 +410,14 @@ def ge_region_figure(region: Any, verdict: str, request: Request) -> Any:
     from matplotlib.colors import ListedColormap
     from matplotlib.patches import Patch
 
-    from kfio.stability._ge_boundary import boundary_lines
-    from kfio.stability._ge_region import GeStructure
+    from kfio.stability import GeStructure, boundary_lines
 
     m = region.map
     rates = np.array(m.rates)
     step = rates[1] - rates[0] if len(rates) > 1 else 1.0
     extent = (0.0, 1.0, 0.0, 1.0)
     codes = np.array([[_EXACT_CODE[x] for x in row] for row in m.labels])  # codes[i][j]: p = rates[i], q = rates[j]
-    fig = _figure()
+    fig = new_figure()
     ax = fig.subplots()
     cmap = ListedColormap(["#e8a0a0", "#f0f0c0", "#a0d0a0"])
     ax.imshow(codes, origin="lower", extent=extent, cmap=cmap, vmin=-1, vmax=1, interpolation="nearest", aspect="auto")
@@ -455,14 +454,14 @@ def ge_region_figure(region: Any, verdict: str, request: Request) -> Any:
     ax.set_ylim(extent[2], extent[3])
     ax.set_xlabel("recovery rate q = P(arrived | lost)")
     ax.set_ylabel("failure rate p = P(lost | arrived)")
-    _headline(
+    figure_headline(
         fig,
         f"{_verdict_text(verdict)} at the request (star): q = {q0:.4g}, p = {p0:.4g}\n"
         f"{_critical_text(region)}\n"
         f"Gilbert-Elliott region, n = {request.system.n}: {len(rates)} x {len(rates)} cells of {step:.3g}, "
         "exact per cell; lines: exact boundary",
     )
-    _legend_beside(ax, handles, fontsize="xx-small")
+    legend_beside(ax, handles, fontsize="xx-small")
     return fig
 
 

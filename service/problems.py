@@ -46,8 +46,7 @@ from kfio.errors import (
     MissingDependency,
     NumericalFailure,
 )
-from kfio.model import json_pointer
-from kfio.model._exact import escaped
+from kfio.model import escaped, json_pointer
 
 from .pool import PoolBusy, PoolShuttingDown, PoolTimeout, WorkerCrashed, WorkerOutOfMemory
 

@@ -25,7 +25,7 @@ import sys
 from pathlib import Path
 from typing import Any, Sequence
 
-from .api.schemas import _NUMBER_PATTERN, COMPONENTS
+from .api.schemas import COMPONENTS, NUMBER_PATTERN
 
 DIALECT = "https://json-schema.org/draft/2020-12/schema"
 PACKAGE_DIR = Path(__file__).resolve().parent / "schemas"
@@ -37,14 +37,13 @@ def _exact(description: str, **bounds: Any) -> dict[str, Any]:
     """An exact number (JSON number or its text) with numeric ``bounds`` on the JSON-number form."""
     return {
         "description": description,
-        "anyOf": [{"type": "number", **bounds}, {"type": "string", "pattern": _NUMBER_PATTERN, "maxLength": 816}],
+        "anyOf": [{"type": "number", **bounds}, {"type": "string", "pattern": NUMBER_PATTERN, "maxLength": 816}],
     }
 
 
 def _check_components() -> dict[str, dict[str, Any]]:
     """The check file, and the plant and channel files it names (see docs/check.md)."""
-    from kfio.check._requirements import COMMAND_OF, OUTAGE_KEYS, VERDICTS
-    from kfio.check._spec import _ENTRY_KEYS, _OPTION_KEYS, _TOP_KEYS
+    from kfio.check import CHECK_ENTRY_KEYS, CHECK_OPTION_KEYS, CHECK_TOP_KEYS, COMMAND_OF, OUTAGE_KEYS, VERDICTS
 
     requirements: dict[str, Any] = {
         "verdict": {"enum": list(VERDICTS), "description": "the exact verdict the entry must have"},
@@ -109,7 +108,7 @@ def _check_components() -> dict[str, dict[str, Any]]:
                 "description": "loop request file (kfio loop FILE), relative to the check file; instead of plant "
                 "and channel, with the loop requirements",
             },
-            "options": {**_ref("Options"), "description": "the request's options"},
+            "options": {**schema_ref("Options"), "description": "the request's options"},
             "requirements": {
                 "type": "object",
                 "minProperties": 1,
@@ -121,7 +120,7 @@ def _check_components() -> dict[str, dict[str, Any]]:
         "oneOf": [{"required": ["plant"]}, {"required": ["loop"]}],
         "additionalProperties": False,
     }
-    assert set(entry["properties"]) == _ENTRY_KEYS
+    assert set(entry["properties"]) == CHECK_ENTRY_KEYS
     check: dict[str, Any] = {
         "type": "object",
         "description": "A kfio check file (kfio check FILE; docs/check.md). The validator also reads each plant "
@@ -134,22 +133,29 @@ def _check_components() -> dict[str, dict[str, Any]]:
                 "properties": {"time_budget_s": budget, "point_budget_s": budget},
                 "additionalProperties": False,
             },
-            "checks": {"type": "array", "minItems": 1, "maxItems": 1000, "items": _ref("CheckEntry")},
+            "checks": {"type": "array", "minItems": 1, "maxItems": 1000, "items": schema_ref("CheckEntry")},
         },
         "required": ["checks"],
         "additionalProperties": False,
     }
-    assert set(check["properties"]) == _TOP_KEYS and set(check["properties"]["options"]["properties"]) == _OPTION_KEYS
+    assert (
+        set(check["properties"]) == CHECK_TOP_KEYS
+        and set(check["properties"]["options"]["properties"]) == CHECK_OPTION_KEYS
+    )
     plant = {
         "description": 'A plant file of a check: {"system": ...} (a whole request is fine) or the bare system.',
         "anyOf": [
             {
                 "type": "object",
-                "properties": {"system": _ref("System"), "channel": _ref("Channel"), "options": _ref("Options")},
+                "properties": {
+                    "system": schema_ref("System"),
+                    "channel": schema_ref("Channel"),
+                    "options": schema_ref("Options"),
+                },
                 "required": ["system"],
                 "additionalProperties": False,
             },
-            _ref("System"),
+            schema_ref("System"),
         ],
     }
     channel = {
@@ -157,11 +163,11 @@ def _check_components() -> dict[str, dict[str, Any]]:
         "anyOf": [
             {
                 "type": "object",
-                "properties": {"channel": _ref("Channel")},
+                "properties": {"channel": schema_ref("Channel")},
                 "required": ["channel"],
                 "additionalProperties": False,
             },
-            _ref("Channel"),
+            schema_ref("Channel"),
         ],
     }
     outcome = {
@@ -201,7 +207,7 @@ def _check_components() -> dict[str, dict[str, Any]]:
     return {"CheckEntry": entry, "CheckFile": check, "PlantFile": plant, "ChannelFile": channel, "CheckReport": report}
 
 
-def _ref(name: str) -> dict[str, str]:
+def schema_ref(name: str) -> dict[str, str]:
     return {"$ref": _COMPONENT_REF + name}
 
 

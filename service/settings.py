@@ -19,10 +19,10 @@ from typing import TYPE_CHECKING
 from pydantic import Field
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
-from kfio.model._limits import Limits
+from kfio.model import Limits
 
 if TYPE_CHECKING:
-    from kfio.simulation._setup import SimulationLimits
+    from kfio.simulation import SimulationLimits
 
 from .watchdog import DEFAULT_MEMORY_MB, MAX_MEMORY_MB
 
@@ -143,7 +143,7 @@ class Settings(BaseSettings):
         """The simulation limits of a job: :attr:`job_max_trajectory_steps` work, the rest as a request's."""
         from dataclasses import replace
 
-        from kfio.simulation._setup import DEFAULT_SIMULATION_LIMITS
+        from kfio.simulation import DEFAULT_SIMULATION_LIMITS
 
         return replace(DEFAULT_SIMULATION_LIMITS, max_trajectory_steps=self.job_max_trajectory_steps)
 

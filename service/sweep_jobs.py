@@ -68,8 +68,7 @@ STAGE = "sweep of {total} points"
 
 def sweep_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[str, Any]) -> tuple[bytes, str]:
     """Run the sweep in ``body`` and answer its table as JSON (:meth:`kfio.sweep.SweepResult.to_dict`)."""
-    from kfio.sweep import load_sweep, run_sweep
-    from kfio.sweep._spec import check_points
+    from kfio.sweep import check_points, load_sweep, run_sweep
 
     from .io import dump_json
 

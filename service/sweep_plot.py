@@ -13,11 +13,10 @@ import numpy as np
 
 from kfio.errors import InvalidInput
 from kfio.model import parse_number
-from kfio.structure._display import readable
-from kfio.sweep._boundary import exact_boundary
-from kfio.sweep._engine import SweepResult
+from kfio.structure import readable
+from kfio.sweep import SweepResult, exact_boundary
 
-from .plots import GE_BOUNDARY_GID, _figure, _headline, _legend_beside, _png
+from .plots import GE_BOUNDARY_GID, figure_headline, legend_beside, new_figure, png_bytes
 
 _COLORS = {"stable": "#2a9d8f", "boundary": "#e9c46a", "unstable": "#e76f51", None: "#bbbbbb"}
 _METRIC = {"analyze": "worst_rate", "bounds": "trace_V_bar", "simulate": "final_mean_trace", "loop": "cost"}
@@ -51,7 +50,7 @@ _WHAT = {
 
 def sweep_png(result: SweepResult) -> bytes:
     """The PNG of :func:`sweep_figure`."""
-    return _png(sweep_figure(result))
+    return png_bytes(sweep_figure(result))
 
 
 def sweep_figure(result: SweepResult) -> Any:
@@ -70,7 +69,7 @@ def sweep_figure(result: SweepResult) -> Any:
     if spec.requests is not None or not 1 <= len(spec.axes) <= 2 or (len(spec.axes) == 2 and spec.combine != "grid"):
         raise InvalidInput("--plot", "plots are drawn for sweeps with one axis, or two axes combined as a grid")
     cmd = spec.command
-    fig = _figure()
+    fig = new_figure()
     ax = fig.subplots()
     boundary = exact_boundary(spec)
     if len(spec.axes) == 1:
@@ -112,7 +111,7 @@ def sweep_figure(result: SweepResult) -> Any:
                 "loop": "stationary cost (none: unbounded)",
             }[cmd]
         )
-        _legend_beside(ax)
+        legend_beside(ax)
     else:
         ax_x, ax_y = spec.axes
         xs = [_coordinate(v, ax_x.name) for v in ax_x.values]
@@ -142,8 +141,8 @@ def sweep_figure(result: SweepResult) -> Any:
         ax.set_ylim(ey.min(), ey.max())
         ax.set_xlabel(ax_x.name, parse_math=False)
         ax.set_ylabel(ax_y.name, parse_math=False)
-        _legend_beside(ax, handles)
-    _headline(fig, f"kfio sweep {cmd}, {spec.size} points: {_WHAT[cmd]}")
+        legend_beside(ax, handles)
+    figure_headline(fig, f"kfio sweep {cmd}, {spec.size} points: {_WHAT[cmd]}")
     return fig
 
 

@@ -10,14 +10,20 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..model._exact import fraction_text
+from ..model import fraction_text
 from ._stability import as_float
 
 if TYPE_CHECKING:
-    from ..mare._certificate import StabilityCertificate
-    from ..mare._filtered import FilteredBounds
-    from ..mare._report import BoundsReport, CovarianceBounds, CriticalInterval, PHatBounds, RegionMap
-    from ..mare._targets import TraceTarget
+    from ..mare import (
+        BoundsReport,
+        CovarianceBounds,
+        CriticalInterval,
+        FilteredBounds,
+        PHatBounds,
+        RegionMap,
+        StabilityCertificate,
+        TraceTarget,
+    )
 
 #: Relative agreement required between the V_bar iteration and the SDP.
 SDP_AGREEMENT = 1e-6

@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from ..check._run import CheckResult, Outcome
+    from ..check import CheckResult, Outcome
 
 
 def outcome(o: Outcome) -> dict[str, Any]:

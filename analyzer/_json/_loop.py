@@ -5,11 +5,11 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from ..loop._report import LoopReport
+    from ..loop import LoopReport
 
 
 def loop_report(r: LoopReport) -> dict[str, Any]:
     """``kfio loop --json``."""
-    from ..loop._report import loop_report_view
+    from ..loop import loop_report_view
 
     return loop_report_view(r)

@@ -12,14 +12,22 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any, Sequence
 
-from ..model._exact import fraction_text
+from ..model import fraction_text
 from ._stability import as_float
 
 if TYPE_CHECKING:
-    from ..stability._regions import RegionGrid, SensorThreshold, SensorThresholds
-    from ..stability._regions_constraints import BlindPattern, BlockConstraints
-    from ..stability._regions_curve import BoundaryCurve, BoundaryPiece, Envelope, Segment
-    from ..stability._sensor_gain import SensorGains
+    from ..stability import (
+        BlindPattern,
+        BlockConstraints,
+        BoundaryCurve,
+        BoundaryPiece,
+        Envelope,
+        RegionGrid,
+        Segment,
+        SensorGains,
+        SensorThreshold,
+        SensorThresholds,
+    )
 
 BASIS = "extension"
 STATEMENT = (

@@ -23,7 +23,7 @@ VIEWS: dict[str, str] = {
     "stability._ge_region.Crossing": "_stability:crossing",
     "stability._ge_region.GeMap": "_stability:ge_map",
     "stability._critical_parameter.CriticalParameter": "_stability:critical_parameter",
-    "stability._critical_parameter._Constraint": "_stability:constraint",
+    "stability._critical_parameter.ParameterConstraint": "_stability:constraint",
     "stability._regions.SensorThresholds": "_regions:sensor_thresholds",
     "stability._regions.RegionGrid": "_regions:region_grid",
     "stability._regions_curve.BoundaryCurve": "_regions:boundary_curve",

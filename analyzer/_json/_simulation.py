@@ -11,15 +11,11 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..simulation._setup import PERCENTILES, matrix_or_none
-from ..simulation._stationary import Z95
+from ..simulation import PERCENTILES, Z95, matrix_or_none
 from ._stability import as_float
 
 if TYPE_CHECKING:
-    from ..simulation._finite_horizon import FiniteHorizonReport
-    from ..simulation._outage_target import OutageTarget
-    from ..simulation._simulate import SimulationReport
-    from ..simulation._stationary import StationaryReport
+    from ..simulation import FiniteHorizonReport, OutageTarget, SimulationReport, StationaryReport
 
 
 def _first(flags: np.ndarray) -> int | None:

@@ -10,10 +10,18 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from ..stability._critical_parameter import CriticalParameter, _Constraint
-    from ..stability._ge_region import Crossing, GeMap, GeRegion, LineResult
-    from ..stability._tail import BlockTail, TailReport
-    from ..stability._verdict import BlockReport, StabilityReport
+    from ..stability import (
+        BlockReport,
+        BlockTail,
+        CriticalParameter,
+        Crossing,
+        GeMap,
+        GeRegion,
+        LineResult,
+        ParameterConstraint,
+        StabilityReport,
+        TailReport,
+    )
 
 THEOREM_1 = "Rohr, Marelli and Fu 2014, Theorem 1"
 GE_REFERENCE = (
@@ -157,7 +165,7 @@ def critical_parameter(c: CriticalParameter) -> dict[str, Any]:
     }
 
 
-def constraint(c: _Constraint) -> dict[str, Any]:
+def constraint(c: ParameterConstraint) -> dict[str, Any]:
     """The block and maximal blind set whose rate decides a crossing of a critical parameter."""
     return {
         "block": c.block,

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-from ..sweep._rows import coordinate_column
+from ..sweep import coordinate_column
 
 if TYPE_CHECKING:
-    from ..sweep._engine import SweepResult, SweepRow
+    from ..sweep import SweepResult, SweepRow
 
 
 def _coordinate(v: Any) -> Any:

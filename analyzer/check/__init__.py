@@ -21,19 +21,33 @@ Examples
 [('verdict', 'pass', 'stable'), ('critical_arrival_probability_at_most', 'pass', '9/25')]
 """
 
-from ._requirements import COMMAND_OF, Judgement, Requirement, judge, parse_requirements
+from ._requirements import COMMAND_OF, OUTAGE_KEYS, VERDICTS, Judgement, Requirement, judge, parse_requirements
 from ._run import ERROR_KINDS, CheckResult, Outcome, run_check, run_one
-from ._spec import CheckEntry, CheckSpec, load_check, load_tree, parse_check
+from ._spec import (
+    CHECK_ENTRY_KEYS,
+    CHECK_OPTION_KEYS,
+    CHECK_TOP_KEYS,
+    CheckEntry,
+    CheckSpec,
+    load_check,
+    load_tree,
+    parse_check,
+)
 
 __all__ = [
+    "CHECK_ENTRY_KEYS",
+    "CHECK_OPTION_KEYS",
+    "CHECK_TOP_KEYS",
     "COMMAND_OF",
-    "ERROR_KINDS",
     "CheckEntry",
     "CheckResult",
     "CheckSpec",
+    "ERROR_KINDS",
     "Judgement",
+    "OUTAGE_KEYS",
     "Outcome",
     "Requirement",
+    "VERDICTS",
     "judge",
     "load_check",
     "load_tree",

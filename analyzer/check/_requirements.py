@@ -47,8 +47,7 @@ from fractions import Fraction
 from typing import Any, Mapping
 
 from ..errors import InvalidInput
-from ..model._exact import fraction_text, parse_integer, parse_number
-from ..model._pointer import json_pointer
+from ..model import fraction_text, json_pointer, parse_integer, parse_number
 
 VERDICTS = ("stable", "unstable", "boundary")
 

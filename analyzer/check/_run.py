@@ -21,7 +21,7 @@ from typing import Any, Callable
 from .._budget import Budget
 from .._reporting import Report, ReportPart
 from ..errors import AnalyzerError, BudgetExceeded, InvalidInput, MissingDependency, NumericalFailure
-from ..model._exact import fraction_text
+from ..model import fraction_text
 from ._requirements import judge
 from ._spec import CheckSpec
 
@@ -85,7 +85,7 @@ def _worst_rate(report: Any) -> tuple[float | None, str | None]:
     """The largest ``|alpha_k|^2 sigma_k`` of a :class:`StabilityReport`, exactly when both factors are rational."""
     import sympy
 
-    from ..model._exact import parse_number
+    from ..model import parse_number
 
     best: tuple[float, Fraction | None] | None = None
     for b in report.blocks:
@@ -110,7 +110,7 @@ def run_one(command: str, tree: dict[str, Any], seconds: float) -> tuple[str, An
 
     Never raises for an analysis failure (it travels back from a worker as data).
     """
-    from ..model._request import parse_request
+    from ..model import parse_request
 
     t0 = time.perf_counter()
     try:

@@ -39,14 +39,12 @@ from pathlib import Path
 from typing import Any, Mapping
 
 from ..errors import InvalidInput
-from ..model._exact import fraction_text, load_json, parse_number
-from ..model._pointer import json_pointer
-from ..model._request import parse_request
+from ..model import fraction_text, json_pointer, load_json, parse_number, parse_request
 from ._requirements import OUTAGE_KEYS, Requirement, parse_requirements
 
-_TOP_KEYS = {"$schema", "description", "options", "checks"}
-_ENTRY_KEYS = {"name", "description", "plant", "channel", "loop", "options", "requirements"}
-_OPTION_KEYS = {"time_budget_s", "point_budget_s"}
+CHECK_TOP_KEYS = {"$schema", "description", "options", "checks"}
+CHECK_ENTRY_KEYS = {"name", "description", "plant", "channel", "loop", "options", "requirements"}
+CHECK_OPTION_KEYS = {"time_budget_s", "point_budget_s"}
 
 #: Defaults of the whole check's budget and of each evaluation's (seconds).
 DEFAULT_TIME_BUDGET_S = 600.0
@@ -96,11 +94,11 @@ def _validate_options(entry: CheckEntry, where: str) -> None:
         try:
             request = parse_request(entry.request_for(command))
             if command == "simulate":
-                from ..simulation._setup import parse_options
+                from ..simulation import parse_options
 
                 parse_options(request)
             elif command == "bounds":
-                from ..mare._options import parse_bounds_options
+                from ..mare import parse_bounds_options
 
                 parse_bounds_options(request)
         except InvalidInput as exc:
@@ -185,15 +183,17 @@ def parse_check(tree: Any, base: str | Path = ".", source: str = "<check>") -> C
     base = Path(base)
     if not isinstance(tree, dict):
         raise InvalidInput("/", "a check file is an object with 'checks' (and optionally 'options')")
-    unknown = sorted(set(tree) - _TOP_KEYS)
+    unknown = sorted(set(tree) - CHECK_TOP_KEYS)
     if unknown:
-        raise InvalidInput(f"/{unknown[0]}", f"unknown key; a check file has {sorted(_TOP_KEYS)}")
+        raise InvalidInput(f"/{unknown[0]}", f"unknown key; a check file has {sorted(CHECK_TOP_KEYS)}")
     opts = tree.get("options", {})
     if not isinstance(opts, dict):
         raise InvalidInput("/options", "expected an object")
-    unknown = sorted(set(opts) - _OPTION_KEYS)
+    unknown = sorted(set(opts) - CHECK_OPTION_KEYS)
     if unknown:
-        raise InvalidInput(json_pointer(("options", unknown[0])), f"unknown key; options has {sorted(_OPTION_KEYS)}")
+        raise InvalidInput(
+            json_pointer(("options", unknown[0])), f"unknown key; options has {sorted(CHECK_OPTION_KEYS)}"
+        )
     checks = tree.get("checks")
     if not isinstance(checks, list) or not checks:
         raise InvalidInput("/checks", "expected a non-empty list of entries")
@@ -205,9 +205,11 @@ def parse_check(tree: Any, base: str | Path = ".", source: str = "<check>") -> C
         where = f"/checks/{i}"
         if not isinstance(entry, dict):
             raise InvalidInput(where, "expected an object with plant, requirements and (usually) channel")
-        unknown = sorted(set(entry) - _ENTRY_KEYS)
+        unknown = sorted(set(entry) - CHECK_ENTRY_KEYS)
         if unknown:
-            raise InvalidInput(where + json_pointer((unknown[0],)), f"unknown key; an entry has {sorted(_ENTRY_KEYS)}")
+            raise InvalidInput(
+                where + json_pointer((unknown[0],)), f"unknown key; an entry has {sorted(CHECK_ENTRY_KEYS)}"
+            )
         if "loop" in entry:
             entries.append(_loop_entry(entry, base, where, names))
             continue

@@ -14,17 +14,29 @@ import sys
 import types
 from typing import Any
 
+from ._cost import stationary_cost
+from ._critical import parameter_of
+from ._mjls import loop_mjls, sensor_links
 from ._model import LoopRequest, load_loop_request, parse_loop_request
-from ._report import LoopReport, analyze_loop, loop, loop_request
+from ._region import region
+from ._report import LoopReport, analyze_loop, loop, loop_report_view, loop_request
+from ._verdict import decide
 
 __all__ = [
     "LoopReport",
     "LoopRequest",
     "analyze_loop",
+    "decide",
     "load_loop_request",
     "loop",
+    "loop_mjls",
+    "loop_report_view",
     "loop_request",
+    "parameter_of",
     "parse_loop_request",
+    "region",
+    "sensor_links",
+    "stationary_cost",
 ]
 
 

@@ -27,7 +27,7 @@ from typing import Any, Callable
 import flint
 
 from ..errors import NumericalFailure
-from ..model._types import MarkovChannel
+from ..model import MarkovChannel
 from ._algebraic import root_text
 from ._mjls import Mjls
 from ._operator import operator_matrix

@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InvalidInput
-from ..model._types import PerSensorChannel, to_float
+from ..model import PerSensorChannel, to_float
 
 #: Value iterations before a MARE is declared divergent.
 MAX_ITERATIONS = 20000

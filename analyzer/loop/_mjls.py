@@ -33,7 +33,7 @@ from typing import Sequence
 import flint
 
 from ..errors import InvalidInput
-from ..model._types import MarkovChannel, Matrix, Request, packets_of
+from ..model import MarkovChannel, Matrix, Request, packets_of
 from ._model import LoopRequest
 
 

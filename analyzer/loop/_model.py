@@ -31,19 +31,24 @@ from dataclasses import dataclass
 from typing import Any, Mapping
 
 from ..errors import InvalidInput
-from ..model._exact import load_json, parse_number
-from ..model._limits import DEFAULT_LIMITS, Limits
-from ..model._request import (
+from ..model import (
+    DEFAULT_LIMITS,
     MIN_TIME_BUDGET_S,
-    _check_keys,
+    Channel,
+    Limits,
+    MarkovChannel,
+    Matrix,
+    check_keys,
     check_symmetric,
     is_psd,
+    load_json,
     parse_channel,
     parse_markov_channel,
     parse_matrix,
+    parse_number,
     parse_system,
 )
-from ..model._types import Channel, MarkovChannel, Matrix, System
+from ..model import SystemRecord as System
 
 _TOP_KEYS = {"system", "channel", "actuator_channel", "controller", "cost", "options"}
 _LOOP_OPTIONS = {"protocol", "on_loss", "region"}
@@ -110,7 +115,7 @@ def _shaped(obj: Any, where: str, name: str, rows: int, cols: int, limits: Limit
 
 
 def _weights(obj: Any, where: str, n: int, m: int, limits: Limits) -> tuple[Matrix, Matrix]:
-    obj = _check_keys(obj, where, {"W", "U"}, set())
+    obj = check_keys(obj, where, {"W", "U"}, set())
     W = _identity(n)
     U = _zeros(m, m)
     if "W" in obj:
@@ -128,7 +133,7 @@ def _weights(obj: Any, where: str, n: int, m: int, limits: Limits) -> tuple[Matr
 
 def parse_loop_request(obj: Any, limits: Limits = DEFAULT_LIMITS) -> LoopRequest:
     """Validate a loop request (the JSON tree of :func:`kfio.load_json`); errors name the field and rule."""
-    obj = _check_keys(obj, "", _TOP_KEYS, {"system", "channel", "actuator_channel", "controller"})
+    obj = check_keys(obj, "", _TOP_KEYS, {"system", "channel", "actuator_channel", "controller"})
     sys_obj = obj["system"]
     if not isinstance(sys_obj, dict):
         raise InvalidInput("/system", "expected a JSON object")
@@ -150,7 +155,7 @@ def parse_loop_request(obj: Any, limits: Limits = DEFAULT_LIMITS) -> LoopRequest
     if not isinstance(ctrl, dict):
         raise InvalidInput("/controller", "expected a JSON object")
     if "lqg" in ctrl:
-        _check_keys(ctrl, "/controller", {"lqg"}, set())
+        check_keys(ctrl, "/controller", {"lqg"}, set())
         W, U = _weights(ctrl["lqg"], "/controller/lqg", n, m, limits)
         if "U" not in ctrl["lqg"] or not is_psd(U, strict=True, where="/controller/lqg/U"):
             raise InvalidInput("/controller/lqg/U", "U is required and must be positive definite for LQG gains")
@@ -158,8 +163,8 @@ def parse_loop_request(obj: Any, limits: Limits = DEFAULT_LIMITS) -> LoopRequest
         K = L = None
         form = "predictor"
     else:
-        _check_keys(ctrl, "/controller", {"gains", "form"}, {"gains"})
-        gains = _check_keys(ctrl["gains"], "/controller/gains", {"K", "L"}, {"K", "L"})
+        check_keys(ctrl, "/controller", {"gains", "form"}, {"gains"})
+        gains = check_keys(ctrl["gains"], "/controller/gains", {"K", "L"}, {"K", "L"})
         K = _shaped(gains["K"], "/controller/gains/K", "K", n, p, limits)
         L = _shaped(gains["L"], "/controller/gains/L", "L", m, n, limits)
         form = ctrl.get("form", "predictor")
@@ -172,7 +177,7 @@ def parse_loop_request(obj: Any, limits: Limits = DEFAULT_LIMITS) -> LoopRequest
 
     protocol, on_loss, budget, region = "tcp", "zero", None, None
     if "options" in obj:
-        opts = _check_keys(obj["options"], "/options", {"loop", "time_budget_s"}, set())
+        opts = check_keys(obj["options"], "/options", {"loop", "time_budget_s"}, set())
         if "time_budget_s" in opts:
             t = parse_number(opts["time_budget_s"], "/options/time_budget_s", limits.max_digits)
             if not MIN_TIME_BUDGET_S <= t <= 3600:
@@ -181,7 +186,7 @@ def parse_loop_request(obj: Any, limits: Limits = DEFAULT_LIMITS) -> LoopRequest
                 )
             budget = float(t)
         if "loop" in opts:
-            lo: Mapping[str, Any] = _check_keys(opts["loop"], "/options/loop", _LOOP_OPTIONS, set())
+            lo: Mapping[str, Any] = check_keys(opts["loop"], "/options/loop", _LOOP_OPTIONS, set())
             protocol = lo.get("protocol", "tcp")
             if protocol not in PROTOCOLS:
                 raise InvalidInput("/options/loop/protocol", f"protocol must be 'tcp' or 'udp'; got {protocol!r}")

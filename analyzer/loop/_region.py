@@ -13,7 +13,7 @@ from __future__ import annotations
 from fractions import Fraction
 from typing import Any
 
-from ..model._types import MarkovChannel, PerSensorChannel
+from ..model import MarkovChannel, PerSensorChannel
 from ._critical import critical_value
 from ._mjls import Mjls, loop_mjls
 from ._model import MAX_REGION_POINTS, LoopRequest

@@ -12,8 +12,7 @@ from fractions import Fraction
 from typing import Any, Mapping
 
 from .._reporting import Report
-from ..model._exact import fraction_text
-from ..model._types import MarkovChannel, PerSensorChannel, Request
+from ..model import MarkovChannel, PerSensorChannel, Request, fraction_text
 from ._cost import stationary_cost
 from ._critical import Critical, critical_value
 from ._mjls import Mjls, estimator_mjls, loop_mjls, sensor_links
@@ -373,8 +372,7 @@ def loop_request(
     """The loop request file (JSON-ready dict) for the arguments of :func:`loop`."""
     from .._system import System
     from ..errors import InvalidInput
-    from ..model._channels import channel_tree
-    from ..model._coerce import json_ready, python_tree
+    from ..model import channel_tree, json_ready, python_tree
 
     if isinstance(system, System):
         sys_tree = system.to_dict()

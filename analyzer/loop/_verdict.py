@@ -31,7 +31,7 @@ import flint
 import numpy as np
 
 from ..errors import NumericalFailure
-from ..model._request import is_psd
+from ..model import is_psd
 from ._algebraic import root_text
 from ._mjls import Mjls
 from ._operator import (

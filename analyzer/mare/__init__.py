@@ -5,7 +5,24 @@ Sinopoli et al. (2004), Liu and Goldsmith (2004) and Rohr, Marelli and Fu
 ``V_bar`` and ``P_hat_N``.  Importing this subpackage imports CVXPY.
 """
 
+from ._certificate import StabilityCertificate
 from ._compute import compute_bounds
-from ._report import BoundsReport
+from ._filtered import FilteredBounds
+from ._options import parse_bounds_options
+from ._report import BoundsReport, CovarianceBounds, CriticalInterval, PHatBounds, RegionMap
+from ._sweep import bound_traces
+from ._targets import TraceTarget
 
-__all__ = ["BoundsReport", "compute_bounds"]
+__all__ = [
+    "BoundsReport",
+    "CovarianceBounds",
+    "CriticalInterval",
+    "FilteredBounds",
+    "PHatBounds",
+    "RegionMap",
+    "StabilityCertificate",
+    "TraceTarget",
+    "bound_traces",
+    "compute_bounds",
+    "parse_bounds_options",
+]

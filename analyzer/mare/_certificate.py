@@ -34,7 +34,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from .._reporting import ReportPart
-from ..model._types import Matrix
+from ..model import Matrix
 from ._riccati import ArrivalModel, closed_loop_operator
 from ._vech import unvech, vech
 

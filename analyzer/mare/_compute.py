@@ -24,7 +24,7 @@ import numpy as np
 
 from .._budget import Budget
 from ..errors import InvalidInput
-from ..model._types import Request, to_float
+from ..model import Request, to_float
 from ._certificate import ExactPlant
 from ._filtered import filtered_bounds, filtered_mean
 from ._lmi import v_bar_sdp
@@ -142,7 +142,7 @@ def _region(search: CertifiedSearch, opts: BoundsOptions, rho: float, request: R
     are outside Assumption 1 of Rohr, Marelli and Fu (2014).
     """
     from ..errors import AssumptionViolation
-    from ..stability._regions import exact_region_grid
+    from ..stability import exact_region_grid
 
     K = opts.grid
     assert K is not None

@@ -15,10 +15,17 @@ from fractions import Fraction
 from typing import Any, Mapping
 
 from ..errors import InvalidInput, LimitExceeded
-from ..model._exact import parse_integer, parse_number
-from ..model._pointer import json_pointer
-from ..model._request import OPTION_KEYS, option_group
-from ..model._types import MarkovChannel, Packet, Request, packets_of
+from ..model import (
+    OPTION_KEYS,
+    MarkovChannel,
+    Packet,
+    Request,
+    json_pointer,
+    option_group,
+    packets_of,
+    parse_integer,
+    parse_number,
+)
 from ._phat import max_horizon
 
 DEFAULT_TOLERANCE = 1e-6

@@ -17,7 +17,7 @@ import numpy as np
 from .._json import json_float as num
 from .._reporting import Report, ReportPart
 from .._verdicts import Verdict
-from ..model._types import Packet
+from ..model import Packet
 from ._certificate import StabilityCertificate
 from ._filtered import FilteredBounds
 from ._lmi import SDPSolution
@@ -26,7 +26,7 @@ from ._riccati import VBarIteration
 from ._search import UpperBound
 
 if TYPE_CHECKING:  # the exact grid is computed by kfio.stability, which imports no bounds
-    from ..stability._regions import RegionGrid
+    from ..stability import RegionGrid
 
 
 def _trace(M: np.ndarray | None) -> float | None:

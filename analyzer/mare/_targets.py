@@ -27,8 +27,7 @@ import numpy as np
 from .._budget import Budget
 from .._reporting import ReportPart
 from ..errors import InvalidInput
-from ..model._exact import parse_number
-from ..model._types import Request
+from ..model import Request, parse_number
 from ._riccati import one_packet_model, solve_v_bar, spectral_radius
 
 FIELD = "/options/bounds/trace_target"

@@ -7,24 +7,93 @@ is given); the validator's own frozen record of a plant, the type of
 ``Request.system``, is its base class and is not exported here.
 """
 
-from ._exact import fraction_text, load_json, parse_number
+from ._channels import bernoulli, channel_tree, gilbert_elliott, markov, per_sensor
+from ._coerce import Route, json_ready, python_tree, renamed
+from ._exact import (
+    DECIMAL_PATTERN,
+    NUMBER_SPACE,
+    escaped,
+    fraction_text,
+    load_json,
+    parse_integer,
+    parse_number,
+    value_text,
+)
 from ._limits import DEFAULT_LIMITS, Limits
 from ._pointer import json_pointer, pointer_tokens
-from ._request import load_request, parse_request
-from ._types import MarkovChannel, PerSensorChannel, Request, Sensor
+from ._request import (
+    MIN_TIME_BUDGET_S,
+    OPTION_KEYS,
+    check_keys,
+    check_symmetric,
+    is_psd,
+    load_request,
+    option_group,
+    parse_channel,
+    parse_markov_channel,
+    parse_matrix,
+    parse_request,
+    parse_system,
+    require_assumption_1,
+)
+from ._types import (
+    Channel,
+    MarkovChannel,
+    Matrix,
+    Packet,
+    PerSensorChannel,
+    Request,
+    Sensor,
+    packets_of,
+    to_domain,
+    to_float,
+)
+from ._types import System as SystemRecord
 
 __all__ = [
+    "Channel",
+    "DECIMAL_PATTERN",
     "DEFAULT_LIMITS",
     "Limits",
+    "MIN_TIME_BUDGET_S",
     "MarkovChannel",
+    "Matrix",
+    "NUMBER_SPACE",
+    "OPTION_KEYS",
+    "Packet",
     "PerSensorChannel",
     "Request",
+    "Route",
     "Sensor",
+    "SystemRecord",
+    "bernoulli",
+    "channel_tree",
+    "check_keys",
+    "check_symmetric",
+    "escaped",
     "fraction_text",
+    "gilbert_elliott",
+    "is_psd",
     "json_pointer",
+    "json_ready",
     "load_json",
     "load_request",
+    "markov",
+    "option_group",
+    "packets_of",
+    "parse_channel",
+    "parse_integer",
+    "parse_markov_channel",
+    "parse_matrix",
     "parse_number",
     "parse_request",
+    "parse_system",
+    "per_sensor",
     "pointer_tokens",
+    "python_tree",
+    "renamed",
+    "require_assumption_1",
+    "to_domain",
+    "to_float",
+    "value_text",
 ]

@@ -22,9 +22,11 @@ from ..errors import InvalidInput, LimitExceeded
 # ("\u0661.\u0662\u0665" is 1.25 in Arabic-Indic digits) and ``\s`` would accept vertical tab and
 # form feed; only JSON's own whitespace (space, tab, LF, CR) may surround a number in a string.
 _DIGITS = "[0-9]"
-_WS = r"[ \t\n\r]*"
-_DECIMAL = rf"[+-]?(?:{_DIGITS}+(?:\.{_DIGITS}*)?|\.{_DIGITS}+)(?:[eE][+-]?{_DIGITS}+)?"
-_NUMBER_RE = re.compile(rf"{_WS}({_DECIMAL}){_WS}(?:/{_WS}({_DECIMAL}){_WS})?", re.ASCII)
+NUMBER_SPACE = r"[ \t\n\r]*"
+DECIMAL_PATTERN = rf"[+-]?(?:{_DIGITS}+(?:\.{_DIGITS}*)?|\.{_DIGITS}+)(?:[eE][+-]?{_DIGITS}+)?"
+_NUMBER_RE = re.compile(
+    rf"{NUMBER_SPACE}({DECIMAL_PATTERN}){NUMBER_SPACE}(?:/{NUMBER_SPACE}({DECIMAL_PATTERN}){NUMBER_SPACE})?", re.ASCII
+)
 _PARTS_RE = re.compile(rf"([+-]?)({_DIGITS}*)(?:\.({_DIGITS}*))?(?:[eE]([+-]?{_DIGITS}+))?", re.ASCII)
 #: Exponent digits kept by :func:`load_json`; a longer exponent is clamped (the value is far
 #: beyond every limit either way, and :mod:`decimal` refuses exponents above 10^18).

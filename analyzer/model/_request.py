@@ -48,7 +48,7 @@ def pointer(where: str, key: str) -> str:
     return where + json_pointer((key,))
 
 
-def _check_keys(
+def check_keys(
     obj: Any, where: str, allowed: Iterable[str], required: set[str], what: str = "field"
 ) -> Mapping[str, Any]:
     if not isinstance(obj, dict):
@@ -214,7 +214,7 @@ def _parse_probability(obj: Any, where: str, limits: Limits) -> Fraction:
 
 def parse_system(obj: Any, limits: Limits = DEFAULT_LIMITS, where: str = "/system") -> System:
     """Validate ``system``: ``A`` square, ``C`` with ``n`` columns, ``Q`` PSD, ``R`` PD, sensors."""
-    obj = _check_keys(obj, where, _SYSTEM_KEYS, {"A", "C"})
+    obj = check_keys(obj, where, _SYSTEM_KEYS, {"A", "C"})
     A = parse_matrix(obj["A"], f"{where}/A", "A", limits, limits.max_states, limits.max_states)
     n = len(A)
     if len(A[0]) != n:
@@ -249,7 +249,7 @@ def _parse_sensors(obj: Any, where: str, p: int, limits: Limits) -> tuple[Sensor
     names: set[str] = set()
     out = []
     for i, s in enumerate(obj):
-        s = _check_keys(s, f"{where}/{i}", {"name", "rows"}, {"name", "rows"})
+        s = check_keys(s, f"{where}/{i}", {"name", "rows"}, {"name", "rows"})
         name = s["name"]
         if not isinstance(name, str) or not name or len(name) > 64:
             raise InvalidInput(f"{where}/{i}/name", "a sensor name must be a non-empty string of at most 64 characters")
@@ -281,16 +281,16 @@ def parse_markov_channel(obj: Any, limits: Limits = DEFAULT_LIMITS, where: str =
         raise InvalidInput(where, "expected a JSON object")
     model = obj.get("model")
     if model == "bernoulli":
-        _check_keys(obj, where, {"model", "arrival_probability"}, {"arrival_probability"})
+        check_keys(obj, where, {"model", "arrival_probability"}, {"arrival_probability"})
         lam = _parse_probability(obj["arrival_probability"], f"{where}/arrival_probability", limits)
         return MarkovChannel("bernoulli", 0, (lam,), {"arrival_probability": lam})
     if model == "gilbert_elliott":
-        _check_keys(obj, where, {"model", "failure_rate", "recovery_rate"}, {"failure_rate", "recovery_rate"})
+        check_keys(obj, where, {"model", "failure_rate", "recovery_rate"}, {"failure_rate", "recovery_rate"})
         p = _parse_probability(obj["failure_rate"], f"{where}/failure_rate", limits)
         q = _parse_probability(obj["recovery_rate"], f"{where}/recovery_rate", limits)
         return MarkovChannel("gilbert_elliott", 1, (q, 1 - p), {"failure_rate": p, "recovery_rate": q})
     if model == "markov":
-        _check_keys(obj, where, {"model", "order", "arrival_probability"}, {"order", "arrival_probability"})
+        check_keys(obj, where, {"model", "order", "arrival_probability"}, {"order", "arrival_probability"})
         nu = obj["order"]
         if isinstance(nu, bool) or not isinstance(nu, int) or nu < 0:
             raise InvalidInput(f"{where}/order", "order must be a non-negative integer")
@@ -327,7 +327,7 @@ def parse_markov_channel(obj: Any, limits: Limits = DEFAULT_LIMITS, where: str =
 def parse_channel(obj: Any, system: System, limits: Limits = DEFAULT_LIMITS, where: str = "/channel") -> Channel:
     """Validate ``channel``; ``per_sensor`` needs ``system.sensors`` and one channel per sensor."""
     if isinstance(obj, dict) and obj.get("model") == "per_sensor":
-        _check_keys(obj, where, {"model", "channels"}, {"channels"})
+        check_keys(obj, where, {"model", "channels"}, {"channels"})
         if system.sensors is None:
             raise InvalidInput(f"{where}/model", "a per_sensor channel needs system.sensors")
         chans = obj["channels"]
@@ -358,13 +358,13 @@ MIN_TIME_BUDGET_S = Fraction(1, 100)
 
 def parse_request(obj: Any, limits: Limits = DEFAULT_LIMITS) -> Request:
     """Validate a whole request (the JSON tree of :func:`load_json`)."""
-    obj = _check_keys(obj, "", _TOP_KEYS, {"system", "channel"})
+    obj = check_keys(obj, "", _TOP_KEYS, {"system", "channel"})
     system = parse_system(obj["system"], limits)
     channel = parse_channel(obj["channel"], system, limits)
     options: dict[str, Mapping[str, Any]] = {}
     time_budget = None
     if "options" in obj:
-        opts = _check_keys(obj["options"], "/options", set(OPTION_GROUPS) | {"time_budget_s"}, set())
+        opts = check_keys(obj["options"], "/options", set(OPTION_GROUPS) | {"time_budget_s"}, set())
         for key, val in opts.items():
             if key == "time_budget_s":
                 t = parse_number(val, "/options/time_budget_s", limits.max_digits)
@@ -377,7 +377,7 @@ def parse_request(obj: Any, limits: Limits = DEFAULT_LIMITS) -> Request:
             elif not isinstance(val, dict):
                 raise InvalidInput(f"/options/{key}", "expected a JSON object")
             else:
-                _check_keys(val, f"/options/{key}", OPTION_KEYS[key], set(), "option")
+                check_keys(val, f"/options/{key}", OPTION_KEYS[key], set(), "option")
                 options[key] = val
     return Request(system=system, channel=channel, options=options, time_budget_s=time_budget)
 

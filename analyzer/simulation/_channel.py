@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..model._types import Packet
+from ..model import Packet
 
 
 @dataclass(frozen=True, eq=False)

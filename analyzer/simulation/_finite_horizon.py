@@ -43,8 +43,7 @@ import numpy as np
 from .._budget import Budget
 from .._reporting import Report
 from ..errors import InvalidInput, LimitExceeded
-from ..model._exact import value_text
-from ..model._types import Request
+from ..model import Request, value_text
 from ._channel import JointChannel
 from ._filtered import filtered_covariance
 from ._kernel import PRECISION_RATIO, RiccatiStep

@@ -39,8 +39,7 @@ import numpy as np
 from .._budget import Budget
 from .._reporting import ReportPart
 from ..errors import InvalidInput
-from ..model._exact import parse_number
-from ..model._types import Request
+from ..model import Request, parse_number
 from ._setup import SimSystem, SimulateOptions
 from ._stationary import wilson
 

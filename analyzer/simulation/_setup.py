@@ -47,10 +47,20 @@ from typing import Any, Mapping
 import numpy as np
 
 from ..errors import InvalidInput, LimitExceeded
-from ..model._exact import parse_integer
-from ..model._limits import DEFAULT_LIMITS
-from ..model._request import OPTION_KEYS, check_symmetric, is_psd, option_group, parse_matrix
-from ..model._types import Matrix, Packet, Request, packets_of, to_float
+from ..model import (
+    DEFAULT_LIMITS,
+    OPTION_KEYS,
+    Matrix,
+    Packet,
+    Request,
+    check_symmetric,
+    is_psd,
+    option_group,
+    packets_of,
+    parse_integer,
+    parse_matrix,
+    to_float,
+)
 
 OPTIONS_FIELD = "/options/simulate"
 PERCENTILES = (50, 90, 99)

@@ -46,7 +46,7 @@ import numpy as np
 from .._budget import Budget
 from .._json import json_float
 from .._reporting import Report
-from ..model._types import Request
+from ..model import Request
 from ._channel import JointChannel
 from ._finite_horizon import FiniteHorizonReport, expected_covariance
 from ._kernel import DIVERGENCE_TRACE, PRECISION_RATIO, GroupedRiccatiStep, RiccatiStep, healthy, traces
@@ -476,7 +476,7 @@ def simulate(
 def _exact_analysis(request: Request) -> Any | None:
     """Theorem 1's report for the same request (tail exponent, growth rate), or ``None`` if it cannot be had."""
     from ..errors import AnalyzerError
-    from ..stability._verdict import analyze
+    from ..stability import analyze
 
     try:
         return analyze(

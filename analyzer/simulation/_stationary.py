@@ -42,8 +42,7 @@ import numpy as np
 from .._reporting import ReportPart
 from .._verdicts import Verdict
 from ..errors import InvalidInput, LimitExceeded
-from ..model._exact import parse_number
-from ..model._types import Request
+from ..model import Request, parse_number
 
 Z95 = 1.959963984540054
 QUANTILES = (0.5, 0.9, 0.99, 0.999)

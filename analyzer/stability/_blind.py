@@ -50,7 +50,7 @@ from typing import Callable
 import numpy as np
 
 from .._budget import Budget
-from ..structure._phases import PhaseBlock, Slot
+from ..structure import PhaseBlock, Slot
 
 #: Batched monotone score: boolean masks ``(C, S)`` -> values ``(C,)``.
 Score = Callable[[np.ndarray], np.ndarray]

@@ -35,10 +35,8 @@ from sympy.polys.matrices import DomainMatrix
 from .._budget import Budget
 from .._reporting import ReportPart
 from ..errors import InvalidInput
-from ..model._pointer import pointer_tokens
-from ..model._types import MarkovChannel, PerSensorChannel, Request
-from ..structure._display import readable
-from ..structure._fmo import FmoBlock
+from ..model import MarkovChannel, PerSensorChannel, Request, pointer_tokens
+from ..structure import FmoBlock, readable
 from ._blind import Margins, SlotSpace, search
 from ._decide import compare_rate_markov
 from ._line import Change, add_candidates, roots_in_unit, scan
@@ -145,7 +143,7 @@ def _boundary_poly(beta: Fraction, N: int, F: frozenset, channels: Sequence[Mark
 
 
 @dataclass(frozen=True)
-class _Constraint(ReportPart):
+class ParameterConstraint(ReportPart):
     block: int
     eigenvalues: tuple[str, ...]
     beta: Any
@@ -156,8 +154,8 @@ class _Constraint(ReportPart):
 
 def _constraints(
     items: Sequence[tuple[FmoBlock, SigmaResult | None]], n_groups: int, budget: Budget
-) -> list[_Constraint]:
-    out: list[_Constraint] = []
+) -> list[ParameterConstraint]:
+    out: list[ParameterConstraint] = []
     for i, (block, res) in enumerate(items):
         if res is None:
             continue
@@ -179,7 +177,7 @@ def _constraints(
             sets = [
                 frozenset((n + k * space.n_phases, g) for n, g in space.slots(m) for k in range(reps)) for m in masks
             ]
-        out.extend(_Constraint(period=N, blind_set=F, **base) for F in sets)
+        out.extend(ParameterConstraint(period=N, blind_set=F, **base) for F in sets)
     return out
 
 
@@ -204,7 +202,7 @@ class CriticalParameter(ReportPart):
     pointer: str
     value: Fraction
     intervals: tuple[tuple[float, float, str], ...]
-    crossings: tuple[Change[_Constraint], ...]
+    crossings: tuple[Change[ParameterConstraint], ...]
     exact: bool
     basis: str
 
@@ -259,7 +257,7 @@ def critical_parameter(
             poly = _boundary_poly(c.beta.rational, c.period, c.blind_set, channels, param)
             add_candidates(candidates, roots_in_unit(poly, X_SYM), c)
 
-    def label_at(x: Fraction) -> tuple[str, _Constraint | None]:
+    def label_at(x: Fraction) -> tuple[str, ParameterConstraint | None]:
         chans = param.channels(channels, x)
         best, where = -2, None
         for c in cons:

@@ -25,9 +25,7 @@ from sympy.polys.matrices import DomainMatrix
 
 from .._verdicts import Verdict
 from ..errors import NumericalFailure
-from ..structure._algebraic import AlgebraicReal
-from ..structure._balls import MAX_PREC, START_PREC, integer_coeffs, precision, root_balls, sign
-from ..structure._eigen import X
+from ..structure import MAX_PREC, START_PREC, AlgebraicReal, X, integer_coeffs, precision, root_balls, sign
 
 #: Verdict names by the sign of ``rate - 1``: ``VERDICTS[sign + 1]``.
 VERDICTS = (Verdict.STABLE, Verdict.BOUNDARY, Verdict.UNSTABLE)

@@ -13,8 +13,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ..errors import InvalidInput
-from ..model._request import OPTION_KEYS, option_group
-from ..model._types import MarkovChannel, Request
+from ..model import OPTION_KEYS, MarkovChannel, Request, option_group
 
 #: Largest ``ge_grid``: 101 x 101 exact labels stay within a second or two.
 MAX_GE_GRID = 101

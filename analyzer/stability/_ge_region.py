@@ -41,9 +41,8 @@ import sympy
 
 from .._budget import Budget
 from .._reporting import ReportPart
-from ..model._types import MarkovChannel
-from ..structure._display import readable
-from ..structure._fmo import FmoBlock
+from ..model import MarkovChannel
+from ..structure import FmoBlock, readable
 from ._blind import Margins, SlotSpace, search
 from ._line import Candidate, add_candidates, roots_in_unit, scan
 from ._sigma import SigmaResult

@@ -49,10 +49,8 @@ from .._json import encode
 from .._reporting import ReportPart
 from .._verdicts import Verdict
 from ..errors import InvalidInput
-from ..model._exact import value_text
-from ..model._request import require_assumption_1
-from ..model._types import PerSensorChannel, Request, packets_of
-from ..structure._fmo import FmoBlock
+from ..model import PerSensorChannel, Request, packets_of, require_assumption_1, value_text
+from ..structure import FmoBlock
 from ._decide import VERDICTS
 from ._regions_constraints import (
     DIGITS,

@@ -46,10 +46,9 @@ import sympy
 
 from .._budget import Budget
 from ..errors import InvalidInput, NumericalFailure
-from ..model._types import MarkovChannel, System
-from ..structure._algebraic import AlgebraicReal
-from ..structure._eigen import DIGITS  # working precision of the numerical side of exact comparisons
-from ..structure._fmo import FmoBlock, fmo_blocks
+from ..model import MarkovChannel
+from ..model import SystemRecord as System
+from ..structure import DIGITS, AlgebraicReal, FmoBlock, fmo_blocks
 from ._decide import compare_rate_bernoulli
 from ._sigma import SigmaResult, compute_sigma
 

@@ -36,8 +36,8 @@ import numpy as np
 
 from .._budget import Budget
 from ..errors import AssumptionViolation, InvalidInput, NumericalFailure
-from ..model._types import MarkovChannel
-from ..structure._phases import PhaseBlock
+from ..model import MarkovChannel
+from ..structure import PhaseBlock
 from ._blind import Margins, Objective, SlotSpace, search
 from ._blind_batch import enumerate_orbits
 from ._pareto import pareto_search

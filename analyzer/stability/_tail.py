@@ -40,9 +40,8 @@ import sympy
 from sympy import CRootOf, Poly
 
 from .._reporting import ReportPart
-from ..model._types import MarkovChannel
-from ..structure._algebraic import AlgebraicReal
-from ..structure._fmo import FmoBlock
+from ..model import MarkovChannel
+from ..structure import AlgebraicReal, FmoBlock
 from ._decide import _rho_poly, bernoulli_factor, compare_rate_bernoulli, compare_rate_markov, spectral_radius
 from ._sigma import SigmaResult, period_transfer_matrix
 
@@ -120,7 +119,7 @@ class TailReport(ReportPart):
         """Lines for the terminal summary."""
         if self.kappa is None:
             return [f"tail: {self.statement}"]
-        from ..structure._display import SHORT_TEXT_CHARS  # long CRootOf texts stay in the JSON, not the terminal
+        from ..structure import SHORT_TEXT_CHARS
 
         exact = ""
         if self.kappa_exact and len(self.kappa_exact) > SHORT_TEXT_CHARS:

@@ -24,13 +24,19 @@ from .._json import json_float
 from .._reporting import Report, ShortRepr
 from .._verdicts import Verdict
 from ..errors import BudgetExceeded
-from ..model._request import require_assumption_1
-from ..model._types import MarkovChannel, PerSensorChannel, Request, System, packets_of
-from ..structure._adjugate import to_fmpq_mat
-from ..structure._algebraic import AlgebraicReal
-from ..structure._balls import START_PREC, precision
-from ..structure._display import SHORT_TEXT_CHARS, readable, short_text
-from ..structure._fmo import FmoBlock, fmo_blocks
+from ..model import MarkovChannel, PerSensorChannel, Request, packets_of, require_assumption_1
+from ..model import SystemRecord as System
+from ..structure import (
+    SHORT_TEXT_CHARS,
+    START_PREC,
+    AlgebraicReal,
+    FmoBlock,
+    fmo_blocks,
+    precision,
+    readable,
+    short_text,
+    to_fmpq_mat,
+)
 from ._critical_parameter import CriticalParameter, critical_parameter
 from ._decide import VERDICTS, bernoulli_factor, compare_rate_bernoulli, compare_rate_markov
 from ._design_options import analyze_options

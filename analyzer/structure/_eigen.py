@@ -35,7 +35,7 @@ from sympy.polys.matrices import DomainMatrix
 
 from .._budget import Budget
 from ..errors import NumericalFailure
-from ..model._types import Matrix, to_domain
+from ..model import Matrix, to_domain
 from ._adjugate import simple_eigenvector, to_fmpq_mat
 from ._balls import START_PREC, IntCoeffs, integer_coeffs, ordered_roots, refine_root
 

@@ -35,8 +35,8 @@ from sympy.polys.polyerrors import BasePolynomialError
 
 from .._budget import Budget
 from ..errors import NumericalFailure
-from ..model._exact import fraction_text
-from ..model._types import Matrix, System
+from ..model import Matrix, fraction_text
+from ..model import SystemRecord as System
 from ._adjugate import to_fmpq_mat
 from ._algebraic import AlgebraicReal, power_minus
 from ._balls import MAX_PREC, START_PREC, horner, precision, sign, to_float

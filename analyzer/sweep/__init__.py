@@ -18,14 +18,16 @@ Examples
 ['unstable', 'unstable', 'stable']
 """
 
+from ._boundary import exact_boundary
 from ._engine import SweepResult, SweepRow, iter_sweep, run_sweep
 from ._evaluate import cache_stats, clear_caches, evaluate_point
-from ._rows import FIELDS, row_from_report
+from ._rows import FIELDS, coordinate_column, row_from_report
 from ._spec import (
     Axis,
     RationalRange,
     SweepPointInvalid,
     SweepSpec,
+    check_points,
     load_sweep,
     parse_sweep,
     point_at,
@@ -33,22 +35,26 @@ from ._spec import (
     sweep_size,
     validate_points,
 )
-from ._table import FORMATS, format_of, write_table
+from ._table import FORMATS, format_of, jsonl_line, write_table
 
 __all__ = [
+    "Axis",
     "FIELDS",
     "FORMATS",
-    "Axis",
     "RationalRange",
     "SweepPointInvalid",
     "SweepResult",
     "SweepRow",
     "SweepSpec",
     "cache_stats",
+    "check_points",
     "clear_caches",
+    "coordinate_column",
     "evaluate_point",
+    "exact_boundary",
     "format_of",
     "iter_sweep",
+    "jsonl_line",
     "load_sweep",
     "parse_sweep",
     "point_at",

@@ -49,9 +49,7 @@ def exact_boundary(spec: SweepSpec) -> dict[str, Any] | None:
             rate_of = {"/channel/failure_rate": "failure_rate", "/channel/recovery_rate": "recovery_rate"}
             if sorted(pointers) != sorted(rate_of):
                 return None
-            from ..stability import analyze
-            from ..stability._ge_boundary import boundary_lines
-            from ..stability._ge_region import GeStructure
+            from ..stability import GeStructure, analyze, boundary_lines
 
             region = analyze(parse_request(spec.base)).gilbert_elliott
             if region is None:  # skipped unasked (a long period): ask for it, with the request's own budget

@@ -47,7 +47,7 @@ JOB_STATUS_SCHEMA: dict[str, Any] = {
     },
 }
 
-_STATUS_RESPONSE = {"content": {"application/json": {"schema": JOB_STATUS_SCHEMA}}}
+STATUS_RESPONSE = {"content": {"application/json": {"schema": JOB_STATUS_SCHEMA}}}
 JobId = Annotated[str, Path(description="the id from the `Location` of `POST /v1/jobs/...`", max_length=64)]
 
 
@@ -160,7 +160,7 @@ def _submit_route(kind: str) -> None:
         ),
         response_class=Response,
         responses={
-            202: {"description": "The job was queued", **_STATUS_RESPONSE},
+            202: {"description": "The job was queued", **STATUS_RESPONSE},
             **problem_responses(413, 422, 429, 503),
         },
         openapi_extra=json_body(REQUEST_EXAMPLES),
@@ -175,7 +175,7 @@ for _kind in ("analyze", "bounds", "simulate"):
     "/{job_id}",
     summary="A job's status, progress, and result or problem",
     response_class=Response,
-    responses={200: {"description": "The job", **_STATUS_RESPONSE}, **problem_responses(404, 422)},
+    responses={200: {"description": "The job", **STATUS_RESPONSE}, **problem_responses(404, 422)},
 )
 async def get_job(job_id: JobId, store: JobStoreDep) -> Response:
     return Response(store.document(store.get(job_id)), media_type="application/json")
@@ -205,7 +205,7 @@ async def get_job_result(job_id: JobId, store: JobStoreDep) -> Response:
     "/{job_id}",
     summary="Cancel a job (a running one's worker process is killed)",
     response_class=Response,
-    responses={200: {"description": "The job, now cancelled", **_STATUS_RESPONSE}, **problem_responses(404, 409, 422)},
+    responses={200: {"description": "The job, now cancelled", **STATUS_RESPONSE}, **problem_responses(404, 409, 422)},
 )
 async def cancel_job(job_id: JobId, store: JobStoreDep) -> Response:
     return Response(store.document(store.cancel(job_id)), media_type="application/json")

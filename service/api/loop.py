@@ -11,14 +11,14 @@ from fastapi.responses import Response
 from .deps import BodyDep, get_body, get_dispatcher
 from .jobs import JobStoreDep, validated
 from .loop_schemas import LOOP_EXAMPLES
-from .schemas import _ref, json_response, problem_responses
+from .schemas import json_response, problem_responses, schema_ref
 
 router = APIRouter(tags=["analysis"])
 
 _BODY = {
     "requestBody": {
         "required": True,
-        "content": {"application/json": {"schema": _ref("LoopRequest"), "examples": LOOP_EXAMPLES}},
+        "content": {"application/json": {"schema": schema_ref("LoopRequest"), "examples": LOOP_EXAMPLES}},
     }
 }
 

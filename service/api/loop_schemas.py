@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import Any
 
 from ..._version import __version__
-from .schemas import COMPONENTS, _ref
+from .schemas import COMPONENTS, schema_ref
 
 LOOP_EXAMPLE: dict[str, Any] = {
     "system": {"A": [[1.25]], "B": [[1]], "C": [[1]], "Q": [[1]], "R": [[0.5]]},
@@ -21,8 +21,8 @@ LOOP_EXAMPLES = {"scalar-loop": {"summary": "A scalar loop, Bernoulli links on b
 _WEIGHTS = {
     "type": "object",
     "properties": {
-        "W": {**_ref("Matrix"), "description": "n x n state weight, symmetric positive semidefinite (default I)"},
-        "U": {**_ref("Matrix"), "description": "m x m input weight, symmetric positive semidefinite (default 0)"},
+        "W": {**schema_ref("Matrix"), "description": "n x n state weight, symmetric positive semidefinite (default I)"},
+        "U": {**schema_ref("Matrix"), "description": "m x m input weight, symmetric positive semidefinite (default 0)"},
     },
     "additionalProperties": False,
 }
@@ -41,19 +41,23 @@ LOOP_COMPONENTS: dict[str, dict[str, Any]] = {
                 "type": "object",
                 "description": "The System fields (A, C, Q, R and sensors; Q and R required) plus B (n x m).",
                 "properties": {
-                    "A": _ref("Matrix"),
-                    "B": _ref("Matrix"),
-                    "C": _ref("Matrix"),
-                    "Q": _ref("Matrix"),
-                    "R": _ref("Matrix"),
-                    "sensors": {"type": "array", "minItems": 1, "maxItems": 8, "items": _ref("Sensor")},
+                    "A": schema_ref("Matrix"),
+                    "B": schema_ref("Matrix"),
+                    "C": schema_ref("Matrix"),
+                    "Q": schema_ref("Matrix"),
+                    "R": schema_ref("Matrix"),
+                    "sensors": {"type": "array", "minItems": 1, "maxItems": 8, "items": schema_ref("Sensor")},
                 },
                 "required": ["A", "B", "C", "Q", "R"],
                 "additionalProperties": False,
             },
-            "channel": _ref("Channel"),
+            "channel": schema_ref("Channel"),
             "actuator_channel": {
-                "anyOf": [_ref("BernoulliChannel"), _ref("GilbertElliottChannel"), _ref("MarkovChannel")]
+                "anyOf": [
+                    schema_ref("BernoulliChannel"),
+                    schema_ref("GilbertElliottChannel"),
+                    schema_ref("MarkovChannel"),
+                ]
             },
             "controller": {
                 "anyOf": [
@@ -63,8 +67,8 @@ LOOP_COMPONENTS: dict[str, dict[str, Any]] = {
                             "gains": {
                                 "type": "object",
                                 "properties": {
-                                    "K": {**_ref("Matrix"), "description": "n x p estimator gain"},
-                                    "L": {**_ref("Matrix"), "description": "m x n feedback gain, u = -L x_hat"},
+                                    "K": {**schema_ref("Matrix"), "description": "n x p estimator gain"},
+                                    "L": {**schema_ref("Matrix"), "description": "m x n feedback gain, u = -L x_hat"},
                                 },
                                 "required": ["K", "L"],
                                 "additionalProperties": False,
@@ -102,7 +106,7 @@ LOOP_COMPONENTS: dict[str, dict[str, Any]] = {
                         },
                         "additionalProperties": False,
                     },
-                    "time_budget_s": {**_ref("ExactNumber"), "description": "seconds, in [0.01, 3600]"},
+                    "time_budget_s": {**schema_ref("ExactNumber"), "description": "seconds, in [0.01, 3600]"},
                 },
                 "additionalProperties": False,
             },

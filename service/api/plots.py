@@ -19,9 +19,9 @@ from .schemas import (
     PHASE_TRANSITION_EXAMPLES,
     REGION_EXAMPLES,
     REQUEST_EXAMPLES,
-    _ref,
     json_body,
     problem_responses,
+    schema_ref,
 )
 
 router = APIRouter(prefix="/v1/plots", tags=["plots"])
@@ -125,7 +125,7 @@ async def ge_region(
     openapi_extra={
         "requestBody": {
             "required": True,
-            "content": {"application/json": {"schema": _ref("LoopRequest"), "examples": LOOP_EXAMPLES}},
+            "content": {"application/json": {"schema": schema_ref("LoopRequest"), "examples": LOOP_EXAMPLES}},
         }
     },
 )

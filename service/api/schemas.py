@@ -12,18 +12,17 @@ from __future__ import annotations
 from typing import Any
 
 from kfio._version import __version__
-from kfio.model._exact import _DECIMAL, _WS
-from kfio.model._request import OPTION_KEYS
+from kfio.model import DECIMAL_PATTERN, NUMBER_SPACE, OPTION_KEYS
 
 #: The grammar of :func:`kfio.model.parse_number`, from its own pieces: JSON's four whitespace characters
 #: (not ``\s``, which also matches form feed and vertical tab) and ASCII digits.
-_NUMBER_PATTERN = rf"^{_WS}{_DECIMAL}{_WS}(?:/{_WS}{_DECIMAL}{_WS})?$"
+NUMBER_PATTERN = rf"^{NUMBER_SPACE}{DECIMAL_PATTERN}{NUMBER_SPACE}(?:/{NUMBER_SPACE}{DECIMAL_PATTERN}{NUMBER_SPACE})?$"
 
 
 _KFIO_VERSION = {"type": "string", "description": "The version of kfio that made the report", "examples": [__version__]}
 
 
-def _ref(name: str) -> dict[str, str]:
+def schema_ref(name: str) -> dict[str, str]:
     return {"$ref": f"#/components/schemas/{name}"}
 
 
@@ -32,7 +31,7 @@ def _matrix(description: str) -> dict[str, Any]:
         "type": "array",
         "minItems": 1,
         "maxItems": 40,
-        "items": {"type": "array", "minItems": 1, "maxItems": 40, "items": _ref("ExactNumber")},
+        "items": {"type": "array", "minItems": 1, "maxItems": 40, "items": schema_ref("ExactNumber")},
         "description": description,
     }
 
@@ -238,7 +237,7 @@ COMPONENTS: dict[str, dict[str, Any]] = {
             "or a string holding an integer, a decimal such as '1.1e-3' or a fraction such as '11/10'. "
             "At most 200 digits."
         ),
-        "anyOf": [{"type": "number"}, {"type": "string", "pattern": _NUMBER_PATTERN, "maxLength": 816}],
+        "anyOf": [{"type": "number"}, {"type": "string", "pattern": NUMBER_PATTERN, "maxLength": 816}],
         "examples": [1.25, "11/10", "2.5e-1"],
     },
     "Probability": {
@@ -246,7 +245,7 @@ COMPONENTS: dict[str, dict[str, Any]] = {
         "forms). A command may need more (its 422 names the rule).",
         "anyOf": [
             {"type": "number", "minimum": 0, "maximum": 1},
-            {"type": "string", "pattern": _NUMBER_PATTERN, "maxLength": 816},
+            {"type": "string", "pattern": NUMBER_PATTERN, "maxLength": 816},
         ],
         "examples": [0.5, "9/25"],
     },
@@ -269,19 +268,19 @@ COMPONENTS: dict[str, dict[str, Any]] = {
         "type": "object",
         "description": "x[t+1] = A x + w, w ~ N(0, Q); y = C x + v, v ~ N(0, R) (see docs/theory.md, The model).",
         "properties": {
-            "A": {**_ref("Matrix"), "description": "n x n state matrix"},
-            "C": {**_ref("Matrix"), "description": "p x n output matrix"},
+            "A": {**schema_ref("Matrix"), "description": "n x n state matrix"},
+            "C": {**schema_ref("Matrix"), "description": "p x n output matrix"},
             "Q": {
-                **_ref("Matrix"),
+                **schema_ref("Matrix"),
                 "description": "n x n process noise covariance, symmetric positive semidefinite (JSON Schema cannot "
                 "say symmetric or semidefinite: the validator checks both, exactly, and answers 422)",
             },
             "R": {
-                **_ref("Matrix"),
+                **schema_ref("Matrix"),
                 "description": "p x p measurement noise covariance, symmetric positive definite (checked exactly by "
                 "the validator, 422 otherwise)",
             },
-            "sensors": {"type": "array", "minItems": 1, "maxItems": 8, "items": _ref("Sensor")},
+            "sensors": {"type": "array", "minItems": 1, "maxItems": 8, "items": schema_ref("Sensor")},
         },
         "required": ["A", "C"],
         "additionalProperties": False,
@@ -289,14 +288,14 @@ COMPONENTS: dict[str, dict[str, Any]] = {
     },
     "BernoulliChannel": _channel(
         "bernoulli",
-        {"arrival_probability": _ref("Probability")},
+        {"arrival_probability": schema_ref("Probability")},
         ["arrival_probability"],
         "i.i.d. arrivals with P(arrival) = arrival_probability (Sinopoli et al. 2004).",
         _SEED004_SCALAR["channel"],
     ),
     "GilbertElliottChannel": _channel(
         "gilbert_elliott",
-        {"failure_rate": _ref("Probability"), "recovery_rate": _ref("Probability")},
+        {"failure_rate": schema_ref("Probability"), "recovery_rate": schema_ref("Probability")},
         ["failure_rate", "recovery_rate"],
         "failure_rate = P(lost | previous arrived), recovery_rate = P(arrived | previous lost).",
         _SEED001_DEGENERATE_GE["channel"],
@@ -313,7 +312,7 @@ COMPONENTS: dict[str, dict[str, Any]] = {
                 "propertyNames": {"pattern": "^[01]{0,10}$"},
                 "minProperties": 1,
                 "maxProperties": 1024,
-                "additionalProperties": _ref("Probability"),
+                "additionalProperties": schema_ref("Probability"),
             },
         },
         ["order", "arrival_probability"],
@@ -331,7 +330,7 @@ COMPONENTS: dict[str, dict[str, Any]] = {
                 "propertyNames": {"minLength": 1, "maxLength": 64},
                 "minProperties": 1,
                 "maxProperties": 8,
-                "additionalProperties": _ref("PacketChannel"),
+                "additionalProperties": schema_ref("PacketChannel"),
             }
         },
         ["channels"],
@@ -340,15 +339,15 @@ COMPONENTS: dict[str, dict[str, Any]] = {
     ),
     "PacketChannel": {
         "description": "The channel of one packet.",
-        "oneOf": [_ref("BernoulliChannel"), _ref("GilbertElliottChannel"), _ref("MarkovChannel")],
+        "oneOf": [schema_ref("BernoulliChannel"), schema_ref("GilbertElliottChannel"), schema_ref("MarkovChannel")],
         "examples": [_SEED001_DEGENERATE_GE["channel"]],
     },
     "Channel": {
         "oneOf": [
-            _ref("BernoulliChannel"),
-            _ref("GilbertElliottChannel"),
-            _ref("MarkovChannel"),
-            _ref("PerSensorChannel"),
+            schema_ref("BernoulliChannel"),
+            schema_ref("GilbertElliottChannel"),
+            schema_ref("MarkovChannel"),
+            schema_ref("PerSensorChannel"),
         ],
         "examples": [{"model": "bernoulli", "arrival_probability": 0.5}],
     },
@@ -361,7 +360,7 @@ COMPONENTS: dict[str, dict[str, Any]] = {
                 "reach a worker, and is 422); the deployment's budget caps it.",
                 "anyOf": [
                     {"type": "number", "minimum": 0.01, "maximum": 3600},
-                    {"type": "string", "pattern": _NUMBER_PATTERN, "maxLength": 816},
+                    {"type": "string", "pattern": NUMBER_PATTERN, "maxLength": 816},
                 ],
             },
             "analyze": {
@@ -418,7 +417,11 @@ COMPONENTS: dict[str, dict[str, Any]] = {
     "AnalysisRequest": {
         "type": "object",
         "description": "The same JSON the kfio CLI reads from a file.",
-        "properties": {"system": _ref("System"), "channel": _ref("Channel"), "options": _ref("Options")},
+        "properties": {
+            "system": schema_ref("System"),
+            "channel": schema_ref("Channel"),
+            "options": schema_ref("Options"),
+        },
         "required": ["system", "channel"],
         "additionalProperties": False,
         "examples": [_SEED002_2X2],
@@ -644,7 +647,7 @@ def problem_responses(*statuses: int) -> dict[int | str, dict[str, Any]]:
     if 413 in statuses and 415 not in statuses:  # a route that reads a body refuses other media types too
         statuses = (*statuses, 415)
     return {
-        s: {"description": texts[s], "content": {"application/problem+json": {"schema": _ref("Problem")}}}
+        s: {"description": texts[s], "content": {"application/problem+json": {"schema": schema_ref("Problem")}}}
         for s in sorted(statuses)
     }
 
@@ -654,11 +657,11 @@ def json_body(examples: dict[str, dict[str, Any]]) -> dict[str, Any]:
     return {
         "requestBody": {
             "required": True,
-            "content": {"application/json": {"schema": _ref("AnalysisRequest"), "examples": examples}},
+            "content": {"application/json": {"schema": schema_ref("AnalysisRequest"), "examples": examples}},
         }
     }
 
 
 def json_response(schema_name: str, description: str) -> dict[int | str, dict[str, Any]]:
     """A 200 JSON response with a component schema."""
-    return {200: {"description": description, "content": {"application/json": {"schema": _ref(schema_name)}}}}
+    return {200: {"description": description, "content": {"application/json": {"schema": schema_ref(schema_name)}}}}

@@ -16,7 +16,7 @@ from fastapi import APIRouter
 from fastapi.responses import Response
 
 from .deps import BodyDep
-from .jobs import _STATUS_RESPONSE, JobStoreDep, validated
+from .jobs import STATUS_RESPONSE, JobStoreDep, validated
 from .schemas import problem_responses
 
 if TYPE_CHECKING:
@@ -116,7 +116,7 @@ def _check_shape(body: bytes, max_points: int) -> SweepSpec:
     ),
     response_class=Response,
     responses={
-        202: {"description": "The sweep was queued", **_STATUS_RESPONSE},
+        202: {"description": "The sweep was queued", **STATUS_RESPONSE},
         **problem_responses(413, 422, 429, 503),  # 503 server-misconfigured: KFIO_DASK_SCHEDULER does not work
     },
     openapi_extra={

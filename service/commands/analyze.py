@@ -41,10 +41,10 @@ def _run(args: argparse.Namespace) -> int:
             request = dataclasses.replace(request, options={**request.options, "analyze": opts})
         report = analyze(request, budget=budget)
         if args.ge_plot:
-            from ..plots import _draw_ge_region
+            from ..plots import draw_ge_region
 
             with open(args.ge_plot, "wb") as fh:
-                fh.write(_draw_ge_region(report.gilbert_elliott, report.verdict, request))
+                fh.write(draw_ge_region(report.gilbert_elliott, report.verdict, request))
         emit(dump_json(report.to_dict()) if args.json else report.summary())  # emit: user text made safe
         return exitcodes.BY_VERDICT[report.verdict]
 

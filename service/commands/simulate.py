@@ -18,7 +18,7 @@ from ..io import add_request_arguments, dump_json, emit, run_request_command
 
 if TYPE_CHECKING:
     from kfio import Budget
-    from kfio.model._types import Request
+    from kfio.model import Request
 
 #: ``--exact`` without ``options.simulate.exact_steps`` enumerates at most 2^16 sequences.
 DEFAULT_EXACT_SEQUENCES_LOG2 = 16
@@ -49,7 +49,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def with_overrides(request: Request, args: argparse.Namespace) -> Request:
     """The request with command-line flags written into ``options.simulate``."""
-    from kfio.simulation._setup import packets_of
+    from kfio.simulation import packets_of
 
     raw: dict[str, Any] = dict(request.options.get("simulate", {}))
     for key in ("steps", "trajectories", "seed"):
@@ -64,7 +64,7 @@ def with_overrides(request: Request, args: argparse.Namespace) -> Request:
 
 
 def _run(args: argparse.Namespace) -> int:
-    from kfio.simulation._simulate import simulate  # here, not at import: `kfio --help` stays fast
+    from kfio.simulation import simulate
 
     def work(request: Request, budget: Budget) -> int:
         report = simulate(with_overrides(request, args), budget=budget)

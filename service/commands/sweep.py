@@ -79,9 +79,7 @@ class _Bar:
 def _run(args: argparse.Namespace) -> int:
     def body() -> int:
         from kfio.errors import InvalidInput
-        from kfio.sweep import format_of, iter_sweep, load_sweep, write_table
-        from kfio.sweep._engine import SweepResult
-        from kfio.sweep._table import jsonl_line
+        from kfio.sweep import SweepResult, format_of, iter_sweep, jsonl_line, load_sweep, write_table
 
         for flag in ("workers", "chunk_size"):
             value = getattr(args, flag)

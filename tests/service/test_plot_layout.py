@@ -3,7 +3,7 @@
 Before: titles were clipped at the API's figure size ("tability region...",
 "verdict unstable (Theorem"), the simulation legend covered the data, and the
 simulation title put the Monte Carlo picture before the exact verdict.  The
-figures are read through :func:`kfio.service.plots._png`, the one place every
+figures are read through :func:`kfio.service.plots.png_bytes`, the one place every
 plot passes on its way to PNG bytes.
 """
 
@@ -30,7 +30,7 @@ def _request(name: str, options: dict | None = None):
 
 def _figure_of(monkeypatch, draw, request, params):
     seen = []
-    monkeypatch.setattr(plots, "_png", lambda fig: seen.append(fig) or b"")
+    monkeypatch.setattr(plots, "png_bytes", lambda fig: seen.append(fig) or b"")
     draw(request, Budget(seconds=300), params)
     (fig,) = seen
     return fig
