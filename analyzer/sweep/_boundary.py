@@ -17,7 +17,7 @@ from __future__ import annotations
 from typing import Any
 
 from ..errors import AnalyzerError
-from ..model import parse_request
+from ..model import json_pointer, parse_request
 from ._spec import SweepSpec
 
 
@@ -67,7 +67,7 @@ def exact_boundary(spec: SweepSpec) -> dict[str, Any] | None:
             return {"kind": "curve", "axes": (spec.axes[0].name, spec.axes[1].name), "x": x, "y": y} if x else None
         if len(spec.axes) == 2 and channel.get("model") == "per_sensor":
             names = list(channel.get("channels", {}))
-            wanted = [f"/channel/channels/{n}/arrival_probability" for n in names]
+            wanted = [json_pointer(("channel", "channels", n, "arrival_probability")) for n in names]
             if len(names) != 2 or sorted(pointers) != sorted(wanted):
                 return None
             from ..stability import analyze

@@ -17,7 +17,7 @@ from fastapi.responses import Response
 
 from .deps import BodyDep
 from .jobs import STATUS_RESPONSE, JobStoreDep, validated
-from .schemas import problem_responses
+from .schemas import NUMBER_PATTERN, problem_responses
 
 if TYPE_CHECKING:
     from kfio.sweep import SweepSpec
@@ -74,8 +74,20 @@ SWEEP_SCHEMA = {
         "options": {
             "type": "object",
             "properties": {
-                "point_budget_s": {"description": "each point's budget in seconds (0.01 to 3600, default 60)"},
-                "time_budget_s": {"description": "the whole sweep's budget in seconds"},
+                "point_budget_s": {
+                    "description": "each point's budget in seconds (0.01 to 3600, default 60)",
+                    "anyOf": [
+                        {"type": "number", "minimum": 0.01, "maximum": 3600},
+                        {"type": "string", "pattern": NUMBER_PATTERN, "maxLength": 40},
+                    ],
+                },
+                "time_budget_s": {
+                    "description": "the whole sweep's budget in seconds (0.01 to 86400)",
+                    "anyOf": [
+                        {"type": "number", "minimum": 0.01, "maximum": 86400},
+                        {"type": "string", "pattern": NUMBER_PATTERN, "maxLength": 40},
+                    ],
+                },
                 "chunk_size": {"type": "integer", "minimum": 1, "description": "points per task"},
             },
             "additionalProperties": False,

@@ -157,3 +157,31 @@ def test_problem_in_enum_lists_every_place_the_server_names() -> None:
         "path",
         "header",
     }
+
+
+def test_sweep_budgets_are_typed_as_the_validator_reads_them() -> None:
+    """``point_budget_s`` and ``time_budget_s`` of a sweep: a number in range or an exact-number string."""
+    import json
+    from pathlib import Path
+
+    doc = json.loads((Path(__file__).resolve().parents[2] / "openapi" / "openapi.json").read_text())
+    found = []
+
+    def walk(node: object) -> None:
+        if isinstance(node, dict):
+            props = node.get("properties")
+            if isinstance(props, dict) and "point_budget_s" in props:
+                found.append(props)
+            for v in node.values():
+                walk(v)
+        elif isinstance(node, list):
+            for v in node:
+                walk(v)
+
+    walk(doc)
+    assert found
+    for props in found:
+        for key, upper in (("point_budget_s", 3600), ("time_budget_s", 86400)):
+            number, text = props[key]["anyOf"]
+            assert number == {"type": "number", "minimum": 0.01, "maximum": upper}
+            assert text["type"] == "string" and "pattern" in text

@@ -231,3 +231,35 @@ def test_exact_boundary_of_a_gilbert_elliott_sweep_is_the_closed_form_curve():
     # Rohr, Marelli and Fu (2014) Example 2 class: |alpha|^4 ((1-q)^2 + p q) = 1 on the boundary
     for q, p in pts:
         assert (5 / 4) ** 4 * ((1 - q) ** 2 + p * q) == pytest.approx(1, abs=1e-6)
+
+
+def test_exact_boundary_of_a_two_sensor_sweep_finds_sensors_whose_names_need_escaping():
+    """Sensor names with ``/`` and ``~`` are RFC 6901-escaped in the axes' pointers: the curve is still found."""
+    from kfio.model import json_pointer
+    from kfio.sweep import exact_boundary
+
+    names = ["a/", "b~c"]
+    spec = load_sweep(
+        json.dumps(
+            {
+                "command": "analyze",
+                "base": {
+                    "system": {
+                        "A": [["5/2", 0], [0, "3/2"]],
+                        "C": [[1, 0], [0, 1]],
+                        "sensors": [{"name": n, "rows": [i]} for i, n in enumerate(names)],
+                    },
+                    "channel": {
+                        "model": "per_sensor",
+                        "channels": {n: {"model": "bernoulli", "arrival_probability": "9/10"} for n in names},
+                    },
+                },
+                "axes": [
+                    {"pointer": json_pointer(("channel", "channels", n, "arrival_probability")), "values": ["9/10"]}
+                    for n in names
+                ],
+            }
+        )
+    )
+    b = exact_boundary(spec)
+    assert b is not None and b["kind"] == "curve" and len(b["x"]) > 2
