@@ -66,7 +66,7 @@ _LAZY = {
     # reports and the request-level entry points
     "StabilityReport": ".stability._verdict",
     "BlockReport": ".stability._verdict",
-    "BoundsReport": ".mare",
+    "BoundsReport": ".riccati_bounds",
     "SimulationReport": ".simulation",
     "FiniteHorizonReport": ".simulation",
     "SimulationLimits": ".simulation",
@@ -97,7 +97,6 @@ if TYPE_CHECKING:  # what the lazy names are, for type checkers and editors
         LimitExceeded,
         NumericalFailure,
     )
-    from .mare import BoundsReport
     from .model import (
         DEFAULT_LIMITS,
         Limits,
@@ -114,6 +113,7 @@ if TYPE_CHECKING:  # what the lazy names are, for type checkers and editors
         parse_request,
         per_sensor,
     )
+    from .riccati_bounds import BoundsReport
     from .simulation import DEFAULT_SIMULATION_LIMITS, FiniteHorizonReport, SimulationLimits, SimulationReport
     from .stability import BlockReport, StabilityReport
 

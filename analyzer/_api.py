@@ -32,7 +32,7 @@ from .model import (
 
 if TYPE_CHECKING:
     from ._typing import BudgetLike, ChannelLike, MatrixLike
-    from .mare import BoundsReport
+    from .riccati_bounds import BoundsReport
     from .simulation import FiniteHorizonReport, SimulationReport
     from .stability import StabilityReport
 
@@ -283,7 +283,7 @@ def bounds(
     >>> round(b.critical[0].lower, 9), b.verdict
     (0.36, 'stable')
     """
-    from .mare import compute_bounds
+    from .riccati_bounds import compute_bounds
 
     request, work, routes = _build_request(system, channel, command="bounds", options=options, budget=budget)
     return _run(compute_bounds, routes, request, work)

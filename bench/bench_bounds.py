@@ -28,13 +28,13 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from kfio.mare import _riccati as riccati  # noqa: E402
-from kfio.mare._certificate import ExactPlant  # noqa: E402
-from kfio.mare._compute import critical_lower_bound  # noqa: E402
-from kfio.mare._lmi import StabilityLMI  # noqa: E402
-from kfio.mare._phat import BatchedMare, p_hat_sequence  # noqa: E402
-from kfio.mare._search import CertifiedSearch  # noqa: E402
-from kfio.mare._vech import vech  # noqa: E402
+from kfio.riccati_bounds import _riccati as riccati  # noqa: E402
+from kfio.riccati_bounds._certificate import ExactPlant  # noqa: E402
+from kfio.riccati_bounds._compute import critical_lower_bound  # noqa: E402
+from kfio.riccati_bounds._lmi import StabilityLMI  # noqa: E402
+from kfio.riccati_bounds._phat import BatchedMare, p_hat_sequence  # noqa: E402
+from kfio.riccati_bounds._search import CertifiedSearch  # noqa: E402
+from kfio.riccati_bounds._vech import vech  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _reference import REFERENCE_COMMIT, run_reference  # noqa: E402
@@ -43,8 +43,8 @@ REFERENCE_LAMBDA_UPPER = """
 import json, time
 from fractions import Fraction
 import numpy as np
-from kfio.mare._certificate import ExactPlant
-from kfio.mare._search import CertifiedSearch
+from kfio.riccati_bounds._certificate import ExactPlant
+from kfio.riccati_bounds._search import CertifiedSearch
 A, C, lower = np.array({A}), np.array({C}), {lower}
 ex = lambda M: tuple(tuple(Fraction(float(x)) for x in r) for r in M)
 t = time.process_time()

@@ -3,7 +3,7 @@
     python bench/bench_bounds_speed.py [--reference 13e923d] [--sizes 3,10,20]
 
 For each size, one system of ``bench_bounds.random_system`` (seed 0, two outputs, ``Q = I``,
-``R = I``, Bernoulli ``0.9``) goes through :func:`kfio.mare._compute.compute_bounds` (the work of
+``R = I``, Bernoulli ``0.9``) goes through :func:`kfio.riccati_bounds._compute.compute_bounds` (the work of
 ``kfio bounds``: interval, covariance bounds with the SDP cross-check, ``P_hat``), timed with
 ``time.process_time`` here and in a child interpreter on the reference code (:mod:`_reference`).
 The JSON of both reports is compared too.
@@ -48,7 +48,7 @@ def measure(sizes: list[int]) -> dict:
     import time
 
     from kfio import load_request
-    from kfio.mare._compute import compute_bounds
+    from kfio.riccati_bounds._compute import compute_bounds
 
     compute_bounds(load_request(request_text(2)))  # imports and CVXPY's first solve
     out = {}

@@ -16,8 +16,8 @@ import json
 import time
 
 from kfio import analyze, load_request
-from kfio.stability._sigma import compute_sigma
-from kfio.stability._tail import tail_report
+from kfio.design._tail import tail_report
+from kfio.sigma._sigma import compute_sigma
 from kfio.stability._verdict import _channels_of
 from kfio.structure._fmo import fmo_blocks
 

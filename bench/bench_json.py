@@ -87,7 +87,7 @@ CASES = [
 SNIPPET = """
 import hashlib, json, time
 from kfio import analyze, load_request
-from kfio.mare._compute import compute_bounds
+from kfio.riccati_bounds._compute import compute_bounds
 from kfio.simulation._simulate import simulate
 RUN = {"analyze": analyze, "bounds": compute_bounds, "simulate": simulate}
 out = []

@@ -2,7 +2,7 @@
 
 Run ``python bench/bench_sigma.py`` from the repository root.  For each
 degenerate block (one output row, eigenvalues ``2 * roots of unity`` of the
-orders in its name) it times :func:`kfio.stability._sigma.compute_sigma` (median of
+orders in its name) it times :func:`kfio.sigma._sigma.compute_sigma` (median of
 three runs) and a naive baseline that tries every subset of the ``N`` phases
 with a numpy rank test, keeps the maximal blind ones and scores them.  The
 baseline is run where ``N <= 16``; beyond that its time is extrapolated as
@@ -30,8 +30,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from kfio._budget import Budget  # noqa: E402
 from kfio.errors import BudgetExceeded  # noqa: E402
 from kfio.model._types import MarkovChannel  # noqa: E402
-from kfio.stability._blind import Margins, SlotSpace, search  # noqa: E402
-from kfio.stability._sigma import _objective, compute_sigma, sigma_period  # noqa: E402
+from kfio.search._blind import Margins, SlotSpace, search  # noqa: E402
+from kfio.sigma._sigma import _objective, compute_sigma, sigma_period  # noqa: E402
 from kfio.structure._phases import PhaseBlock  # noqa: E402
 
 NAIVE_MAX_N = 16

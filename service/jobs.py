@@ -35,7 +35,7 @@ log = logging.getLogger("kfio.service")
 PRELOAD = (
     "kfio.service.jobs",
     "kfio.service.plots",
-    "kfio.mare._compute",
+    "kfio.riccati_bounds._compute",
     "kfio.simulation._simulate",
     "matplotlib.figure",
     "kfio.service.warmup",  # last: runs one tiny request of each kind (SymPy sub-imports, CVXPY's first solve)
@@ -76,7 +76,7 @@ def analyze_job(body: bytes, settings: Settings, budget: Budget, params: Mapping
 
 def bounds_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[str, Any]) -> JobOutput:
     """``kfio bounds``: bounds on the critical probability and on ``E[P]``."""
-    from kfio.mare import compute_bounds
+    from kfio.riccati_bounds import compute_bounds
 
     return report_json(compute_bounds(parse(body, settings), budget=budget))
 

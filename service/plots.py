@@ -187,9 +187,9 @@ def _value(node: Any) -> float | None:
 
 
 def _critical_values(request: Request, budget: Budget) -> dict[str, Any]:
-    """Bounds on lambda_c (:func:`kfio.mare._compute.compute_bounds`) and the exact value (:func:`kfio.analyze`)."""
+    """Bounds on lambda_c (:func:`kfio.riccati_bounds._compute.compute_bounds`) and the exact value (:func:`kfio.analyze`)."""
     from kfio import analyze
-    from kfio.mare import compute_bounds
+    from kfio.riccati_bounds import compute_bounds
 
     report = compute_bounds(request, budget=budget).to_dict()
     crit = report.get("critical_probability") or {}
@@ -206,7 +206,7 @@ def _critical_values(request: Request, budget: Budget) -> dict[str, Any]:
 def phase_transition(request: Request, budget: Budget, params: Mapping[str, Any]) -> bytes:
     """``trace(S_bar)`` and ``trace(V_bar)`` against lambda, critical values marked.
 
-    The traces come from :func:`kfio.mare._sweep.bound_traces`: ``S_bar``
+    The traces come from :func:`kfio.riccati_bounds._sweep.bound_traces`: ``S_bar``
     (exists for lambda above the lower bound) bounds the limit of ``E[P_t]``
     from below and ``V_bar`` (exists above the LMI bound) from above
     (Sinopoli et al. 2004, Theorems 3-6).  Marked: the lower bound
@@ -220,7 +220,7 @@ def phase_transition(request: Request, budget: Budget, params: Mapping[str, Any]
     """
     lam0 = _bernoulli_lambda(request, "phase transition")
     _require_noise(request, "phase transition")
-    from kfio.mare import bound_traces
+    from kfio.riccati_bounds import bound_traces
 
     crit = _critical_values(request, budget)
     A, C, Q, R = (to_float(getattr(request.system, k)) for k in ("A", "C", "Q", "R"))
@@ -273,13 +273,13 @@ def region(request: Request, budget: Budget, params: Mapping[str, Any]) -> bytes
     the ``points`` parameter): the coloured map, unstable by the lower bound
     and stable by the LMI of Liu and Goldsmith (2004), and over it the exact
     labels of every cell and the exact boundary curve ``lambda_2 = h(lambda_1)``
-    that the report carries (:func:`kfio.stability._regions.exact_region_grid`,
+    that the report carries (:func:`kfio.design._regions.exact_region_grid`,
     a kfio extension of Rohr, Marelli and Fu 2014).
     """
     import dataclasses
 
     from kfio import analyze
-    from kfio.mare import compute_bounds
+    from kfio.riccati_bounds import compute_bounds
     from kfio.stability import exact_region_grid
 
     if not isinstance(request.channel, PerSensorChannel) or len(request.channel.channels) != 2:
@@ -375,7 +375,7 @@ def ge_region(request: Request, budget: Budget, params: Mapping[str, Any]) -> by
 
     Every cell is Theorem 1's exact verdict (Rohr, Marelli and Fu, 2014) at its
     centre; the lines are the boundary ``|alpha_k|^2 sigma_k(p, q) = 1`` traced by
-    :func:`kfio.stability._ge_boundary.boundary_lines` (the same lines a (p, q)
+    :func:`kfio.design._ge_boundary.boundary_lines` (the same lines a (p, q)
     sweep's plot draws), one colour per closed-form piece; the star is the request.
     """
     import dataclasses

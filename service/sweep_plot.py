@@ -61,7 +61,7 @@ def sweep_figure(result: SweepResult) -> Any:
     probability where kfio knows it.  2-D: each grid cell coloured by its
     verdict (grey: error), with the exact boundary of
     :func:`kfio.sweep._boundary.exact_boundary` (for a Gilbert-Elliott (p, q)
-    sweep the lines of :func:`kfio.stability._ge_boundary.boundary_lines`, the
+    sweep the lines of :func:`kfio.design._ge_boundary.boundary_lines`, the
     ones ``kfio analyze --ge-plot`` draws).  The title says whose verdict the
     colours are; the legend sits beside the axes.
     """

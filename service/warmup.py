@@ -37,7 +37,7 @@ WARMUP_BOUNDS = (
 def warm() -> float:
     """Run the warm-up requests; returns the CPU seconds spent (0 if something failed)."""
     from kfio import analyze, load_request
-    from kfio.mare import compute_bounds
+    from kfio.riccati_bounds import compute_bounds
 
     start = time.process_time()
     try:

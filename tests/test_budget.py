@@ -15,7 +15,7 @@ import pytest
 from kfio import Budget
 from kfio.errors import BudgetExceeded
 from kfio.model._types import MarkovChannel
-from kfio.stability._sigma import period_transfer_matrix
+from kfio.sigma._sigma import period_transfer_matrix
 
 
 def spent(seconds: float) -> Budget:

@@ -20,14 +20,14 @@ from typing import Any, Callable
 import pytest
 
 from kfio import load_request
+from kfio.design._design_options import analyze_options
 from kfio.errors import InvalidInput
-from kfio.mare._options import parse_bounds_options
-from kfio.mare._targets import parse_trace_target
 from kfio.model._types import Request
+from kfio.riccati_bounds._options import parse_bounds_options
+from kfio.riccati_bounds._targets import parse_trace_target
 from kfio.simulation._outage_target import parse_outage_target
 from kfio.simulation._setup import parse_options as parse_simulate_options
 from kfio.simulation._stationary import parse_thresholds
-from kfio.stability._design_options import analyze_options
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -21,9 +21,9 @@ from kfio import analyze, load_request
 from kfio._json import encode
 from kfio._json._registry import VIEWS, class_key, view_of
 from kfio._reporting import Report, ReportPart
-from kfio.mare import compute_bounds
+from kfio.design._regions_constraints import BlindPattern
+from kfio.riccati_bounds import compute_bounds
 from kfio.simulation import simulate
-from kfio.stability._regions_constraints import BlindPattern
 
 from support.factories import bern, ge, make
 

@@ -14,7 +14,7 @@ from ..model import fraction_text
 from ._stability import as_float
 
 if TYPE_CHECKING:
-    from ..mare import (
+    from ..riccati_bounds import (
         BoundsReport,
         CovarianceBounds,
         CriticalInterval,

@@ -3,9 +3,9 @@
 Blind patterns count misses per sensor, so their views take the sensor names
 as context: :func:`blind_pattern`, :func:`block_constraints`,
 :func:`sensor_threshold` and :func:`boundary_piece` are called by the view of
-the object that knows the names (:class:`~kfio.stability._regions.SensorThresholds`,
-:class:`~kfio.stability._regions_curve.BoundaryCurve`,
-:class:`~kfio.stability._sensor_gain.SensorGains`), never reached alone.
+the object that knows the names (:class:`~kfio.design._regions.SensorThresholds`,
+:class:`~kfio.design._regions_curve.BoundaryCurve`,
+:class:`~kfio.design._sensor_gain.SensorGains`), never reached alone.
 """
 
 from __future__ import annotations

@@ -127,7 +127,7 @@ def run_one(command: str, tree: dict[str, Any], seconds: float) -> tuple[str, An
             rate, rate_exact = _worst_rate(report)
             payload = {"report": report.to_dict(), "worst_rate": rate, "worst_rate_exact": rate_exact}
         elif command == "bounds":
-            from ..mare import compute_bounds
+            from ..riccati_bounds import compute_bounds
 
             payload = {"report": compute_bounds(request, budget=budget).to_dict()}
         else:
@@ -166,7 +166,7 @@ def _preload(commands: set[str]) -> None:
     if "analyze" in commands:
         import kfio.stability  # noqa: F401
     if "bounds" in commands:
-        import kfio.mare  # noqa: F401
+        import kfio.riccati_bounds  # noqa: F401
     if "simulate" in commands:
         import kfio.simulation  # noqa: F401
     if "loop" in commands:

@@ -98,7 +98,7 @@ def _validate_options(entry: CheckEntry, where: str) -> None:
 
                 parse_options(request)
             elif command == "bounds":
-                from ..mare import parse_bounds_options
+                from ..riccati_bounds import parse_bounds_options
 
                 parse_bounds_options(request)
         except InvalidInput as exc:

@@ -276,9 +276,9 @@ def _vech_index(n: int) -> np.ndarray:
 
 
 def _congruence(A: np.ndarray) -> np.ndarray:
-    """``T`` with ``vech(A P A') = T vech(P)``: the formula of :func:`kfio.mare._vech.congruence_matrix`.
+    """``T`` with ``vech(A P A') = T vech(P)``: the formula of :func:`kfio.riccati_bounds._vech.congruence_matrix`.
 
-    Repeated here so that the simulation does not import :mod:`kfio.mare` (CVXPY and all) at first use.
+    Repeated here so that the simulation does not import :mod:`kfio.riccati_bounds` (CVXPY and all) at first use.
     """
     n = A.shape[0]
     iu, ju = np.triu_indices(n)

@@ -15,7 +15,7 @@ is well past the channel's mixing time) and reports
 * the Hill estimate of the tail exponent from the largest ``k = M / 20``
   samples, ``1/kappa_hat = mean(log(x_(i) / x_(k+1)))``, with its asymptotic
   sampling interval ``kappa_hat (1 +- 1.96 / sqrt(k))`` (Hill, 1975), beside
-  the exact ``kappa`` of :mod:`kfio.stability._tail` (Mo and Sinopoli, 2012);
+  the exact ``kappa`` of :mod:`kfio.design._tail` (Mo and Sinopoli, 2012);
 * a warning when the exact ``kappa <= 2``: the variance of ``trace P`` is
   infinite (and the mean too when ``kappa <= 1``), so the sample mean and its
   normal band mislead; the exact growth rate of ``E[P_t]`` per step

@@ -1,17 +1,36 @@
-"""The exact stability verdict: blind patterns, ``sigma_k``, rates, regions.
+"""The exact stability verdict of Rohr, Marelli and Fu (2014), Theorem 1, and the report around it.
 
-Rohr, Marelli and Fu (2014), Theorem 1, and kfio's per-sensor extension.
+:func:`analyze` assembles the verdict from :mod:`kfio.sigma` (``sigma_k``, exact rate decisions,
+on the blind-set engines of :mod:`kfio.search`) and the design answers of :mod:`kfio.design`; this
+face also names their report classes, which is where most callers look for them.
 """
 
-from ._critical_parameter import CriticalParameter, ParameterConstraint
-from ._ge_boundary import boundary_lines
-from ._ge_region import Crossing, GeMap, GeRegion, GeStructure, LineResult
-from ._regions import RegionGrid, SensorThreshold, SensorThresholds, exact_region_grid
-from ._regions_constraints import BlindPattern, BlockConstraints
-from ._regions_curve import BoundaryCurve, BoundaryPiece, Envelope, Segment
-from ._sensor_gain import SensorGains
-from ._sigma import SigmaResult, compute_sigma
-from ._tail import BlockTail, TailReport
+from __future__ import annotations
+
+from ..design import (
+    BlindPattern,
+    BlockConstraints,
+    BlockTail,
+    BoundaryCurve,
+    BoundaryPiece,
+    CriticalParameter,
+    Crossing,
+    Envelope,
+    GeMap,
+    GeRegion,
+    GeStructure,
+    LineResult,
+    ParameterConstraint,
+    RegionGrid,
+    Segment,
+    SensorGains,
+    SensorThreshold,
+    SensorThresholds,
+    TailReport,
+    boundary_lines,
+    exact_region_grid,
+)
+from ..sigma import SigmaResult, compute_sigma
 from ._verdict import BlockReport, StabilityReport, analyze
 
 __all__ = [

@@ -5,7 +5,7 @@ for every FMO block ``k``, and diverges if some block has ``> 1``; ``= 1`` is
 the theorem's gap, reported as ``boundary``.  Pipeline (docs/theory.md):
 exact eigenstructure (:mod:`kfio.structure._eigen`), FMO blocks in phase form
 (:mod:`kfio.structure._fmo`), ``sigma_k`` over maximal blind phase sets
-(:mod:`kfio.stability._sigma`), exact comparison with 1 (:mod:`kfio.stability._decide`).
+(:mod:`kfio.sigma._sigma`), exact comparison with 1 (:mod:`kfio.sigma._decide`).
 """
 
 from __future__ import annotations
@@ -23,9 +23,28 @@ from .._budget import Budget
 from .._json import json_float
 from .._reporting import Report, ShortRepr
 from .._verdicts import Verdict
+from ..design import (
+    CriticalParameter,
+    GeRegion,
+    TailReport,
+    analyze_options,
+    critical_parameter,
+    ge_region,
+    region_report,
+    tail_report,
+)
 from ..errors import BudgetExceeded
 from ..model import MarkovChannel, PerSensorChannel, Request, packets_of, require_assumption_1
 from ..model import SystemRecord as System
+from ..sigma import (
+    VERDICTS,
+    SigmaResult,
+    bernoulli_factor,
+    compare_rate_bernoulli,
+    compare_rate_markov,
+    compute_sigma,
+    period_transfer_matrix,
+)
 from ..structure import (
     SHORT_TEXT_CHARS,
     START_PREC,
@@ -37,14 +56,7 @@ from ..structure import (
     short_text,
     to_fmpq_mat,
 )
-from ._critical_parameter import CriticalParameter, critical_parameter
-from ._decide import VERDICTS, bernoulli_factor, compare_rate_bernoulli, compare_rate_markov
-from ._design_options import analyze_options
-from ._ge_region import GeRegion, ge_region
 from ._radicals import RealRadical
-from ._regions import region_report
-from ._sigma import SigmaResult, compute_sigma, period_transfer_matrix
-from ._tail import TailReport, tail_report
 
 #: Default wall-clock budget (s) of one analysis when the request sets none.
 DEFAULT_BUDGET_S = 120.0

@@ -3,11 +3,11 @@
 For a 2-D ``analyze`` sweep whose axes are the arrival probabilities of the two
 sensors of a per-sensor Bernoulli channel, the stable region is known exactly
 (kfio's per-sensor extension of Rohr, Marelli and Fu (2014), Theorem 1; see
-:mod:`kfio.stability._regions`): its boundary curve is taken from the report of
+:mod:`kfio.design._regions`): its boundary curve is taken from the report of
 the base request.  For a 1-D ``analyze`` sweep of a one-packet Bernoulli
 arrival probability, the boundary is the exact critical probability; for a
 2-D sweep of a Gilbert-Elliott channel's failure and recovery rates, the
-boundary lines of :func:`kfio.stability._ge_boundary.boundary_lines` (Rohr,
+boundary lines of :func:`kfio.design._ge_boundary.boundary_lines` (Rohr,
 Marelli and Fu (2014), Theorem 1, on the Gilbert-Elliott family), the same
 lines ``kfio analyze --ge-plot`` draws.
 """

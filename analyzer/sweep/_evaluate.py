@@ -72,7 +72,7 @@ def evaluate_point(command: str, tree: Any, budget_s: float, *, reuse: bool = Tr
 
             return dict(_VERDICT_ROWS.get(request_text(_without_noise(tree)), run))
         if command == "bounds":
-            from ..mare import compute_bounds
+            from ..riccati_bounds import compute_bounds
 
             return row_from_report(command, compute_bounds(request, budget=budget).to_dict())
         from ..simulation import simulate

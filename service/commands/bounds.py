@@ -30,7 +30,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def _run(args: argparse.Namespace) -> int:
     from kfio import Budget, Request  # here, not at import: CVXPY takes seconds to load
-    from kfio.mare import compute_bounds
+    from kfio.riccati_bounds import compute_bounds
 
     def work(request: Request, budget: Budget) -> int:
         flags = {k: getattr(args, k) for k in ("grid", "horizon", "tolerance") if getattr(args, k) is not None}

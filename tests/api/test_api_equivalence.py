@@ -20,7 +20,7 @@ import pytest
 
 import kfio
 from kfio import load_request
-from kfio.mare import compute_bounds
+from kfio.riccati_bounds import compute_bounds
 from kfio.simulation import expected_covariance, simulate
 
 # Sinopoli et al. (2004) / Rohr, Marelli and Fu (2010) 2x2 example: lambda_c = 9/25.

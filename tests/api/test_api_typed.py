@@ -82,12 +82,14 @@ def test_build_request_returns_the_public_request() -> None:
 
 
 def test_one_public_name_per_concept() -> None:
-    import kfio.mare
     import kfio.model
+    import kfio.riccati_bounds
 
     assert "compute_bounds" not in kfio.__all__ and not hasattr(kfio, "compute_bounds")
     assert "System" not in kfio.model.__all__ and not hasattr(kfio.model, "System")
-    assert kfio.mare.compute_bounds is not kfio.bounds  # the request-level engine under kfio.mare only
+    assert (
+        kfio.riccati_bounds.compute_bounds is not kfio.bounds
+    )  # the request-level engine under kfio.riccati_bounds only
 
 
 def _parts(value: object) -> list[ReportPart]:

@@ -15,8 +15,8 @@ import pytest
 
 from kfio import load_request
 from kfio.errors import InvalidInput, LimitExceeded
-from kfio.mare._options import parse_bounds_options
 from kfio.model._exact import load_json, parse_integer, parse_number, value_text
+from kfio.riccati_bounds._options import parse_bounds_options
 from kfio.simulation._setup import parse_options as parse_simulate_options
 
 BASE = {

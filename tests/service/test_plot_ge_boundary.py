@@ -16,10 +16,10 @@ import pytest
 import sympy
 
 from kfio import analyze, load_request
+from kfio.design._ge_boundary import boundary_lines
+from kfio.design._ge_region import GeStructure, _u, critical_on_line
 from kfio.service.plots import GE_BOUNDARY_GID, ge_region_figure
 from kfio.service.sweep_plot import sweep_figure
-from kfio.stability._ge_boundary import boundary_lines
-from kfio.stability._ge_region import GeStructure, _u, critical_on_line
 from kfio.sweep import load_sweep, run_sweep
 
 BASE = {

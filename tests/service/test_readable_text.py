@@ -115,7 +115,7 @@ def test_system_repr_shortens_long_fractions_and_to_dict_keeps_them() -> None:
 
 
 def test_bounds_summary_says_it_computes_no_exact_verdict() -> None:
-    from kfio.mare._compute import compute_bounds
+    from kfio.riccati_bounds._compute import compute_bounds
 
     report = compute_bounds(load_request((EXAMPLES / "seed004_scalar.json").read_text()))
     first = report.summary().splitlines()[0]

@@ -137,7 +137,7 @@ def test_seeded_runs_agree_across_kernels(system, channel) -> None:
 
 
 def test_the_kernel_s_congruence_matrix_is_the_bounds_one() -> None:
-    from kfio.mare._vech import congruence_matrix
+    from kfio.riccati_bounds._vech import congruence_matrix
     from kfio.simulation._kernel import _congruence
 
     A = np.random.default_rng(3).normal(size=(5, 5))

@@ -7,7 +7,7 @@ it changes by less than 0.1% per step at t = 20, the slowest case being Sinopoli
 stable eigenvalue 0.9 relaxes like 0.81^t) and the Monte Carlo mean at t = 300 (within 4 standard
 errors of ``E[P_20]`` and inside the sandwich).
 
-The bounds come from two routes: ``kfio.mare._riccati`` (another engineer's module; skipped while it
+The bounds come from two routes: ``kfio.riccati_bounds._riccati`` (another engineer's module; skipped while it
 does not exist) and local reference computations written here from the seeds' definitions
 (S_bar: Lyapunov equation; V_bar: the MARE iterated from 0, Sinopoli et al. (2004) Theorem 4; P_hat_N: Rohr, Marelli and Fu (2010)'s
 recursion (22), with g_N evaluated by our own enumeration).  When both exist they must agree.
@@ -83,18 +83,18 @@ def local_p_hat(req: Request, N: int, iters: int = 2_000) -> np.ndarray:
 
 
 def _riccati(names: tuple[str, ...]):
-    """``kfio.mare._riccati``, which must have every one of ``names``."""
-    from kfio.mare import _riccati as riccati
+    """``kfio.riccati_bounds._riccati``, which must have every one of ``names``."""
+    from kfio.riccati_bounds import _riccati as riccati
 
     missing = [f for f in names if not hasattr(riccati, f)]
-    assert not missing, f"kfio.mare._riccati has no {', '.join(missing)}"
+    assert not missing, f"kfio.riccati_bounds._riccati has no {', '.join(missing)}"
     return riccati
 
 
 def bounds(route: str, req: Request, lam: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     A, C, Q, R = (to_float(getattr(req.system, k)) for k in ("A", "C", "Q", "R"))
     if route == "riccati":
-        from kfio.mare._phat import p_hat
+        from kfio.riccati_bounds._phat import p_hat
 
         riccati = _riccati(("s_bar", "v_bar"))
         s, v, p = riccati.s_bar(A, Q, 1 - lam), riccati.v_bar(A, C, Q, R, lam), p_hat(A, C, Q, R, lam, N_HAT)
@@ -142,7 +142,7 @@ def test_riccati_s_bar_and_v_bar_agree_with_local_references(name: str) -> None:
 
 @pytest.mark.parametrize("name", sorted(CASES))
 def test_riccati_p_hat_agrees_with_enumeration(name: str) -> None:
-    from kfio.mare._phat import p_hat
+    from kfio.riccati_bounds._phat import p_hat
 
     system, lam = CASES[name]
     req = make(system, lam)

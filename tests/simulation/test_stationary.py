@@ -1,6 +1,6 @@
 """Stationary distribution from the simulation: outage, quantiles, Hill exponent beside the exact kappa.
 
-The exact kappa is :mod:`kfio.stability._tail` (Mo and Sinopoli 2012; kfio's
+The exact kappa is :mod:`kfio.design._tail` (Mo and Sinopoli 2012; kfio's
 extension for degenerate blocks); the independent route is the numpy Riccati
 sampler of ``tests/support/tail_sim.py`` (shares nothing with kfio.simulation).
 """

@@ -12,10 +12,10 @@ import pytest
 from kfio import load_request
 from kfio._budget import Budget
 from kfio.model._types import MarkovChannel
+from kfio.search._blind import Margins, SlotSpace, search
+from kfio.search._blind_batch import _gap_canonical_children, enumerate_orbits, gap_canonical_possible, real_space
+from kfio.sigma._sigma import undominated
 from kfio.stability import compute_sigma
-from kfio.stability._blind import Margins, SlotSpace, search
-from kfio.stability._blind_batch import _gap_canonical_children, enumerate_orbits, gap_canonical_possible, real_space
-from kfio.stability._sigma import undominated
 from kfio.structure import fmo_blocks
 from kfio.structure._phases import PhaseBlock
 

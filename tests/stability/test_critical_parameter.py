@@ -2,8 +2,8 @@
 
 Cross-checked against three independent routes: Rohr, Marelli and Fu (2014)'s closed form for
 Bernoulli (``critical_arrival_probability``), the Gilbert-Elliott line solver
-(renewal closed form, :mod:`kfio.stability._ge_region`), the per-sensor
-thresholds (:mod:`kfio.stability._regions`), and for order-2 Markov channels
+(renewal closed form, :mod:`kfio.design._ge_region`), the per-sensor
+thresholds (:mod:`kfio.design._regions`), and for order-2 Markov channels
 the brute-force blind-probability DP on both sides of the critical value.
 """
 

@@ -22,9 +22,9 @@ import pytest
 import sympy
 
 from kfio import InvalidInput, analyze, expected_covariance, load_request
+from kfio.design._ge_region import critical_on_line, ge_structure
 from kfio.model._types import MarkovChannel
-from kfio.stability._ge_region import critical_on_line, ge_structure
-from kfio.stability._sigma import compute_sigma, period_transfer_matrix
+from kfio.sigma._sigma import compute_sigma, period_transfer_matrix
 from kfio.structure._fmo import fmo_blocks
 
 from support.bruteforce import oracle_sigma

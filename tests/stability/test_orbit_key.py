@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from kfio.stability._blind import SlotSpace
+from kfio.search._blind import SlotSpace
 
 
 @pytest.mark.parametrize("phases,groups", [(1, 1), (7, 1), (15, 2), (36, 2), (60, 3), (9, 4)])

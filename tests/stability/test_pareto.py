@@ -1,7 +1,7 @@
 """The Pareto search for undominated miss vectors against enumeration, all subsets and brute force.
 
 Under independent Bernoulli sensors ``compute_sigma`` keeps one maximal blind
-set per undominated miss vector (:mod:`kfio.stability._pareto`).  Oracles:
+set per undominated miss vector (:mod:`kfio.search._pareto`).  Oracles:
 
 * the enumeration of every shift orbit (:func:`enumerate_orbits`, the
   previous route) followed by :func:`undominated`;
@@ -21,11 +21,11 @@ from kfio import analyze
 from kfio._budget import Budget
 from kfio.errors import BudgetExceeded
 from kfio.model._types import MarkovChannel
+from kfio.search._blind import Margins, SlotSpace
+from kfio.search._blind_batch import enumerate_orbits
+from kfio.search._pareto import Front, group_lower_bounds, pareto_search
+from kfio.sigma._sigma import undominated
 from kfio.stability import compute_sigma
-from kfio.stability._blind import Margins, SlotSpace
-from kfio.stability._blind_batch import enumerate_orbits
-from kfio.stability._pareto import Front, group_lower_bounds, pareto_search
-from kfio.stability._sigma import undominated
 from kfio.structure._phases import PhaseBlock
 
 from support.blind_blocks import (

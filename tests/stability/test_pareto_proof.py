@@ -1,6 +1,6 @@
 """Completing a two-sensor front from the big flats of one sensor, against enumeration and brute force.
 
-:mod:`kfio.stability._pareto_proof` takes over from the walk over both
+:mod:`kfio.search._pareto_proof` takes over from the walk over both
 groups once it has expanded ``PROBE_FLATS`` flats (by default none: the
 proof builds the whole front from the one-group extremes).  With no probe,
 or a short one, the answer must equal:
@@ -18,13 +18,13 @@ import itertools
 import numpy as np
 import pytest
 
-import kfio.stability._pareto as pareto
-import kfio.stability._pareto_proof as proof
+import kfio.search._pareto as pareto
+import kfio.search._pareto_proof as proof
 from kfio._budget import Budget
-from kfio.stability._blind import Margins, SlotSpace
-from kfio.stability._blind_batch import enumerate_orbits, real_space
-from kfio.stability._pareto import Front, group_space, pareto_search
-from kfio.stability._sigma import undominated
+from kfio.search._blind import Margins, SlotSpace
+from kfio.search._blind_batch import enumerate_orbits, real_space
+from kfio.search._pareto import Front, group_space, pareto_search
+from kfio.sigma._sigma import undominated
 
 from support.blind_blocks import (
     assert_front_matches_enumeration,

@@ -29,8 +29,8 @@ import pytest
 import sympy
 
 from kfio import InvalidInput, analyze, load_request
-from kfio.mare._compute import compute_bounds
-from kfio.stability._regions import exact_region_grid, region_report, sensor_thresholds
+from kfio.design._regions import exact_region_grid, region_report, sensor_thresholds
+from kfio.riccati_bounds._compute import compute_bounds
 
 from support.bruteforce_sensors import SEED000, critical_probability, sensor_request
 
@@ -330,7 +330,7 @@ def test_grid_errors() -> None:
 
 def test_region_report_reuses_analyze_sigma_results() -> None:
     """Passing ``analyze``'s FMO blocks and sigma results (real channels) gives the same report."""
-    from kfio.stability._sigma import compute_sigma
+    from kfio.sigma._sigma import compute_sigma
     from kfio.structure._fmo import fmo_blocks
 
     A, Cs = system("last")

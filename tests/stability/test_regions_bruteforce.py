@@ -23,9 +23,9 @@ import pytest
 import sympy
 
 from kfio import analyze
+from kfio.design._regions import sensor_thresholds
+from kfio.design._regions_constraints import block_rate
 from kfio.model._types import MarkovChannel
-from kfio.stability._regions import sensor_thresholds
-from kfio.stability._regions_constraints import block_rate
 
 from support.bruteforce_sensors import bernoulli, block_rates, critical_probability, sensor_request
 
@@ -182,7 +182,7 @@ def test_named_degenerate_blocks(name: str, lambdas: tuple[float, float]) -> Non
 
 def _curved_systems(count: int = 6) -> list[int]:
     """Random systems whose boundary curve has at least two closed-form pieces (chosen by index, deterministically)."""
-    from kfio.stability._regions import exact_region_grid
+    from kfio.design._regions import exact_region_grid
 
     out = []
     for i in range(60):
@@ -197,7 +197,7 @@ def _curved_systems(count: int = 6) -> list[int]:
 @pytest.mark.parametrize("i", _curved_systems())
 def test_boundary_curve_matches_bruteforce(i: int) -> None:
     """``h(lambda_1)`` is the oracle's critical ``lambda_2``; breakpoints are where adjacent pieces meet."""
-    from kfio.stability._regions import exact_region_grid
+    from kfio.design._regions import exact_region_grid
 
     A, Cs, lambdas = random_system(i)
     curve = exact_region_grid(sensor_request(A, Cs, lambdas, noise=False), 2).curve

@@ -41,9 +41,9 @@ import math
 import numpy as np
 import pytest
 
-from kfio.mare._compute import compute_bounds
+from kfio.design._regions import sensor_thresholds
+from kfio.riccati_bounds._compute import compute_bounds
 from kfio.simulation._simulate import simulate
-from kfio.stability._regions import sensor_thresholds
 
 from support.bruteforce_sensors import SEED000, sensor_request
 

@@ -19,8 +19,8 @@ from sympy.polys.matrices import DomainMatrix
 from kfio._budget import Budget
 from kfio.errors import AssumptionViolation, BudgetExceeded, InvalidInput, NumericalFailure
 from kfio.model._types import MarkovChannel
-from kfio.stability._blind import Margins, SlotSpace
-from kfio.stability._sigma import compute_sigma, period_transfer_matrix, sigma_period
+from kfio.search._blind import Margins, SlotSpace
+from kfio.sigma._sigma import compute_sigma, period_transfer_matrix, sigma_period
 from kfio.structure._phases import PhaseBlock
 
 from support.bruteforce import oracle_sigma

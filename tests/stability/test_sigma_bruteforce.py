@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from kfio.model._types import MarkovChannel
-from kfio.stability._sigma import compute_sigma
+from kfio.sigma._sigma import compute_sigma
 from kfio.structure._phases import PhaseBlock
 
 from support.bruteforce import BlindDP, oracle_sigma

@@ -24,8 +24,8 @@ import pytest
 
 from kfio._budget import Budget
 from kfio.model._types import MarkovChannel, System
-from kfio.stability._blind import Margins, SlotSpace, search
-from kfio.stability._sigma import (
+from kfio.search._blind import Margins, SlotSpace, search
+from kfio.sigma._sigma import (
     _LogRho,
     _objective,
     _RenewalScore,

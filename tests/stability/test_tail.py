@@ -119,7 +119,7 @@ def test_log_ratio_text_is_sympys_text():
     # the fast path prints what SymPy's evaluating log prints, character for character
     import sympy
 
-    from kfio.stability._tail import log_ratio_text
+    from kfio.design._tail import log_ratio_text
 
     rng = random.Random(11)
     pairs = [(F(2), F(2)), (F(8), F(4)), (F(25, 16), F(25, 16)), (F(10**40 + 1, 3), F(9, 8)), (F(3, 2), F(100))]
@@ -143,7 +143,7 @@ def test_log_root_ratio_text_is_sympys_text():
     import sympy
     from sympy import QQ, Poly
 
-    from kfio.stability._tail import log_root_ratio_text
+    from kfio.design._tail import log_root_ratio_text
     from kfio.structure._algebraic import AlgebraicReal
     from kfio.structure._eigen import X
 

@@ -22,7 +22,9 @@ from kfio import load_request
 from kfio.model._types import System
 from kfio.stability._verdict import analyze
 from kfio.structure._eigen import eigen_factors
-from kfio.structure._fmo import fmo_blocks, fmo_classes, fmo_classes_resultant
+from kfio.structure._fmo import fmo_blocks, fmo_classes
+
+from support.fmo_resultant import fmo_classes_resultant
 
 
 def fr(M):

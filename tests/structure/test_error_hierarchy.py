@@ -17,11 +17,11 @@ import numpy as np
 import pytest
 
 from kfio import load_request
+from kfio.design._regions_constraints import block_constraints
 from kfio.errors import AnalyzerError, InvalidInput, NumericalFailure
-from kfio.mare._phat import BatchedMare, p_hat
+from kfio.riccati_bounds._phat import BatchedMare, p_hat
 from kfio.service.cli import main
-from kfio.stability._decide import bernoulli_factor
-from kfio.stability._regions_constraints import block_constraints
+from kfio.sigma._decide import bernoulli_factor
 from kfio.structure import _fmo
 from kfio.structure._fmo import fmo_blocks
 

@@ -13,7 +13,7 @@ import pytest
 from sympy import QQ, Rational, cos, pi, sqrt
 from sympy.polys.matrices import DomainMatrix
 
-from kfio.stability._blind import SlotSpace
+from kfio.search._blind import SlotSpace
 from kfio.structure._modp import ModP
 
 from support.blind_blocks import bench_block

@@ -16,9 +16,9 @@ import numpy as np
 
 from kfio import load_request
 from kfio._budget import Budget
-from kfio.stability._blind import Margins, SlotSpace
-from kfio.stability._blind_batch import enumerate_orbits
-from kfio.stability._sigma import undominated
+from kfio.search._blind import Margins, SlotSpace
+from kfio.search._blind_batch import enumerate_orbits
+from kfio.sigma._sigma import undominated
 from kfio.structure import fmo_blocks
 from kfio.structure._phases import PhaseBlock
 

@@ -1,6 +1,6 @@
 """Independent brute force for ``sigma``: ``P(blind after t steps)`` by dynamic programming.
 
-Shares nothing with :mod:`kfio.stability._sigma` or :mod:`kfio.stability._blind`: it reads
+Shares nothing with :mod:`kfio.sigma._sigma` or :mod:`kfio.search._blind`: it reads
 the raw fields of a :class:`~kfio.structure._phases.PhaseBlock` and the tables of
 the channels, and follows the definition of Rohr, Marelli and Fu (2014), eq. (14) and (33).
 The state after ``t`` steps is (set of covered slots as a bitmask, joint

@@ -1,7 +1,7 @@
 """Independent brute force of the per-sensor blind probability, from the raw ``(A, C, sensors)``.
 
-Shares nothing with :mod:`kfio.structure._fmo`, :mod:`kfio.stability._sigma`,
-:mod:`kfio.stability._blind` or :mod:`kfio.stability._regions`: the FMO blocks come from
+Shares nothing with :mod:`kfio.structure._fmo`, :mod:`kfio.sigma._sigma`,
+:mod:`kfio.search._blind` or :mod:`kfio.design._regions`: the FMO blocks come from
 floating-point eigenvectors (``numpy.linalg.eigvals`` and
 ``scipy.linalg.null_space``), the classes from numerical root-of-unity
 tests, and the blind probability from the covered-set dynamic programme of

@@ -10,7 +10,7 @@ import threading
 import pytest
 
 from kfio import analyze, load_request
-from kfio.mare import compute_bounds
+from kfio.riccati_bounds import compute_bounds
 from kfio.sweep import cache_stats, clear_caches, iter_sweep, load_sweep, point_at, row_from_report, run_sweep
 from kfio.sweep._spec import request_text
 

@@ -1,0 +1,209 @@
+"""CVXPY problems for the bounds of docs/theory.md: the stability LMI and the ``V_bar`` SDP.
+
+* :class:`StabilityLMI` is Sinopoli et al. (2004)'s Theorem 5(c) LMI ``Psi_lambda(Y, Z) > 0,
+  0 < Y <= I`` and its ``m``-packet generalization (Liu and Goldsmith (2004), eq. 20 is
+  ``m = 2``), built once with CVXPY parameters and re-solved at every
+  bisection step (DPP: each parameter multiplies a variable exactly once).
+* :func:`v_bar_sdp` is Theorem 6(b) of Sinopoli et al. (2004) (with the ``Q`` that its
+  printed block omits, a typo; Liu and Goldsmith (2004) eq. 21 has it) for ``m`` packets.
+
+Solver answers are hypotheses: :mod:`kfio.riccati_bounds._certificate` re-checks
+them.  The solver is Clarabel (interior point; CVXPY's ``warm_start`` only
+lets it update its data in place, it does not seed the iterates).
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+from typing import Sequence
+
+import cvxpy as cp
+import numpy as np
+import scipy.linalg
+
+from ._riccati import ArrivalModel
+
+SOLVER = cp.CLARABEL
+#: Clarabel options for the stability LMI: its defaults (1e-8).  Looser ones (1e-7) save a fifth
+#: of the iterations but stop producing certifiable gains earlier near the threshold (on a random
+#: n = 10 system lambda_upper rose by 2e-5); tighter ones (1e-9) gain nothing measurable.
+LMI_SOLVER_OPTIONS: dict[str, float] = {}
+
+
+def balancing_scaling(A: np.ndarray) -> np.ndarray:
+    """Diagonal ``d`` (powers of 2) with ``D^-1 A D`` balanced, ``D = diag(d)`` (LAPACK ``gebal``).
+
+    Balancing reduces the spread of the entries of ``A`` before it enters the
+    LMI; the state change ``x -> D^-1 x`` leaves feasibility unchanged.
+    """
+    _, (scale, _) = scipy.linalg.matrix_balance(np.asarray(A, float), permute=False, separate=True)
+    return np.asarray(scale, float)
+
+
+@dataclass(frozen=True)
+class LMISolution:
+    """What the solver returned for :class:`StabilityLMI`.
+
+    Attributes
+    ----------
+    status:
+        CVXPY status string.
+    margin:
+        The optimal ``t`` in ``Psi(Y, Z) >= t I``: the solver's own margin,
+        not a proof of anything.
+    Y:
+        ``n x n`` or ``None``.
+    Z:
+        One ``n x p_S`` matrix per non-empty arrival pattern (mask order), or ``None``.
+    """
+
+    status: str
+    margin: float | None
+    Y: np.ndarray | None
+    Z: tuple[np.ndarray, ...] | None
+
+    def gains(self) -> tuple[np.ndarray, ...] | None:
+        """``K_S = Y^-1 Z_S``: then ``Y(A + K_S C_S) = Y A + Z_S C_S`` (Sinopoli et al. (2004), proof of Theorem 5)."""
+        if self.Y is None or self.Z is None:
+            return None
+        try:
+            return tuple(np.linalg.solve(self.Y, Z) for Z in self.Z)
+        except np.linalg.LinAlgError:
+            return None
+
+
+class StabilityLMI:
+    r"""The LMI whose feasibility defines ``lambda_upper`` (Sinopoli et al. (2004), Theorem 5(c); Liu and Goldsmith (2004), eq. 20).
+
+    For ``m`` packets with pattern probabilities ``pi(S)``:
+
+    .. math::
+
+        \Psi = \begin{bmatrix}
+            Y & \sqrt{\pi(S_1)}(Y A + Z_{S_1} C_{S_1}) & \cdots & \sqrt{\pi(\emptyset)}\, Y A \\
+            \ast & Y & & 0 \\
+            \vdots & & \ddots & \\
+            \ast & 0 & & Y
+        \end{bmatrix} \succ 0, \qquad 0 \prec Y \preceq I,
+
+    one block per non-empty pattern ``S`` and one for the empty pattern.  By
+    Schur complements and the change of variables ``X = Y^-1``,
+    ``K_S = X Z_S``, it is equivalent to ``X > L_K(X)`` with ``L_K`` of
+    :func:`kfio.riccati_bounds._riccati.closed_loop_operator`.  We maximize ``t`` subject
+    to ``Psi >= t I`` so that the answer is as far inside the cone as the
+    normalization ``Y <= I`` allows.
+
+    The products ``sqrt(pi(S)) A`` and ``sqrt(pi(S)) C_S`` are the parameters
+    (in whatever coordinates the caller works), so the problem is DPP and
+    re-solving it only re-fills the solver's data.
+
+    Parameters
+    ----------
+    n:
+        Number of states.
+    pattern_rows:
+        Number of rows of ``C_S`` for each non-empty pattern, in mask order.
+    """
+
+    def __init__(self, n: int, pattern_rows: Sequence[int]) -> None:
+        self.n = n
+        self.pattern_rows = tuple(pattern_rows)
+        self._Y = cp.Variable((n, n), symmetric=True)
+        self._t = cp.Variable()
+        self._Z = [cp.Variable((n, p)) for p in self.pattern_rows]
+        self._MA = [cp.Parameter((n, n)) for _ in self.pattern_rows]
+        self._MC = [cp.Parameter((p, n)) for p in self.pattern_rows]
+        self._M0 = cp.Parameter((n, n))
+        Y = self._Y
+        top = [Y @ MA + Z @ MC for MA, MC, Z in zip(self._MA, self._MC, self._Z)] + [Y @ self._M0]
+        k = len(top)
+        zero = np.zeros((n, n))
+        rows = [[Y, *top]]
+        for i, B in enumerate(top):
+            rows.append([B.T] + [Y if j == i else zero for j in range(k)])
+        psi = cp.bmat(rows)
+        size = n * (k + 1)
+        self._problem = cp.Problem(
+            cp.Maximize(self._t),
+            [psi - self._t * np.eye(size) >> 0, Y << np.eye(n), self._t <= 1],
+        )
+        self.size = size
+
+    def is_dpp(self) -> bool:
+        return bool(self._problem.is_dcp(dpp=True))  # type: ignore[call-arg]  # CVXPY's stub lacks dpp
+
+    def solve(self, A: np.ndarray, C_S: Sequence[np.ndarray], weights: Sequence[float]) -> LMISolution:
+        """Solve at pattern probabilities ``weights`` (``weights[0] = pi(empty)``).
+
+        ``A`` and ``C_S`` are in the caller's working coordinates; the
+        returned ``Y``, ``Z`` are in the same coordinates.
+        """
+        for MA, MC, w, C in zip(self._MA, self._MC, weights[1:], C_S):
+            s = np.sqrt(max(0.0, float(w)))
+            MA.value = s * A
+            MC.value = s * C
+        self._M0.value = np.sqrt(max(0.0, float(weights[0]))) * A
+        try:
+            with warnings.catch_warnings():  # "may be inaccurate": the status says so and the answer is re-checked
+                warnings.simplefilter("ignore", UserWarning)
+                self._problem.solve(solver=SOLVER, warm_start=True, **LMI_SOLVER_OPTIONS)
+        except cp.SolverError:
+            return LMISolution("solver_error", None, None, None)
+        status = str(self._problem.status)
+        if self._Y.value is None or self._t.value is None:
+            return LMISolution(status, None, None, None)
+        Y = 0.5 * (self._Y.value + self._Y.value.T)
+        return LMISolution(status, float(self._t.value), Y, tuple(np.array(Z.value) for Z in self._Z))
+
+
+@dataclass(frozen=True)
+class SDPSolution:
+    """``V_bar`` from :func:`v_bar_sdp`: the matrix (or ``None``), CVXPY status and solve time."""
+
+    status: str
+    matrix: np.ndarray | None
+    solve_time: float | None
+
+
+def v_bar_sdp(model: ArrivalModel) -> SDPSolution:
+    r"""``V_bar`` as the SDP of Sinopoli et al. (2004) Theorem 6(b), generalized to ``m`` packets (Liu and Goldsmith (2004), eq. 21).
+
+    .. math::
+
+        \max \operatorname{tr} V \ \text{s.t.}\
+        \begin{bmatrix}
+            A V A' + Q - V & \sqrt{\pi(S_1)} A V C_{S_1}' & \cdots \\
+            \ast & C_{S_1} V C_{S_1}' + R_{S_1 S_1} & 0 \\
+            \vdots & 0 & \ddots
+        \end{bmatrix} \succeq 0,\quad V \succeq 0.
+
+    The Schur complement of the constraint is ``g(V) - V >= 0``; ``V_bar`` is
+    the greatest element of that set (Sinopoli et al. (2004), proof of Theorem 6), so it
+    maximizes the trace.  Sinopoli et al. (2004) prints the top-left block without ``Q``:
+    a typo (without ``Q`` the SDP is homogeneous and its answer is 0 or
+    unbounded).
+    """
+    A, Q = model.A, model.Q
+    n = model.n
+    V = cp.Variable((n, n), symmetric=True)
+    active = model.active()
+    top = [A @ V @ A.T + Q - V] + [np.sqrt(w) * A @ V @ C.T for w, C, _ in active]
+    rows = [top]
+    for i, (w, C, R) in enumerate(active):
+        row = [np.sqrt(w) * C @ V @ A.T]
+        for j, (_, Cj, _) in enumerate(active):
+            row.append(C @ V @ C.T + R if i == j else np.zeros((C.shape[0], Cj.shape[0])))
+        rows.append(row)
+    gamma = cp.bmat(rows)
+    problem = cp.Problem(cp.Maximize(cp.trace(V)), [0.5 * (gamma + gamma.T) >> 0, V >> 0])
+    try:
+        with warnings.catch_warnings():  # an inaccurate answer shows in the status and in the cross-check
+            warnings.simplefilter("ignore", UserWarning)
+            problem.solve(solver=SOLVER)
+    except cp.SolverError:
+        return SDPSolution("solver_error", None, None)
+    status = str(problem.status)
+    if status not in (cp.OPTIMAL, cp.OPTIMAL_INACCURATE) or V.value is None:
+        return SDPSolution(status, None, problem.solver_stats.solve_time if problem.solver_stats else None)
+    return SDPSolution(status, 0.5 * (V.value + V.value.T), problem.solver_stats.solve_time)

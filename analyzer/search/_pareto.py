@@ -1,0 +1,202 @@
+"""Undominated miss vectors of maximal blind sets, by a Pareto branch and bound.
+
+With independent Bernoulli sensors (one per row group) a maximal blind set
+``F`` enters every result only through its miss vector ``z(F)``, ``z_g`` the
+phases of ``[0, N0)`` at which group ``g`` is not in ``F``:
+``rho(P_F) = prod_g (1 - lambda_g)^{z_g}`` (Rohr, Marelli and Fu (2014),
+Corollary 2) is strictly decreasing in every ``z_g``, so ``sigma`` and every
+stability region depend only on the componentwise-minimal (undominated)
+miss vectors, whatever the arrival probabilities.  This module finds those
+vectors without enumerating every shift orbit of maximal blind sets.
+
+The walk is the batched closure search of :mod:`kfio.search._blind_batch`
+(prefix-preserving closure extension, flats in gap-canonical rotation),
+with a *front* of the undominated vectors found so far in place of the
+list of every orbit:
+
+* **decided slots**: the flats below a flat with core slot ``c`` agree
+  with it on the slots ``<= c``, so the slots ``<= c`` it misses are missed
+  by every set in its subtree, a lower bound ``b`` on their ``z``; the
+  subtree is cut when every ``z >= b`` is dominated by or equal to a vector
+  of the front;
+* **one-group bounds**: ``z_g(D) >= m_g``, ``m_g`` the fewest misses of any
+  blind set of group ``g`` alone (a subset of a blind set is blind), from
+  the one-group branch and bound of :func:`kfio.search._blind.search`
+  (that largest set, closed over every group, also seeds the front).
+
+Every vector of the final front is attained by a maximal blind set found in
+the walk, and every maximal blind set in gap-canonical rotation either was
+offered to the front or lies in a cut subtree, whose sets all have vectors
+dominated by or equal to one of the front: the front is exactly the set of
+undominated miss vectors, each with one representative set (the first one
+found).  The test oracles are the enumeration of every orbit
+(:func:`kfio.search._blind_batch.enumerate_orbits`) followed by
+:func:`kfio.sigma._sigma.undominated`, and all subsets of small blocks.
+"""
+
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+
+from .._budget import Budget
+from ._blind import Margins, Objective, SearchResult, SlotSpace, group_space, search
+
+#: Flats the walk over both groups may expand before a two-group front is
+#: completed from the big flats of one group (:mod:`kfio.search._pareto_proof`).
+#: 0: two groups go straight to the proof (docs/structure.md: faster on every
+#: bench block and on 150 random ones, within 10 ms where it is not);
+#: ``None``: the walk alone, to its end.
+PROBE_FLATS: int | None = 0
+
+
+class Front:
+    """Undominated miss vectors found so far, one representative mask each.
+
+    Parameters
+    ----------
+    space:
+        The slot space (``N0`` phases, ``G`` groups).
+    lower:
+        ``m_g``: no blind set misses fewer than ``m_g`` slots of group ``g``.
+    """
+
+    def __init__(self, space: SlotSpace, lower: np.ndarray) -> None:
+        self.space = space
+        self.lower = lower
+        self.vectors = np.zeros((0, space.n_groups), dtype=int)
+        self.masks: list[np.ndarray] = []
+
+    def misses(self, masks: np.ndarray) -> np.ndarray:
+        """``z`` per row of ``masks``: per group, the phases not held."""
+        C = masks.shape[0]
+        return self.space.n_phases - masks.reshape(C, self.space.n_phases, self.space.n_groups).sum(axis=1)
+
+    def dead(self, bounds: np.ndarray) -> np.ndarray:
+        """Rows ``b`` of ``bounds`` such that every ``z >= b`` is dominated by or equal to a front vector."""
+        if self.vectors.shape[0] == 0:
+            return np.zeros(bounds.shape[0], dtype=bool)
+        b = np.maximum(bounds, self.lower[None, :])
+        return (b[:, None, :] >= self.vectors[None, :, :]).all(axis=2).any(axis=1)
+
+    def alive(self, masks: np.ndarray, cores: np.ndarray, kernels: np.ndarray | None = None) -> np.ndarray:
+        """Whether the subtree of each flat may still hold a vector the front does not dominate or equal.
+
+        Flats below a flat with core ``c`` agree with it on the slots
+        ``<= c``, so the slots up to ``c`` it misses are missed by all of
+        them: a lower bound on their ``z``.
+        """
+        decided = np.arange(self.space.size)[None, :] <= cores[:, None]
+        return ~self.dead(self.misses(masks | ~decided))
+
+    def alive_hulls(self, hulls: np.ndarray) -> np.ndarray:
+        """Whether a subtree whose flats all lie inside a row of ``hulls`` may beat the front.
+
+        Every set inside a hull misses at least the slots the hull misses.
+        """
+        return ~self.dead(self.misses(hulls))
+
+    def visit(self, masks: np.ndarray, kernels: np.ndarray) -> None:
+        """The front needs only maximal sets."""
+
+    def offer(self, masks: np.ndarray) -> None:
+        """Add the maximal blind sets (rows) whose miss vectors are not dominated or equalled."""
+        if masks.shape[0] == 0:
+            return
+        z = self.misses(masks)
+        for i in np.flatnonzero(~self.dead(z)):
+            zi = z[i]
+            if self.dead(zi[None, :])[0]:
+                continue  # an earlier row of this batch dominates or equals it
+            keep = ~(self.vectors >= zi[None, :]).all(axis=1)
+            self.vectors = np.concatenate([self.vectors[keep], zi[None, :]])
+            self.masks = [m for m, k in zip(self.masks, keep) if k] + [masks[i].copy()]
+
+
+def group_extremes(space: SlotSpace, budget: Budget, margins: Margins) -> tuple[np.ndarray, list[np.ndarray]]:
+    """``m_g``, the fewest slots of group ``g`` that a blind set misses, and a maximal blind set attaining each.
+
+    A subset of a blind set is blind, so ``D`` blind gives ``D cap g`` blind
+    for group ``g`` alone: ``z_g(D) >= N0 - (largest blind set of g alone)``,
+    from the one-group branch and bound for the largest blind set (0 when
+    group ``g`` alone is rank-deficient).  That largest set has rank
+    ``L - 1``; the zero set of its kernel line over every group is a
+    maximal blind set with ``z_g = m_g``, returned to seed the front.
+    """
+    out = np.zeros(space.n_groups, dtype=int)
+    seeds = []
+    index = np.arange(space.size)
+    for g in range(space.n_groups):
+        sub = group_space(space, g)
+        if sub.rank(np.ones(sub.size, dtype=bool), margins) < sub.n_columns:
+            continue
+        objective = Objective(score=_held, max_weight=functools.partial(_most_misses, sub.size))
+        best = search(sub, budget, margins, objective).maximal[0]
+        out[g] = space.n_phases - int(best.sum())
+        held = np.isin(index, np.flatnonzero(best) * space.n_groups + g)
+        _, sv, vh = np.linalg.svd(space.rows[held].reshape(-1, space.n_columns))
+        if int((~margins.record(sv)).sum()) == space.n_columns - 1:
+            v = vh[-1].conj()
+            seeds.append(margins.record(np.linalg.norm(space.rows @ v, axis=1)))
+    return out, seeds
+
+
+def group_lower_bounds(space: SlotSpace, budget: Budget, margins: Margins) -> np.ndarray:
+    """``m_g`` of :func:`group_extremes`."""
+    return group_extremes(space, budget, margins)[0]
+
+
+def _most_misses(size: int, best: float) -> int:
+    """Most slots a set may miss and still hold more than ``best`` slots."""
+    return size - int(best) - 1
+
+
+def _held(masks: np.ndarray) -> np.ndarray:
+    return masks.sum(axis=1).astype(float)
+
+
+def pareto_search(space: SlotSpace, budget: Budget, margins: Margins) -> SearchResult:
+    """One maximal blind set per undominated miss vector (Rohr, Marelli and Fu (2014), Corollary 2).
+
+    The batched closure walk of :func:`kfio.search._blind_batch.walk`
+    (gap-canonical rotations, real rows where the plant is real) with
+    :class:`Front` deciding which subtrees to keep.  With two groups the
+    walk stops after :data:`PROBE_FLATS` flats (by default it does not
+    start) and :func:`kfio.search._pareto_proof.prove_front` completes
+    the front from the big flats of one group at a time (the walk over both
+    groups grows like ``C(S, L - 1) / N0`` with dense sensor rows).
+
+    Returns
+    -------
+    SearchResult
+        :attr:`~SearchResult.maximal` holds one representative per
+        undominated vector ``z``, rotated to its orbit key, in the order of
+        the keys.
+
+    Raises
+    ------
+    BudgetExceeded
+        When ``budget`` runs out (one tick per expanded flat, also in the
+        one-group searches for ``m_g``).
+    """
+    from ._blind_batch import NodeCap, real_space, walk  # local: _blind_batch is heavier and imports _blind too
+    from ._pareto_proof import prove_front
+
+    lower, seeds = group_extremes(space, budget, margins)
+    front = Front(space, lower)
+    if seeds:
+        front.offer(np.array(seeds))
+    real = real_space(space)
+    cap = PROBE_FLATS if space.n_groups == 2 else None
+    checked = None
+    try:
+        if cap == 0:
+            raise NodeCap("no walk over both groups")
+        nodes = walk(real, budget, margins, front, max_nodes=cap)
+    except NodeCap:
+        nodes = cap or 0
+        checked = prove_front(real, front, budget, margins)
+    keys = sorted(space.orbit_key(m) for m in front.masks)
+    reps = tuple(np.isin(np.arange(space.size), key) for key in keys)
+    return SearchResult(maximal=reps, nodes=nodes, planes=0, window=real.window(margins), checked=checked)
