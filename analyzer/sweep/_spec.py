@@ -330,6 +330,9 @@ def parse_sweep(obj: Any, max_points: int = MAX_POINTS) -> SweepSpec:
         reqs = obj["requests"]
         if not isinstance(reqs, list) or not reqs:
             raise InvalidInput("/requests", "expected a non-empty array of requests")
+        for i, r in enumerate(reqs):  # O(body): each request's content is validated with its point
+            if not isinstance(r, dict):
+                raise InvalidInput(f"/requests/{i}", "expected a request object")
         return SweepSpec(command, None, (), combine, tuple(reqs), point_budget, time_budget, chunk)
     base = obj["base"]
     if not isinstance(base, dict):

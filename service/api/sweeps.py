@@ -10,7 +10,7 @@ points done), and its result is the table as JSON.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from fastapi import APIRouter
 from fastapi.responses import Response
@@ -35,7 +35,7 @@ SWEEP_EXAMPLE = {
 }
 
 
-SWEEP_SCHEMA = {
+SWEEP_SCHEMA: dict[str, Any] = {
     "type": "object",
     "description": "A sweep: a base request and axes, or a list of requests (see docs/sweeps.md).",
     "properties": {
@@ -97,6 +97,30 @@ SWEEP_SCHEMA = {
 }
 
 
+#: The route's schema: the sweep's own fields as :data:`SWEEP_SCHEMA` says (the submit check reads
+#: them), while ``base`` and each of ``requests`` are any object here: every point is validated by
+#: the job's worker, so a bad request inside a sweep fails the job (422 naming ``/points/<i>/...``)
+#: instead of being refused at submit. The published file schema (``sweep.json``) keeps the strict
+#: request schemas, for editors.
+SWEEP_ROUTE_SCHEMA: dict[str, Any] = {
+    **SWEEP_SCHEMA,
+    "properties": {
+        **SWEEP_SCHEMA["properties"],
+        "base": {
+            "type": "object",
+            "description": "a request (AnalysisRequest; a LoopRequest when `command` is `loop`), validated with "
+            "the axes applied, point by point, by the job's worker",
+        },
+        "requests": {
+            "type": "array",
+            "minItems": 1,
+            "items": {"type": "object"},
+            "description": "whole requests, each validated by the job's worker",
+        },
+    },
+}
+
+
 def _check_shape(body: bytes, max_points: int) -> SweepSpec:
     """The sweep's shape and size: O(body) work, safe in the server process.
 
@@ -136,7 +160,7 @@ def _check_shape(body: bytes, max_points: int) -> SweepSpec:
             "required": True,
             "content": {
                 "application/json": {
-                    "schema": SWEEP_SCHEMA,
+                    "schema": SWEEP_ROUTE_SCHEMA,
                     "examples": {
                         "channel-sweep": {
                             "summary": "the 2x2 example of Sinopoli et al. (2004)",

@@ -6,7 +6,9 @@ import json
 import time
 
 import httpx
+import pytest
 
+from kfio.errors import InvalidInput
 from kfio.sweep import load_sweep, run_sweep
 
 from support.live_server import LiveServer
@@ -57,3 +59,21 @@ def test_sweep_job_gives_the_cli_table_and_a_bad_point_fails_its_job_naming_it()
         expected = run_sweep(load_sweep(json.dumps(SWEEP)), engine="serial").records()
         assert table["rows"] == expected
         assert table["columns"][:2] == ["index", "axis:/channel/arrival_probability"]
+
+
+def test_the_route_refuses_at_submit_what_its_schema_refuses_and_leaves_requests_to_the_worker() -> None:
+    """The route's schema (``SWEEP_ROUTE_SCHEMA``): ``base`` and each of ``requests`` must be objects, checked at
+    once; their content is each point's, validated by the job's worker (a schemathesis negative case found a
+    sweep accepted whose requests broke the strict request schema the route used to advertise)."""
+    from kfio.service.api.sweeps import SWEEP_ROUTE_SCHEMA
+
+    assert SWEEP_ROUTE_SCHEMA["properties"]["base"]["type"] == "object"
+    assert SWEEP_ROUTE_SCHEMA["properties"]["requests"]["items"] == {"type": "object"}
+    for body, field in (
+        ({"base": 5}, "/base"),
+        ({"requests": [{}, 5]}, "/requests/1"),
+        ({"requests": []}, "/requests"),
+    ):
+        with pytest.raises(InvalidInput) as err:
+            load_sweep(json.dumps(body))
+        assert err.value.field == field
