@@ -272,22 +272,14 @@ def block_tail(
             beta_expr = beta.expr()
             kappa_exact = str(sympy.log(1 / c_expr) / (N * sympy.log(beta_expr)))
     if N == 1 and c_rational is not None:
-        return BlockTail(
-            eigenvalues=block.eigenvalue_texts,
-            kappa=kappa,
-            kappa_exact=kappa_exact,
-            sigma_exact=_text(c_rational),
-            moments=moments,
-            exact=exact,
-            basis=basis,
-            reference=reference,
-        )
-    sigma_expr = c_expr ** sympy.Rational(1, N)
+        sigma_exact = _text(c_rational)
+    else:
+        sigma_exact = str(c_expr ** sympy.Rational(1, N))
     return BlockTail(
         eigenvalues=block.eigenvalue_texts,
         kappa=kappa,
         kappa_exact=kappa_exact,
-        sigma_exact=str(sigma_expr),
+        sigma_exact=sigma_exact,
         moments=moments,
         exact=exact,
         basis=basis,
