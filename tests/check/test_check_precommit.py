@@ -56,6 +56,7 @@ def test_hook_manifest_and_action_run_kfio_check():
     assert action["inputs"]["file"]["default"] == "kfio-check.json"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("name", "code"), [("kfio-check.json", 0), ("kfio-check-failing.json", 1)])
 def test_action_check_step_writes_junit_and_summary_and_passes_the_exit_code_on(tmp_path, name, code):
     """The action's `kfio check` step, run by bash as a runner would, with kfio as the installed one."""

@@ -77,6 +77,7 @@ def v_bar_trace(system, lam: float) -> float:
     return float(np.trace(X))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("plant", sorted(PLANTS))
 def test_trace_v_bar_against_the_riccati_iteration(plant):
     brute = v_bar_trace(PLANTS[plant], float(LAMBDA))

@@ -136,6 +136,7 @@ CONTAINMENT = {
 }
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", sorted(CONTAINMENT))
 def test_containment_of_the_exact_critical_probability(name) -> None:
     system = CONTAINMENT[name]

@@ -38,6 +38,7 @@ def rho_closed_loop(A, C, K, lam) -> float:
     return float(max(abs(np.linalg.eigvals(closed_loop_operator(m, K)))))
 
 
+@pytest.mark.slow
 def test_issue12_reproducer_bounds_meet_at_the_closed_form() -> None:
     # C is injective on the 2-dimensional unstable subspace of A, so lambda_upper = lambda_lower = 0.250289
     # (the LMI route alone reported 0.27403 and "not certifiable" at 0.27393).

@@ -119,6 +119,7 @@ def min_closed_loop_radius(A, C, lam, starts=40, seed=0) -> float:
     return best
 
 
+@pytest.mark.slow
 def test_lambda_upper_of_seed004_2x2_by_an_independent_route() -> None:
     # Sinopoli et al. (2004) Fig. 3 / Rohr, Marelli and Fu (2010) Sec. VI: A = [[1.25, 0], [1, 1.1]], C = [1 1]; Rohr, Marelli and Fu (2010) reads lambda_upper ~ 0.48.
     # The LMI is feasible iff some K makes L_K(X) = (1-lam) A X A' + lam F X F' Schur stable (Sinopoli et al. (2004) Thm 5(b)),

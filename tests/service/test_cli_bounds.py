@@ -64,6 +64,7 @@ def test_json_and_flags(write, capsys) -> None:
     assert upper["tolerance"] == 1e-3 and 0.36 < upper["value"] <= 0.361
 
 
+@pytest.mark.slow
 def test_examples_run(capsys) -> None:
     root = Path(__file__).resolve().parents[2] / "examples"
     for path in sorted(root.glob("bounds_*.json")):

@@ -83,6 +83,7 @@ def test_without_dask_a_sweep_is_refused_503_at_once(monkeypatch):
         client.__exit__(None, None, None)
 
 
+@pytest.mark.slow
 def test_kfio_serve_checks_the_scheduler_at_start_and_exits_6_naming_the_setting(monkeypatch, capsys):
     monkeypatch.setattr(sweep_jobs, "DASK_CONNECT_TIMEOUT_S", 1.0)
     monkeypatch.setenv("KFIO_DASK_SCHEDULER", f"tcp://127.0.0.1:{free_port()}")

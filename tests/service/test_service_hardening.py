@@ -48,6 +48,7 @@ def client() -> Iterator[TestClient]:
         yield c
 
 
+@pytest.mark.slow
 def test_big_bodies_are_parsed_off_the_event_loop(client: TestClient, monkeypatch: pytest.MonkeyPatch) -> None:
     real = dispatch.load_json
     gate = threading.Event()
@@ -115,6 +116,7 @@ def test_a_budget_too_small_to_do_anything_is_422(client: TestClient, tiny: obje
     assert r.json()["field"] == "/options/time_budget_s" and "0.01" in r.json()["rule"]
 
 
+@pytest.mark.slow
 def test_validation_comes_before_the_busy_answer() -> None:
     with started(Settings(workers=1, max_queue=0, time_budget_s=20)) as c:
         hold = threading.Thread(

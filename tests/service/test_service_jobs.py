@@ -145,6 +145,7 @@ def test_the_queue_is_bounded_with_429(client: TestClient) -> None:
     assert client.delete(first).json()["status"] == "cancelled"
 
 
+@pytest.mark.slow
 def test_progress_and_budget_of_a_long_simulation(client: TestClient) -> None:
     location = submit(client, "simulate", slow_request(time_budget_s=4, seed=15))
     queued = client.get(location).json()

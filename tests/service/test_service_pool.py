@@ -110,6 +110,7 @@ def test_a_worker_at_its_memory_limit_is_reported_and_retired() -> None:
     asyncio.run(scenario())
 
 
+@pytest.mark.slow
 def test_waiting_is_bounded_in_count_and_in_time() -> None:
     async def scenario() -> None:
         p = pool(1, "sleeper", max_waiting=1)  # the busy task sleeps 5 s, the waiter's budget is 0.3 s
@@ -162,6 +163,7 @@ def client_not_ready(c: TestClient) -> bool:
     return c.get("/readyz").status_code != 200
 
 
+@pytest.mark.slow
 def test_past_its_budget_a_request_gets_504_and_the_service_recovers(client: TestClient) -> None:
     r = client.post(SLOW_PATH, content=slow_request(time_budget_s=1), headers=JSON_HEADERS)
     assert r.status_code == 504, r.text  # the request takes minutes: only the budget ended it
@@ -178,6 +180,7 @@ def test_past_its_budget_a_request_gets_504_and_the_service_recovers(client: Tes
     assert pool["alive"] == pool["size"] and pool["busy"] == 0, pool
 
 
+@pytest.mark.slow
 def test_healthz_answers_while_every_worker_is_busy(client: TestClient) -> None:
     results: list[int] = []
     slow = [slow_request(time_budget_s=10, seed=s) for s in (11, 12)]  # distinct: no shared computation

@@ -103,6 +103,7 @@ def test_timeout_is_504_and_the_server_keeps_serving(server: LiveServer) -> None
     assert pool["alive"] == pool["size"] and pool["busy"] == 0, pool
 
 
+@pytest.mark.slow
 def test_healthz_answers_while_every_worker_is_busy(server: LiveServer) -> None:
     async def scenario() -> list[int]:
         async with httpx.AsyncClient(base_url=server.url, timeout=30) as client:

@@ -194,6 +194,7 @@ def growth(req: Request, horizon: int = HORIZON) -> float:
     return g
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("system", "channel", "rate"),
     [
@@ -230,6 +231,7 @@ def test_example1_gilbert_elliott_sigma_and_seed_erratum() -> None:
     assert abs(g - math.log(seed)) > 4 * GROWTH_TOL
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("system", "channel"),
     [

@@ -107,6 +107,7 @@ def assert_psd(M: np.ndarray, scale: float) -> None:
     assert np.linalg.eigvalsh((M + M.T) / 2).min() >= -1e-9 * scale
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("route", ["local", "riccati"])
 @pytest.mark.parametrize("name", sorted(CASES))
 def test_bounds_sandwich_the_limit(name: str, route: str) -> None:

@@ -87,6 +87,7 @@ SEED_CASES = {
 }
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", sorted(SEED_CASES))
 def test_seed_systems_growth_matches_verdict(name: str) -> None:
     system, channel, expected, closed_form = SEED_CASES[name]
@@ -96,6 +97,7 @@ def test_seed_systems_growth_matches_verdict(name: str) -> None:
         assert rate == pytest.approx(closed_form, rel=1e-9)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("lam1", "expected"), [(0.9, "stable"), (0.8, "unstable")])
 def test_two_packets_growth_matches_verdict(lam1: float, expected: str) -> None:
     """docs/theory.md: A = diag(2.5, 1.5), one packet per state; exact region lambda_1 > 0.84, lambda_2 > 5/9."""
@@ -166,6 +168,7 @@ def random_cases(count: int = 12, seed: int = 2024) -> list[tuple[dict, dict, fl
     return out
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("case", random_cases(), ids=lambda c: f"{len(c[0]['A'])}x{len(c[0]['A'])}-{c[1]['model']}")
 def test_random_systems_growth_matches_verdict(case: tuple[dict, dict, float]) -> None:
     system, channel, closed_form = case

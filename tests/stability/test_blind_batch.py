@@ -70,6 +70,7 @@ def orbit_keys_by_subsets(block: PhaseBlock) -> set[tuple[int, ...]]:
     return {space.orbit_key(np.isin(np.arange(S), sorted(F))) for F in maximal}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("i", range(60))
 def test_batched_orbits_equal_one_at_a_time(i: int) -> None:
     rng = np.random.default_rng([SEED, i])

@@ -118,6 +118,7 @@ def plant_case(i: int) -> tuple[list[list[int]], list[list[list[int]]], list[flo
     return A, Cs, lambdas
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("i", range(24))
 def test_block_rates_of_cyclotomic_plants_match_bruteforce(i: int) -> None:
     A, Cs, lambdas = plant_case(i)

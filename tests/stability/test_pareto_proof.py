@@ -65,6 +65,7 @@ def test_proof_equals_all_subsets(i: int, monkeypatch: pytest.MonkeyPatch) -> No
     assert vectors(space, front.maximal) == subsets_front(space)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("factors", [(15,), (3, 5), (3, 4)])
 @pytest.mark.parametrize("probe", [0, 50])
 def test_dense_bench_blocks_equal_the_walk(
@@ -167,6 +168,7 @@ def test_most_zeros_vector_against_all_subsets(i: int, route: str, monkeypatch: 
             assert int((np.linalg.norm(P @ x, axis=1) <= 1e-9).sum()) >= m
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("k", [2, 3, 4, 5])
 def test_most_zeros_vectors_batch_equals_all_subsets(k: int) -> None:
     """One batched walk over 12 blocks of one shape, each asked for a different count, against all subsets."""
@@ -382,6 +384,7 @@ def test_generic_front_of_period_21_is_the_whole_front() -> None:
     assert vectors(space, front.masks) == sorted((21 - g[r], 21 - g[11 - r]) for r in range(12))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("i", range(12))
 def test_front_proof_invariant_passed_flats_hold_nothing_beyond_the_front(i: int) -> None:
     """:class:`FrontProof`'s invariant, by brute force: every passed flat ``F`` of a side holds no

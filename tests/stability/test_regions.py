@@ -202,6 +202,7 @@ def test_exact_grid_between_bounds(name: str) -> None:
         assert ("undecided", "stable") in seen or ("undecided", "unstable") in seen  # the grid decides more
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["diagonal", "last"])
 @pytest.mark.parametrize("point", [("1/4", "1/4"), ("9/10", "3/5"), ("9/20", "1/20"), ("3/10", "1/10")])
 def test_thresholds_between_bounds(name: str, point: tuple[str, str]) -> None:

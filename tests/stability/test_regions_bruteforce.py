@@ -161,6 +161,7 @@ DEGENERATE = {
 }
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", sorted(DEGENERATE))
 @pytest.mark.parametrize("lambdas", [(0.3, 0.6), (0.75, 0.2), (0.9, 0.9)])
 def test_named_degenerate_blocks(name: str, lambdas: tuple[float, float]) -> None:

@@ -69,6 +69,7 @@ def exact_side(point: tuple[str, str]) -> tuple[str, float]:
     return th.verdict, max(th.block_rates)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", [0, 1])
 def test_stable_side_levels_off(seed: int) -> None:
     verdict, rate = exact_side(("1/4", "1/4"))

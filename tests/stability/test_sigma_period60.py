@@ -64,6 +64,7 @@ def spectral_radius(P: list[list[F]]) -> float:
     return float(np.abs(np.linalg.eigvals(np.array(P, dtype=float))).max())
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("channel", [GE_BURSTY, ORDER2, ORDER3], ids=["gilbert_elliott", "order2", "order3"])
 def test_period60_markov_in_a_few_thousand_steps(channel: MarkovChannel) -> None:
     # Before the renewal score and the window program, Gilbert-Elliott took about 20 s of CPU here

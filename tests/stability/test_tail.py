@@ -99,6 +99,7 @@ def test_variance_threshold_iid(a):
 # prefactor reached 0.03 for the degenerate cases over seeds 0-2 at M = 100..25600.
 # The tolerances 0.03 (non-degenerate) and 0.06 (degenerate) exclude the wrong
 # formula in every case (non-degenerate formula on a degenerate block: 1.0 and 0.5).
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "A, C, p, q, ratio, tol",
     [

@@ -43,6 +43,7 @@ def test_poly_text_keeps_sympys_constant_first_exception(cs) -> None:
     assert poly_text(cs) == str(Poly([QQ(Fraction(c).numerator, Fraction(c).denominator) for c in cs], X).as_expr())
 
 
+@pytest.mark.slow
 def test_crootof_text_is_sympys_text() -> None:
     rng = random.Random(7)
     checked = rescaled = 0

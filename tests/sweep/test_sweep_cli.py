@@ -135,6 +135,7 @@ def test_sweep_on_a_separately_started_scheduler_and_worker(tmp_path):
                 p.kill()
 
 
+@pytest.mark.slow
 def test_unreachable_scheduler_is_invalid_input(tmp_path, capsys):
     port = _free_port()
     assert main(["sweep", write(tmp_path, SWEEP), "--scheduler", f"tcp://127.0.0.1:{port}", "--quiet"]) == 2

@@ -133,6 +133,7 @@ def test_failing_points_get_error_rows_and_the_sweep_goes_on():
     assert rows[0].fields["verdict"] == "stable" and rows[2].fields["verdict"] == "stable"
 
 
+@pytest.mark.slow
 def test_two_d_gilbert_elliott_grid_on_the_local_cluster_equals_serial(cluster):
     spec = load_sweep(
         json.dumps(
@@ -159,6 +160,7 @@ def test_two_d_gilbert_elliott_grid_on_the_local_cluster_equals_serial(cluster):
         assert r.fields["verdict"] == ("stable" if rate < 1 else "unstable" if rate > 1 else "boundary")
 
 
+@pytest.mark.slow
 def test_a_worker_killed_mid_sweep_loses_and_duplicates_no_row(cluster):
     from distributed import Client
 

@@ -34,6 +34,7 @@ def _finished(server: LiveServer, location: str) -> dict:
         time.sleep(0.2)
 
 
+@pytest.mark.slow
 def test_sweep_job_gives_the_cli_table_and_a_bad_point_fails_its_job_naming_it():
     with LiveServer(workers=1) as server:
         bad_shape = {**SWEEP, "axes": [{"pointer": "/channel/nowhere", "values": ["1/2"]}]}
