@@ -133,7 +133,9 @@ def build_request(
     ``options`` group (``"analyze"``, ``"bounds"``, ``"simulate"``); budget
     seconds become ``request.time_budget_s`` (a :class:`kfio.Budget` object
     is not part of a request: pass it to :func:`analyze` and friends).
-    ``limits`` default to those the :class:`System` was built with.
+    ``limits`` default to those the :class:`System` was built with, as
+    :meth:`kfio.Limits.for_command` of ``command`` gives them (``analyze``
+    accepts more states than the other commands).
 
     Examples
     --------
@@ -172,7 +174,7 @@ def _build_request(
     tree, routes = _tree(system, channel, command, options, budget, keywords or {}, limits)
     work, _ = _budget_of(budget)
     try:
-        return parse_request(tree, limits), work, routes
+        return parse_request(tree, limits.for_command(command)), work, routes
     except InvalidInput as exc:
         raise renamed(exc, routes) from None
 

@@ -71,7 +71,10 @@ class System(SystemRecord):
         partition those of ``C``.
     limits:
         Size limits (default :data:`kfio.DEFAULT_LIMITS`); the requests that
-        ``kfio.analyze`` and friends build from this system use them too.
+        ``kfio.analyze`` and friends build from this system use them too.  A
+        system may have up to ``limits.max_analyze_states`` states (120): that
+        is what ``kfio.analyze`` accepts; the other commands refuse more than
+        ``limits.max_states`` (40) when they build their request.
 
     Attributes
     ----------
@@ -122,7 +125,7 @@ class System(SystemRecord):
             tree["sensors"], routes = _sensors_tree(sensors)
         routes.append(("/system", "", tree, True))
         try:
-            system = parse_system(tree, limits)
+            system = parse_system(tree, limits.for_command("analyze"))  # each command checks its own
         except InvalidInput as exc:
             raise renamed(exc, routes) from None
         for f in fields(SystemRecord):

@@ -183,6 +183,6 @@ class Dispatcher:
 
                 load_loop_request(body, self.settings.limits())
             else:
-                load_request(body, self.settings.limits())
+                load_request(body, self.settings.limits(job))
         except InvalidInput as exc:
             raise ProblemError(problem_from_exception(exc)) from None

@@ -98,13 +98,16 @@ def memory_limit(args: argparse.Namespace) -> int | None:
     return mb << 20 if mb else None
 
 
-def run_request_command(args: argparse.Namespace, work: Callable[[Request, Budget], int]) -> int:
+def run_request_command(
+    args: argparse.Namespace, work: Callable[[Request, Budget], int], command: str | None = None
+) -> int:
     """Read the request of ``args.file`` and run ``work(request, budget)`` under the watchdog.
 
     The budget is ``--time-budget``, else the request's ``options.time_budget_s``,
     else :data:`DEFAULT_TIME_BUDGET_S`; the work gets it as a cooperative
     :class:`kfio.Budget` and the watchdog (:func:`kfio.service.watchdog.run_supervised`)
-    kills it shortly after.  Exit codes as :func:`run_guarded`.
+    kills it shortly after.  The request is validated with the size limits of
+    ``command`` (:meth:`kfio.Limits.for_command`).  Exit codes as :func:`run_guarded`.
     """
 
     def body() -> int:
@@ -115,9 +118,10 @@ def run_request_command(args: argparse.Namespace, work: Callable[[Request, Budge
         seconds = args.time_budget or request_budget(data) or DEFAULT_TIME_BUDGET_S
 
         def child() -> int:
-            from kfio import Budget, load_request
+            from kfio import DEFAULT_LIMITS, Budget, load_request
 
-            return run_guarded(lambda: work(load_request(data), Budget(seconds=seconds)))
+            limits = DEFAULT_LIMITS.for_command(command)
+            return run_guarded(lambda: work(load_request(data, limits), Budget(seconds=seconds)))
 
         return run_supervised(child, seconds, memory_bytes=memory)
 

@@ -56,9 +56,9 @@ def report_json(report: Any) -> JobOutput:
     return dump_json(report.to_dict()).encode("utf-8"), JSON
 
 
-def parse(body: bytes, settings: Settings) -> Request:
-    """The request, validated with this deployment's limits."""
-    return load_request(body, settings.limits())
+def parse(body: bytes, settings: Settings, command: str | None = None) -> Request:
+    """The request, validated with this deployment's limits for ``command``."""
+    return load_request(body, settings.limits(command))
 
 
 def analyze_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[str, Any]) -> JobOutput:
@@ -70,7 +70,7 @@ def analyze_job(body: bytes, settings: Settings, budget: Budget, params: Mapping
     from kfio._reuse import reused_fmo_blocks
     from kfio.stability import analyze
 
-    request = parse(body, settings)
+    request = parse(body, settings, "analyze")
     return report_json(analyze(request, budget, fmo=reused_fmo_blocks(request.system, budget)))
 
 
@@ -118,7 +118,7 @@ def check_job_request(kind: str, body: bytes, settings: Settings) -> None:
     its options are sized against the job's limits, so a job that would be
     refused is a 422 at once, as on the synchronous endpoint.
     """
-    request = parse(body, settings)
+    request = parse(body, settings, kind)
     if kind == "simulate":
         from kfio.simulation import parse_options
 

@@ -62,8 +62,9 @@ class Settings(BaseSettings):
         Largest accepted request body (413 beyond it).
     cache_entries, cache_bytes:
         Bounds of the in-memory LRU cache of answers.
-    max_states, max_markov_order, max_digits, max_outputs, max_sensors:
-        Request size limits (:class:`kfio.model._limits.Limits`).
+    max_states, max_analyze_states, max_markov_order, max_digits, max_outputs, max_sensors:
+        Request size limits (:class:`kfio.Limits`); ``max_analyze_states`` is the state limit
+        of ``analyze`` requests, ``max_states`` that of every other command.
     job_workers:
         Worker processes of the job lane (``/v1/jobs/...``), separate from
         ``workers`` so that long jobs never starve synchronous requests.
@@ -117,6 +118,7 @@ class Settings(BaseSettings):
     cache_entries: int = Field(512, ge=0, le=10_000_000)
     cache_bytes: int = Field(64 << 20, ge=0, le=1 << 40)
     max_states: int = Field(Limits.max_states, ge=1, le=400)
+    max_analyze_states: int = Field(Limits.max_analyze_states, ge=1, le=400)
     max_markov_order: int = Field(Limits.max_markov_order, ge=0, le=100)
     max_digits: int = Field(Limits.max_digits, ge=1, le=4000)  # below Python's 4300-digit int parsing limit
     max_outputs: int = Field(Limits.max_outputs, ge=1, le=400)
@@ -147,15 +149,16 @@ class Settings(BaseSettings):
 
         return replace(DEFAULT_SIMULATION_LIMITS, max_trajectory_steps=self.job_max_trajectory_steps)
 
-    def limits(self) -> Limits:
-        """The request size limits of this deployment."""
+    def limits(self, command: str | None = None) -> Limits:
+        """The request size limits of this deployment for ``command`` (:meth:`kfio.Limits.for_command`)."""
         return Limits(
             max_states=self.max_states,
+            max_analyze_states=self.max_analyze_states,
             max_markov_order=self.max_markov_order,
             max_digits=self.max_digits,
             max_outputs=self.max_outputs,
             max_sensors=self.max_sensors,
-        )
+        ).for_command(command)
 
 
 @lru_cache(maxsize=1)

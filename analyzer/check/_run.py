@@ -110,7 +110,7 @@ def run_one(command: str, tree: dict[str, Any], seconds: float) -> tuple[str, An
 
     Never raises for an analysis failure (it travels back from a worker as data).
     """
-    from ..model import parse_request
+    from ..model import DEFAULT_LIMITS, parse_request
 
     t0 = time.perf_counter()
     try:
@@ -118,7 +118,7 @@ def run_one(command: str, tree: dict[str, Any], seconds: float) -> tuple[str, An
             from ..loop import analyze_loop, parse_loop_request
 
             return "ok", {"report": analyze_loop(parse_loop_request(tree)).to_dict()}, time.perf_counter() - t0
-        request = parse_request(tree)
+        request = parse_request(tree, DEFAULT_LIMITS.for_command(command))
         budget = Budget(seconds=seconds)
         if command == "analyze":
             from ..stability import analyze

@@ -39,7 +39,7 @@ from pathlib import Path
 from typing import Any, Mapping
 
 from ..errors import InvalidInput
-from ..model import fraction_text, json_pointer, load_json, parse_number, parse_request
+from ..model import DEFAULT_LIMITS, fraction_text, json_pointer, load_json, parse_number, parse_request
 from ._requirements import OUTAGE_KEYS, Requirement, parse_requirements
 
 CHECK_TOP_KEYS = {"$schema", "description", "options", "checks"}
@@ -92,7 +92,7 @@ def _validate_options(entry: CheckEntry, where: str) -> None:
     """Check each command's options now (a Monte Carlo too large is a bad file, exit 2, not a failed run)."""
     for command in entry.commands:
         try:
-            request = parse_request(entry.request_for(command))
+            request = parse_request(entry.request_for(command), DEFAULT_LIMITS.for_command(command))
             if command == "simulate":
                 from ..simulation import parse_options
 
@@ -235,7 +235,7 @@ def parse_check(tree: Any, base: str | Path = ".", source: str = "<check>") -> C
         elif isinstance(plant_file.get("options"), dict) and "channel" not in entry:
             request["options"] = plant_file["options"]
         try:
-            parse_request(request)
+            parse_request(request, DEFAULT_LIMITS.for_command("analyze"))  # each command checks its own below
         except InvalidInput as exc:
             # the field inside the request maps to the file that holds it
             top = exc.field.split("/")[1] if exc.field.count("/") else ""

@@ -215,6 +215,13 @@ def _parse_probability(obj: Any, where: str, limits: Limits) -> Fraction:
 def parse_system(obj: Any, limits: Limits = DEFAULT_LIMITS, where: str = "/system") -> System:
     """Validate ``system``: ``A`` square, ``C`` with ``n`` columns, ``Q`` PSD, ``R`` PD, sensors."""
     obj = check_keys(obj, where, _SYSTEM_KEYS, {"A", "C"})
+    raw_A = obj["A"]
+    if isinstance(raw_A, list) and limits.max_states < len(raw_A) <= limits.max_analyze_states:
+        raise LimitExceeded(
+            f"{where}/A",
+            f"A has {len(raw_A)} rows; the limit is {limits.max_states} "
+            f"(kfio analyze accepts up to {limits.max_analyze_states} states)",
+        )
     A = parse_matrix(obj["A"], f"{where}/A", "A", limits, limits.max_states, limits.max_states)
     n = len(A)
     if len(A[0]) != n:

@@ -452,7 +452,7 @@ def check_points(
     n = 0
     for p in points(spec):
         try:
-            validate(p.request, limits)
+            validate(p.request, limits.for_command(spec.command))
         except InvalidInput as exc:
             raise SweepPointInvalid(p.index, exc.field if exc.field != "/" else "", exc.rule) from None
         if keep is not None:

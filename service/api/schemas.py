@@ -30,8 +30,8 @@ def _matrix(description: str) -> dict[str, Any]:
     return {
         "type": "array",
         "minItems": 1,
-        "maxItems": 40,
-        "items": {"type": "array", "minItems": 1, "maxItems": 40, "items": schema_ref("ExactNumber")},
+        "maxItems": 120,  # Limits.max_analyze_states; the other commands refuse more than 40 states (422)
+        "items": {"type": "array", "minItems": 1, "maxItems": 120, "items": schema_ref("ExactNumber")},
         "description": description,
     }
 
@@ -250,7 +250,10 @@ COMPONENTS: dict[str, dict[str, Any]] = {
         "examples": [0.5, "9/25"],
     },
     "Matrix": {
-        **_matrix("A non-empty rectangular matrix, as an array of rows."),
+        **_matrix(
+            "A non-empty rectangular matrix, as an array of rows. At most 120 states for analyze, "
+            "40 for every other command (a deployment may change both: KFIO_MAX_ANALYZE_STATES, KFIO_MAX_STATES)."
+        ),
         "examples": [_SEED002_2X2["system"]["A"], [["5/4", 0], [1, "11/10"]]],
     },
     "Sensor": {

@@ -48,4 +48,4 @@ def _run(args: argparse.Namespace) -> int:
         emit(dump_json(report.to_dict()) if args.json else report.summary())  # emit: user text made safe
         return exitcodes.BY_VERDICT[report.verdict]
 
-    return run_request_command(args, work)
+    return run_request_command(args, work, "analyze")

@@ -184,3 +184,21 @@ def test_plots_refuse_requests_they_cannot_draw(client: TestClient, path: str) -
     body = SCALAR if path.endswith("region") else REQUEST_EXAMPLES["seed000-two-sensors"]["value"]
     r = client.post(path, json=body)
     assert r.status_code == 422 and r.json()["field"] == "/channel/model"
+
+
+def test_analyze_takes_more_states_than_the_other_routes(client: TestClient) -> None:
+    n = 60  # KFIO_MAX_STATES is 40, KFIO_MAX_ANALYZE_STATES 120
+    A = [["1/2" if i == j else 0 for j in range(n)] for i in range(n)]
+    A[0][0] = "6/5"
+    body = {
+        "system": {"A": A, "C": [[1] * n], "R": [[1]]},
+        "channel": {"model": "bernoulli", "arrival_probability": 0.5},
+    }
+    r = client.post("/v1/analyze", json=body)
+    assert r.status_code == 200 and r.json()["critical_arrival_probability_exact"] == "11/36"
+    body["system"]["Q"] = [[int(i == j) for j in range(n)] for i in range(n)]
+    r = client.post("/v1/bounds", json=body)
+    assert r.status_code == 422 and r.headers["content-type"].startswith(PROBLEM)
+    problem = r.json()
+    assert problem["field"] == "/system/A"
+    assert problem["rule"] == "A has 60 rows; the limit is 40 (kfio analyze accepts up to 120 states)"
