@@ -41,10 +41,18 @@ class RationalRange(SequenceABC):
     (:func:`kfio.model.fraction_text`) is computed only when a point needs it.
     """
 
-    __slots__ = ("lo", "hi", "num")
+    __slots__ = ("lo", "hi", "num", "_start", "_step", "_den")
 
     def __init__(self, lo: Fraction, hi: Fraction, num: int):
         self.lo, self.hi, self.num = lo, hi, num
+        # the i-th value is (start + step i) / den in integers: one gcd per value, not four Fraction operations
+        step = (hi - lo) / (num - 1) if num > 1 else Fraction(0)
+        den = math.lcm(lo.denominator, step.denominator)
+        self._start, self._step, self._den = (
+            lo.numerator * (den // lo.denominator),
+            step.numerator * (den // step.denominator),
+            den,
+        )
 
     def __len__(self) -> int:
         return self.num
@@ -57,9 +65,10 @@ class RationalRange(SequenceABC):
             i += self.num
         if not 0 <= i < self.num:
             raise IndexError(i)
-        if self.num == 1:
-            return fraction_text(self.lo)
-        return fraction_text(self.lo + (self.hi - self.lo) * i / (self.num - 1))
+        num = self._start + self._step * i
+        g = math.gcd(num, self._den)
+        num, den = num // g, self._den // g
+        return str(num) if den == 1 else f"{num}/{den}"  # :func:`kfio.model.fraction_text` of the value
 
     def __eq__(self, other: object) -> bool:
         if isinstance(other, RationalRange):

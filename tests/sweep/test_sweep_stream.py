@@ -162,3 +162,20 @@ def test_streamed_tables_equal_the_sweeps_records(tmp_path):
     out = tmp_path / "t.jsonl"
     assert main(["sweep", str(path), "--serial", "--quiet", "--out", str(out)]) == 0
     assert [json.loads(line) for line in out.read_text().splitlines()] == records
+
+
+def test_range_values_in_integers_equal_the_exact_formula():
+    from fractions import Fraction
+
+    from kfio.model import fraction_text
+    from kfio.sweep import RationalRange
+
+    rng = random.Random(11)
+    for _ in range(300):
+        lo = Fraction(rng.randint(-(10**6), 10**6), rng.randint(1, 10**4))
+        hi = Fraction(rng.randint(-(10**6), 10**6), rng.randint(1, 10**4))
+        num = rng.randint(1, 40)
+        hi = lo if num == 1 else hi
+        r = RationalRange(lo, hi, num)
+        assert list(r) == [fraction_text(lo + (hi - lo) * Fraction(i, max(1, num - 1))) for i in range(num)]
+        assert r[-1] == fraction_text(hi)
