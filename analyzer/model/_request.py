@@ -363,10 +363,16 @@ def parse_channel(obj: Any, system: System, limits: Limits = DEFAULT_LIMITS, whe
 MIN_TIME_BUDGET_S = Fraction(1, 100)
 
 
-def parse_request(obj: Any, limits: Limits = DEFAULT_LIMITS) -> Request:
-    """Validate a whole request (the JSON tree of :func:`load_json`)."""
+def parse_request(obj: Any, limits: Limits = DEFAULT_LIMITS, *, system: System | None = None) -> Request:
+    """Validate a whole request (the JSON tree of :func:`load_json`).
+
+    ``system``: :func:`parse_system` of ``obj["system"]`` with ``limits``, when
+    the caller already has it (a sweep whose points share one plant); the
+    rest of the request is validated as always.
+    """
     obj = check_keys(obj, "", _TOP_KEYS, {"system", "channel"})
-    system = parse_system(obj["system"], limits)
+    if system is None:
+        system = parse_system(obj["system"], limits)
     channel = parse_channel(obj["channel"], system, limits)
     options: dict[str, Mapping[str, Any]] = {}
     time_budget = None

@@ -19,7 +19,7 @@ Examples
 """
 
 from ._boundary import exact_boundary
-from ._engine import SweepResult, SweepRow, iter_sweep, run_sweep
+from ._engine import SweepResult, SweepRow, in_index_order, iter_sweep, record, run_sweep, table_columns
 from ._evaluate import cache_stats, clear_caches, evaluate_point
 from ._rows import FIELDS, coordinate_column, row_from_report
 from ._spec import (
@@ -28,6 +28,7 @@ from ._spec import (
     SweepPointInvalid,
     SweepSpec,
     check_points,
+    coordinates_at,
     load_sweep,
     parse_sweep,
     point_at,
@@ -35,7 +36,7 @@ from ._spec import (
     sweep_size,
     validate_points,
 )
-from ._table import FORMATS, format_of, jsonl_line, write_table
+from ._table import FORMATS, TableWriter, format_of, jsonl_line, write_table
 
 __all__ = [
     "Axis",
@@ -46,22 +47,27 @@ __all__ = [
     "SweepResult",
     "SweepRow",
     "SweepSpec",
+    "TableWriter",
     "cache_stats",
     "check_points",
     "clear_caches",
     "coordinate_column",
+    "coordinates_at",
     "evaluate_point",
     "exact_boundary",
     "format_of",
+    "in_index_order",
     "iter_sweep",
     "jsonl_line",
     "load_sweep",
     "parse_sweep",
     "point_at",
     "points",
+    "record",
     "row_from_report",
     "run_sweep",
     "sweep_size",
+    "table_columns",
     "validate_points",
     "write_table",
 ]

@@ -22,14 +22,14 @@ import os
 import threading
 import time
 from dataclasses import dataclass, field
-from typing import Any, Callable, Iterator
+from typing import Any, Callable, Iterable, Iterator, Sequence
 
 from .._reporting import Report, ReportPart
 from ..errors import InvalidInput, MissingDependency
 from ..model import DEFAULT_LIMITS, Limits, fraction_text
 from ._evaluate import evaluate_chunk
 from ._rows import FIELDS, coordinate_column, error_row
-from ._spec import Axis, RationalRange, SweepSpec, points, request_text, validate_points
+from ._spec import Axis, RationalRange, SweepSpec, check_points, coordinates_at, request_text
 
 #: ``progress(done, total)`` after every finished chunk.
 Progress = Callable[[int, int], None]
@@ -82,12 +82,42 @@ class SweepResult(Report):
     @property
     def columns(self) -> list[str]:
         """``index``, ``axis:<name>`` per axis, the command's fields (:data:`FIELDS`), ``error``."""
-        coordinates = [coordinate_column(name) for name in self.spec.coordinate_names]
-        return ["index", *coordinates, *FIELDS[self.spec.command], "error"]
+        return table_columns(self.spec)
 
     def records(self) -> list[dict[str, Any]]:
+        """One JSON record per row, in index order, with exactly :attr:`columns` (each row encoded once)."""
         cols = self.columns
-        return [{c: r.to_dict().get(c) for c in cols} for r in self.rows]
+        return [record(r, cols) for r in self.rows]
+
+
+def record(row: SweepRow, columns: Sequence[str]) -> dict[str, Any]:
+    """The table record of ``row``: its JSON (:meth:`SweepRow.to_dict`, encoded once) keyed by ``columns``."""
+    d = row.to_dict()
+    return {c: d.get(c) for c in columns}
+
+
+def in_index_order(rows: Iterable[SweepRow], start: int = 0) -> Iterator[SweepRow]:
+    """``rows`` (any order, each index once from ``start`` on) in index order, as soon as each can go.
+
+    Rows that arrive ahead of a missing index wait in a buffer until it
+    comes: the engines finish chunks of consecutive points nearly in order,
+    so the buffer holds a few chunks, not the table.
+    """
+    ahead: dict[int, SweepRow] = {}
+    nxt = start
+    for r in rows:
+        ahead[r.index] = r
+        while nxt in ahead:
+            yield ahead.pop(nxt)
+            nxt += 1
+    for i in sorted(ahead):  # pragma: no cover - only if an index never came (an engine bug)
+        yield ahead.pop(i)
+
+
+def table_columns(spec: SweepSpec) -> list[str]:
+    """The table's columns: ``index``, ``axis:<name>`` per axis, the command's fields (:data:`FIELDS`), ``error``."""
+    coordinates = [coordinate_column(name) for name in spec.coordinate_names]
+    return ["index", *coordinates, *FIELDS[spec.command], "error"]
 
 
 def chunk_size_for(n_points: int, workers: int, requested: int | None = None) -> int:
@@ -157,11 +187,10 @@ def iter_sweep(
     limits:
         The size limits every point is validated with.
     validated:
-        The caller has already run :func:`validate_points` with ``limits`` (skip it here).
+        The caller has already run :func:`check_points` with ``limits`` (skip it here).
     """
-    pts = points(spec) if validated else validate_points(spec, limits)
-    coords = {p.index: p.coordinates for p in pts}
-    del pts
+    if not validated:
+        check_points(spec, limits)  # every point, before any work; none is kept (memory flat in the points)
     total = spec.size
     text = _canonical(spec)
     deadline = None if spec.time_budget_s is None else time.time() + spec.time_budget_s
@@ -175,20 +204,24 @@ def iter_sweep(
             if cancel is not None and cancel.is_set():
                 info["stopped"] = "cancelled"
                 for i in range(start, total):
-                    yield SweepRow(i, coords[i], error_row(spec.command, "cancelled", "the sweep was cancelled"))
+                    yield _row(spec, i, error_row(spec.command, "cancelled", "the sweep was cancelled"))
                 return
             for i, row in evaluate_chunk(text, range(start, min(total, start + size)), deadline, reuse):
-                yield SweepRow(i, coords[i], row)
+                yield _row(spec, i, row)
             done = min(total, start + size)
             if progress is not None:
                 progress(done, total)
         return
     if engine != "dask":
         raise InvalidInput("/engine", "expected 'dask' or 'serial'")
-    yield from _iter_dask(spec, text, coords, deadline, scheduler, workers, chunk_size, progress, cancel, reuse, info)
+    yield from _iter_dask(spec, text, deadline, scheduler, workers, chunk_size, progress, cancel, reuse, info)
 
 
-def _iter_dask(spec, text, coords, deadline, scheduler, workers, chunk_size, progress, cancel, reuse, info):
+def _row(spec: SweepSpec, index: int, fields: dict[str, Any]) -> SweepRow:
+    return SweepRow(index, coordinates_at(spec, index), fields)
+
+
+def _iter_dask(spec, text, deadline, scheduler, workers, chunk_size, progress, cancel, reuse, info):
     try:
         from distributed import Client, LocalCluster, as_completed
     except ImportError:  # a regular dependency: missing only in a broken install
@@ -219,7 +252,7 @@ def _iter_dask(spec, text, coords, deadline, scheduler, workers, chunk_size, pro
         info.update(engine="dask", workers=n_workers, chunks=len(starts), scheduler=scheduler or "local")
         futures = {}
         for start in starts:
-            idx = list(range(start, min(total, start + size)))
+            idx = range(start, min(total, start + size))  # pickles as two integers
             fut = client.submit(evaluate_chunk, text, idx, deadline, reuse, pure=False, retries=1)
             futures[fut] = idx
         pending = set(futures)
@@ -237,13 +270,14 @@ def _iter_dask(spec, text, coords, deadline, scheduler, workers, chunk_size, pro
                 if fut is None or fut not in pending:
                     continue
                 pending.discard(fut)
-                idx = futures[fut]
+                idx = futures.pop(fut)  # the future goes: the cluster forgets its rows once they are read
                 try:
                     rows = fut.result()
                 except Exception as exc:  # noqa: BLE001 - KilledWorker and friends: the rows say so
                     rows = [(i, error_row(spec.command, "worker-lost", f"{type(exc).__name__}: {exc}")) for i in idx]
+                del fut
                 for i, row in rows:
-                    yield SweepRow(i, coords[i], row)
+                    yield _row(spec, i, row)
                 done_points += len(idx)
                 if progress is not None:
                     progress(done_points, total)
@@ -254,7 +288,7 @@ def _iter_dask(spec, text, coords, deadline, scheduler, workers, chunk_size, pro
         message = "the sweep was cancelled" if kind == "cancelled" else "the sweep's time budget ran out"
         for fut in pending:
             for i in futures[fut]:
-                yield SweepRow(i, coords[i], error_row(spec.command, kind, message))
+                yield _row(spec, i, error_row(spec.command, kind, message))
     finally:
         if "client" in locals():
             client.close()

@@ -19,7 +19,8 @@ from typing import Any, Sequence
 from .._budget import Budget
 from .._reuse import LRU, reused_fmo_blocks, structure_cache
 from ..errors import AnalyzerError, AssumptionViolation, BudgetExceeded, InvalidInput, NumericalFailure
-from ..model import DEFAULT_LIMITS, load_json, parse_request
+from ..model import DEFAULT_LIMITS, load_json
+from ._parse import parse_point
 from ._rows import error_row, row_from_report
 from ._spec import SweepSpec, parse_sweep, point_at, request_text
 
@@ -58,7 +59,7 @@ def evaluate_point(command: str, tree: Any, budget_s: float, *, reuse: bool = Tr
             from ..loop import analyze_loop, parse_loop_request
 
             return row_from_report(command, analyze_loop(parse_loop_request(tree)).to_dict())
-        request = parse_request(tree, DEFAULT_LIMITS.for_command(command))
+        request = parse_point(tree, DEFAULT_LIMITS.for_command(command))
         budget = Budget(seconds=budget_s)
         if command == "analyze":
             from ..stability import analyze

@@ -18,7 +18,8 @@ from fractions import Fraction
 from typing import Any, Callable, Iterator, Sequence
 
 from ..errors import InvalidInput, LimitExceeded
-from ..model import DEFAULT_LIMITS, Limits, fraction_text, load_json, parse_number, parse_request
+from ..model import DEFAULT_LIMITS, Limits, fraction_text, load_json, parse_number
+from ._parse import parse_point
 
 COMMANDS = ("analyze", "bounds", "simulate", "loop")
 COMBINES = ("grid", "zip")
@@ -40,10 +41,18 @@ class RationalRange(SequenceABC):
     (:func:`kfio.model.fraction_text`) is computed only when a point needs it.
     """
 
-    __slots__ = ("lo", "hi", "num")
+    __slots__ = ("lo", "hi", "num", "_start", "_step", "_den")
 
     def __init__(self, lo: Fraction, hi: Fraction, num: int):
         self.lo, self.hi, self.num = lo, hi, num
+        # the i-th value is (start + step i) / den in integers: one gcd per value, not four Fraction operations
+        step = (hi - lo) / (num - 1) if num > 1 else Fraction(0)
+        den = math.lcm(lo.denominator, step.denominator)
+        self._start, self._step, self._den = (
+            lo.numerator * (den // lo.denominator),
+            step.numerator * (den // step.denominator),
+            den,
+        )
 
     def __len__(self) -> int:
         return self.num
@@ -56,9 +65,10 @@ class RationalRange(SequenceABC):
             i += self.num
         if not 0 <= i < self.num:
             raise IndexError(i)
-        if self.num == 1:
-            return fraction_text(self.lo)
-        return fraction_text(self.lo + (self.hi - self.lo) * i / (self.num - 1))
+        num = self._start + self._step * i
+        g = math.gcd(num, self._den)
+        num, den = num // g, self._den // g
+        return str(num) if den == 1 else f"{num}/{den}"  # :func:`kfio.model.fraction_text` of the value
 
     def __eq__(self, other: object) -> bool:
         if isinstance(other, RationalRange):
@@ -432,8 +442,9 @@ def check_points(
 ) -> int:
     """Check every point with the single-request validator, keeping none.
 
-    The validator is :func:`kfio.model.parse_request`, or for a ``loop`` sweep
-    :func:`kfio.loop.parse_loop_request`.
+    The validator is :func:`kfio.model.parse_request` (each distinct plant
+    validated once: :func:`kfio.sweep._parse.parse_point`), or for a ``loop``
+    sweep :func:`kfio.loop.parse_loop_request`.
 
     ``keep`` is called with each valid point; ``tick`` after each point (a
     budget's check-in, which may raise: one point's check can take a tenth of
@@ -444,7 +455,7 @@ def check_points(
     SweepPointInvalid
         As :func:`validate_points`.
     """
-    validate: Callable[[Any, Limits], Any] = parse_request
+    validate: Callable[[Any, Limits], Any] = parse_point
     if spec.command == "loop":  # each point is a loop request (kfio.loop)
         from ..loop import parse_loop_request
 
@@ -478,6 +489,32 @@ def _exact_tree(node: Any) -> Any:
     return node
 
 
+def _combo(spec: SweepSpec, index: int) -> list[Any]:
+    """The axis values of point ``index`` (row-major grid: the last axis varies fastest)."""
+    if spec.combine == "zip":
+        return [a.values[index] for a in spec.axes]
+    combo = []
+    rest = index
+    for a in reversed(spec.axes):
+        rest, k = divmod(rest, len(a.values))
+        combo.append(a.values[k])
+    combo.reverse()
+    return combo
+
+
+def coordinates_at(spec: SweepSpec, index: int) -> dict[str, Any]:
+    """The coordinates (axis name -> value) of point ``index``, without building its request.
+
+    The engine attaches them to each row as it streams, so it never holds a
+    map of every point's coordinates.
+    """
+    if not 0 <= index < spec.size:
+        raise IndexError(index)
+    if spec.requests is not None or not spec.axes:
+        return {}
+    return {a.name: v for a, v in zip(spec.axes, _combo(spec, index))}
+
+
 def point_at(spec: SweepSpec, index: int) -> Point:
     """The point ``index`` of the sweep without enumerating the ones before it.
 
@@ -490,15 +527,7 @@ def point_at(spec: SweepSpec, index: int) -> Point:
         return Point(index, {}, spec.requests[index])
     if not spec.axes:
         return Point(0, {}, spec.base)
-    if spec.combine == "zip":
-        combo = [a.values[index] for a in spec.axes]
-    else:
-        combo = []
-        rest = index
-        for a in reversed(spec.axes):
-            rest, k = divmod(rest, len(a.values))
-            combo.append(a.values[k])
-        combo.reverse()
+    combo = _combo(spec, index)
     tree = spec.base
     for a, value in zip(spec.axes, combo):
         tree = substitute(tree, a.tokens, value)

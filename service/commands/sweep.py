@@ -2,8 +2,9 @@
 
 A sweep is a base request plus axes (JSON pointers with values or ranges,
 combined as a grid or zipped), or JSON Lines of whole requests.  Rows stream
-to standard output as JSON Lines as they finish; ``--out`` writes the whole
-table (CSV, Parquet or JSON Lines, by its suffix) in index order.
+to standard output as JSON Lines as they finish; ``--out`` writes the table
+(CSV, Parquet or JSON Lines, by its suffix) in index order as the rows come,
+so memory stays flat in the number of points (``--plot`` keeps every row).
 Exit 0 every point answered, 8 some points have an error row, 4 the sweep's
 time budget ran out, 2 invalid input (before any work starts), 9 a package
 is missing (a broken install; ``--serial`` needs no Dask).
@@ -78,8 +79,20 @@ class _Bar:
 
 def _run(args: argparse.Namespace) -> int:
     def body() -> int:
+        import time
+
         from kfio.errors import InvalidInput
-        from kfio.sweep import SweepResult, format_of, iter_sweep, jsonl_line, load_sweep, write_table
+        from kfio.sweep import (
+            SweepResult,
+            TableWriter,
+            format_of,
+            in_index_order,
+            iter_sweep,
+            jsonl_line,
+            load_sweep,
+            record,
+            table_columns,
+        )
 
         for flag in ("workers", "chunk_size"):
             value = getattr(args, flag)
@@ -90,15 +103,24 @@ def _run(args: argparse.Namespace) -> int:
         if args.plot and not args.plot.lower().endswith(".png"):
             raise InvalidInput("--plot", "the plot's file name must end in .png")
         spec = load_sweep(read_request_text(args.file, MAX_SWEEP_BYTES, "a sweep file"))
+        columns = table_columns(spec)
         enabled = sys.stderr.isatty() if args.progress is None else args.progress
         bar = _Bar(spec.size, enabled)
         info: dict[str, Any] = {}
-        rows = []
-        import time
+        kept: list[Any] | None = [] if args.plot else None  # a plot needs every row; a table does not
+        writer: TableWriter | None = None
+        n = errors = 0
+        budget_rows = False
+
+        def streamed(rows: Any) -> Any:
+            for row in rows:
+                if not args.quiet:
+                    print(jsonl_line(row.to_dict()), flush=False)
+                yield row
 
         t0 = time.perf_counter()
         try:
-            for row in iter_sweep(
+            rows = iter_sweep(
                 spec,
                 engine="serial" if args.serial else "dask",
                 scheduler=args.scheduler,
@@ -107,32 +129,42 @@ def _run(args: argparse.Namespace) -> int:
                 progress=bar,
                 cancel=threading.Event(),
                 info=info,
-            ):
-                rows.append(row)
-                if not args.quiet:
-                    record = row.to_dict()
-                    print(jsonl_line(record), flush=False)
+            )
+            # rows print as they finish; the table is written in index order as it becomes known
+            for row in in_index_order(streamed(rows)):
+                n += 1
+                error = row.fields.get("error")
+                if error:
+                    errors += 1
+                    budget_rows = budget_rows or str(error).startswith("budget-exceeded: the sweep")
+                if args.out:
+                    if writer is None:  # opened at the first row: every point has been validated
+                        writer = TableWriter(args.out, columns)
+                    writer.write(record(row, columns))
+                if kept is not None:
+                    kept.append(row)
+            if writer is not None:
+                writer.close()
+                writer = None
         finally:
             bar.close()
             sys.stdout.flush()
-        result = SweepResult.collect(spec, rows, info, time.perf_counter() - t0)
-        if args.out:
-            write_table(args.out, result.columns, result.records())
+            if writer is not None:
+                writer.abort()
+        seconds = time.perf_counter() - t0
         if args.plot:
             from ..sweep_plot import sweep_png
 
+            assert kept is not None
             with open(args.plot, "wb") as fh:
-                fh.write(sweep_png(result))
-        errors = sum(1 for r in rows if r.fields.get("error"))
-        rate = len(rows) / result.seconds if result.seconds > 0 else float("inf")
+                fh.write(sweep_png(SweepResult.collect(spec, kept, info, seconds)))
+        rate = n / seconds if seconds > 0 else float("inf")
         print(
-            f"kfio sweep: {len(rows)} points, {errors} with errors, engine {result.engine} "
-            f"({result.workers} workers, {result.chunks} tasks), {result.seconds:.2f} s, {rate:.1f} points/s",
+            f"kfio sweep: {n} points, {errors} with errors, engine {info.get('engine', '?')} "
+            f"({info.get('workers', 0)} workers, {info.get('chunks', 0)} tasks), {seconds:.2f} s, {rate:.1f} points/s",
             file=sys.stderr,
         )
-        if result.stopped == "budget-exceeded" or any(
-            str(r.fields.get("error", "")).startswith("budget-exceeded: the sweep") for r in rows
-        ):
+        if info.get("stopped") == "budget-exceeded" or budget_rows:
             return exitcodes.BUDGET
         return exitcodes.SWEEP_ERRORS if errors else exitcodes.STABLE
 

@@ -82,25 +82,26 @@ def _free_port() -> int:
         return int(s.getsockname()[1])
 
 
+def _dask_cli() -> list[str]:
+    """The ``dask`` command of this environment (its script, or ``python -m dask`` where a venv has none)."""
+    script = Path(sys.executable).parent / "dask"
+    return [str(script)] if script.exists() else [sys.executable, "-m", "dask"]
+
+
 @pytest.mark.slow
 def test_sweep_on_a_separately_started_scheduler_and_worker(tmp_path):
-    """``dask scheduler`` + ``dask worker`` on loopback, as docs/sweeps.md tells users to start them."""
+    """``dask scheduler`` + two ``dask worker`` processes on loopback, as docs/sweeps.md tells users to start them."""
     port = _free_port()
     addr = f"tcp://127.0.0.1:{port}"
     bindir = Path(sys.executable).parent
     env = {**os.environ, "DASK_DISTRIBUTED__WORKER__DAEMON": "False"}
+    quiet = {"stdout": subprocess.DEVNULL, "stderr": subprocess.DEVNULL, "env": env}
     sched = subprocess.Popen(
-        [str(bindir / "dask"), "scheduler", "--host", "127.0.0.1", "--port", str(port), "--no-dashboard"],
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.DEVNULL,
-        env=env,
+        [*_dask_cli(), "scheduler", "--host", "127.0.0.1", "--port", str(port), "--no-dashboard"], **quiet
     )
-    worker = subprocess.Popen(
-        [str(bindir / "dask"), "worker", addr, "--nworkers", "1", "--nthreads", "1", "--no-dashboard"],
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.DEVNULL,
-        env=env,
-    )
+    workers = [
+        subprocess.Popen([*_dask_cli(), "worker", addr, "--nthreads", "1", "--no-dashboard"], **quiet) for _ in range(2)
+    ]
     try:
         from distributed import Client
 
@@ -108,7 +109,7 @@ def test_sweep_on_a_separately_started_scheduler_and_worker(tmp_path):
         while True:
             try:
                 with Client(addr, timeout=5) as c:
-                    c.wait_for_workers(1, timeout=max(1, deadline - time.monotonic()))
+                    c.wait_for_workers(2, timeout=max(1, deadline - time.monotonic()))
                 break
             except (OSError, TimeoutError):
                 if time.monotonic() > deadline:
@@ -122,13 +123,17 @@ def test_sweep_on_a_separately_started_scheduler_and_worker(tmp_path):
             timeout=300,
         )
         assert done.returncode == 0, done.stderr[-2000:]
-        assert "engine dask (1 workers" in done.stderr
+        assert "engine dask (2 workers" in done.stderr
         rows = list(csv.DictReader(out.open()))
-        assert len(rows) == 13 and rows[-1]["verdict"] == "stable"
+        assert [int(r["index"]) for r in rows] == list(range(13))  # written in index order as the rows came
+        serial = tmp_path / "serial.csv"
+        assert main(["sweep", write(tmp_path, SWEEP), "--serial", "--quiet", "--out", str(serial)]) == 0
+        assert out.read_text() == serial.read_text()  # the cluster's table is the serial one, byte for byte
+        assert rows[-1]["verdict"] == "stable"
     finally:
-        for p in (worker, sched):
+        for p in (*workers, sched):
             p.terminate()
-        for p in (worker, sched):
+        for p in (*workers, sched):
             try:
                 p.wait(timeout=30)
             except subprocess.TimeoutExpired:
