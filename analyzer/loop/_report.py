@@ -56,8 +56,9 @@ class LoopReport(Report):
     estimator_alone:
         The fixed estimator gain without control, beside the optimal filter's critical value.
     lqg:
-        With ``controller.lqg``: the control MARE's critical actuator probability (lower bound, exact for
-        square invertible ``B`` and scalar plants).
+        With ``controller.lqg``: the control MARE's critical actuator probability ``nu_c`` (exact for
+        square invertible ``B`` and scalar plants, else a bracket) and ``cost_bounds``, the bounds
+        ``J_min <= J_inf <= J_max`` on the optimal TCP-like cost (:mod:`kfio.loop._lqg_bounds`).
     region:
         With ``options.loop.region``: the exact boundary of the stable region in the
         (sensor, actuator) arrival-probability plane (:mod:`kfio.loop._region`).
@@ -219,8 +220,9 @@ def _lqg_part(req: LoopRequest) -> dict[str, Any] | None:
     if req.controller != "lqg":
         return None
     from ._lqg import control_critical
+    from ._lqg_bounds import lqg_cost_bounds
 
-    return control_critical(req)
+    return {**control_critical(req), "cost_bounds": lqg_cost_bounds(req)}
 
 
 def analyze_loop(req: LoopRequest, *, critical: bool = True) -> LoopReport:
