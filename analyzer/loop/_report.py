@@ -59,6 +59,9 @@ class LoopReport(Report):
         With ``controller.lqg``: the control MARE's critical actuator probability ``nu_c`` (exact for
         square invertible ``B`` and scalar plants, else a bracket) and ``cost_bounds``, the bounds
         ``J_min <= J_inf <= J_max`` on the optimal TCP-like cost (:mod:`kfio.loop._lqg_bounds`).
+    udp_region_bounds:
+        With ``protocol: udp``: outer and inner bounds on the optimal UDP-like controller's critical
+        region (:mod:`kfio.loop._udp_bounds`), labelled as bounds.
     region:
         With ``options.loop.region``: the exact boundary of the stable region in the
         (sensor, actuator) arrival-probability plane (:mod:`kfio.loop._region`).
@@ -81,6 +84,7 @@ class LoopReport(Report):
     region: dict[str, Any] | None
     lqg: dict[str, Any] | None = None
     notes: tuple[str, ...] = field(default=())
+    udp_region_bounds: dict[str, Any] | None = None
 
     _repr_fields = ("verdict", "spectral_radius", "cost")
 
@@ -137,6 +141,7 @@ def loop_report_view(r: LoopReport) -> dict[str, Any]:
         "estimator_alone": r.estimator_alone,
         "region": r.region,
         "lqg": r.lqg,
+        "udp_region_bounds": r.udp_region_bounds,
         "loop": {
             "protocol": req.protocol,
             "on_loss": req.on_loss,
@@ -225,6 +230,22 @@ def _lqg_part(req: LoopRequest) -> dict[str, Any] | None:
     return {**control_critical(req), "cost_bounds": lqg_cost_bounds(req)}
 
 
+def _udp_part(req: LoopRequest, verdict: str) -> dict[str, Any]:
+    """Bounds on the optimal UDP-like critical region, and where the request's point falls (:mod:`kfio.loop._udp_bounds`)."""
+    from ._udp_bounds import udp_region_bounds
+
+    out = udp_region_bounds(req, _optimal_filter_critical(req))
+    outer = out["outer"]
+    if verdict == "stable":
+        out["request_point_inside_optimal_region"] = True  # the inner bound: these gains are stable here
+    elif outer is not None and not isinstance(req.channel, PerSensorChannel):
+        lam, nu = req.channel.table[0], req.actuator.table[0]  # Bernoulli links: checked by udp_region_bounds
+        g, n_ = outer["sensor_arrival_probability_above"], outer["actuator_arrival_probability_above"]
+        if (g is not None and float(lam) < g) or (n_ is not None and float(nu) < n_):
+            out["request_point_inside_optimal_region"] = False
+    return out
+
+
 def analyze_loop(req: LoopRequest, *, critical: bool = True) -> LoopReport:
     """The whole report for a validated loop request (module docstring of :mod:`kfio.loop`)."""
     from ..errors import LimitExceeded
@@ -264,7 +285,9 @@ def analyze_loop(req: LoopRequest, *, critical: bool = True) -> LoopReport:
             sensor_c = crits[0]
         if ac.parameter.endswith("arrival_probability"):
             actuator_c = ac
+    udp_bounds = None
     if req.protocol == "udp":
+        udp_bounds = _udp_part(req, dec.verdict)
         notes.append(
             "UDP-like: the estimator does not know whether the actuator packet arrived and uses the link's "
             "long-run arrival rate; the verdict is exact for these fixed gains (Schenato, Sinopoli, Franceschetti, Poolla and Sastry 2007, Sec. VI)"
@@ -287,6 +310,7 @@ def analyze_loop(req: LoopRequest, *, critical: bool = True) -> LoopReport:
         region=region(req, req.region) if req.region is not None else None,
         lqg=_lqg_part(req),
         notes=tuple(notes),
+        udp_region_bounds=udp_bounds,
     )
 
 
