@@ -26,6 +26,7 @@ from typing import Any, Callable
 
 import flint
 
+from .._budget import Budget
 from ..errors import NumericalFailure
 from ..model import MarkovChannel
 from ._algebraic import root_text
@@ -126,9 +127,15 @@ def roots_in_unit(poly: flint.fmpq_poly) -> list[tuple[flint.arb, flint.fmpz_pol
     return out
 
 
-def det_polynomial(build: Callable[[Fraction], Mjls]) -> flint.fmpq_poly | None:
+def _tick(budget: Budget | None, what: str) -> None:
+    if budget is not None:
+        budget.tick(what)
+
+
+def det_polynomial(build: Callable[[Fraction], Mjls], budget: Budget | None = None) -> flint.fmpq_poly | None:
     """``det(I - T(x))`` up to a non-zero constant, as a polynomial in ``x`` (see the module docstring)."""
     x0, x1 = Fraction(1, 3), Fraction(2, 3)
+    _tick(budget, "critical value: exact operators")
     T0 = operator_matrix(build(x0))
     T1 = (operator_matrix(build(x1)) - T0) * 3  # slope of the affine map
     size = T0.nrows()
@@ -137,10 +144,12 @@ def det_polynomial(build: Callable[[Fraction], Mjls]) -> flint.fmpq_poly | None:
         eye[i, i] = 1
     for base in (x0, Fraction(1, 2), Fraction(1, 5), Fraction(4, 5), Fraction(1, 7), Fraction(6, 7)):
         A0 = eye - T0 - flint.fmpq((base - x0).numerator, (base - x0).denominator) * T1
+        _tick(budget, "critical value: exact solve")
         try:
             Bm = A0.solve(T1)
         except ZeroDivisionError:
             continue
+        _tick(budget, "critical value: characteristic polynomial")
         chi = Bm.charpoly()  # det(mu I - B), degree size
         coeffs = list(chi.coeffs()) + [flint.fmpq(0)] * (size + 1 - len(chi.coeffs()))
         rev = flint.fmpq_poly(list(reversed(coeffs)))  # det(I - y B)
@@ -149,8 +158,18 @@ def det_polynomial(build: Callable[[Fraction], Mjls]) -> flint.fmpq_poly | None:
     return None
 
 
-def critical_value(label: str, pointer: str, ch: MarkovChannel, build: Callable[[MarkovChannel], Mjls]) -> Critical:
-    """The exact critical value of the link's parameter (see the module docstring)."""
+def critical_value(
+    label: str,
+    pointer: str,
+    ch: MarkovChannel,
+    build: Callable[[MarkovChannel], Mjls],
+    budget: Budget | None = None,
+) -> Critical:
+    """The exact critical value of the link's parameter (see the module docstring).
+
+    ``budget`` (:class:`kfio.Budget`) is checked between the exact steps; :class:`kfio.errors.BudgetExceeded`
+    when it is spent.
+    """
     par = parameter_of(pointer, ch)
     if par is None:
         return Critical(label, pointer, None, None, (), f"not defined for a {ch.model} channel of order {ch.order}")
@@ -169,7 +188,7 @@ def critical_value(label: str, pointer: str, ch: MarkovChannel, build: Callable[
             (),
             f"not computed: the operator has size {size} > {MAX_CRITICAL_SIZE}, the limit for exact critical values",
         )
-    poly = det_polynomial(system)
+    poly = det_polynomial(system, budget)
     if poly is None:
         return Critical(label, parameter, None, None, (), "not computed: I - T(x) is singular at every base point")
     roots = roots_in_unit(poly)
@@ -183,7 +202,7 @@ def critical_value(label: str, pointer: str, ch: MarkovChannel, build: Callable[
         lo = flint.arb(0) if a[3] is None else a[3]
         hi = flint.arb(1) if b[3] is None else b[3]
         mid = _between(lo, hi)
-        labels.append(decide(system(mid)).verdict)
+        labels.append(decide(system(mid), budget).verdict)
     merged: list[tuple[float, float, str]] = []
     for k, lab in enumerate(labels):  # spurious roots (another eigenvalue crossing 1) join their neighbours
         if merged and merged[-1][2] == lab:

@@ -66,7 +66,8 @@ def cost_at(S: np.ndarray, M: np.ndarray, Q: np.ndarray, P_filtered: np.ndarray)
     return float(np.trace(S @ Q) + np.trace(M @ P_filtered))
 
 
-def _unavailable(reason: str) -> dict[str, Any]:
+def unavailable(reason: str) -> dict[str, Any]:
+    """The bounds' record when they are not available, with the reason."""
     return {
         "lower": None,
         "upper": None,
@@ -85,18 +86,18 @@ def lqg_cost_bounds(req: Any, budget: Any = None) -> dict[str, Any]:
     ``V_bar``) beside the tighter one, and the control MARE's ``S``.
     """
     if req.protocol != "tcp":
-        return _unavailable("defined for the TCP-like protocol (separation fails for UDP-like)")
+        return unavailable("defined for the TCP-like protocol (separation fails for UDP-like)")
     if isinstance(req.channel, PerSensorChannel) or req.channel.model != "bernoulli":
-        return _unavailable("kfio's covariance bounds need one Bernoulli sensor packet here")
+        return unavailable("kfio's covariance bounds need one Bernoulli sensor packet here")
     if req.actuator.model != "bernoulli":
-        return _unavailable("the control modified Riccati equation needs a Bernoulli actuator link")
+        return unavailable("the control modified Riccati equation needs a Bernoulli actuator link")
     A, B, C = to_float(req.system.A), to_float(req.B), to_float(req.system.C)
     Q, R = to_float(req.system.Q), to_float(req.system.R)
     W, U = to_float(req.W), to_float(req.U)
     lam, nu = float(req.channel.table[0]), float(req.actuator.table[0])
     S = mare_fixed_point(A, B, W, U, nu)
     if S is None:
-        return _unavailable("the control modified Riccati equation diverges: nu is below its critical value")
+        return unavailable("the control modified Riccati equation diverges: nu is below its critical value")
     M = control_weight(A, B, W, U, S, nu)
     from .._api import bounds
 
@@ -143,4 +144,4 @@ def lqg_cost_bounds(req: Any, budget: Any = None) -> dict[str, Any]:
     }
 
 
-__all__ = ["control_weight", "cost_at", "filtered", "lqg_cost_bounds"]
+__all__ = ["control_weight", "cost_at", "filtered", "lqg_cost_bounds", "unavailable"]

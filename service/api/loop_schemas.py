@@ -127,6 +127,11 @@ LOOP_COMPONENTS: dict[str, dict[str, Any]] = {
             "verdict": {"type": "string", "enum": ["stable", "unstable", "boundary"]},
             "exact": {"type": "boolean"},
             "certified": {"type": "boolean"},
+            "partial": {
+                "type": "boolean",
+                "description": "true when options.time_budget_s ran out after the verdict and cost: the notes "
+                "name what was not computed (critical values, region, LQG cost bounds)",
+            },
             "spectral_radius": {"type": ["number", "null"]},
             "spectral_radius_exact": {"type": ["string", "null"]},
             "cost": {"type": ["number", "null"]},
