@@ -32,6 +32,7 @@ from ..model import MarkovChannel
 from ._algebraic import root_text
 from ._mjls import Mjls
 from ._operator import operator_matrix
+from ._pencil import det_polynomial_of
 from ._verdict import decide
 
 #: Largest operator size for which the exact critical value is computed.
@@ -133,9 +134,25 @@ def _tick(budget: Budget | None, what: str) -> None:
 
 
 def det_polynomial(build: Callable[[Fraction], Mjls], budget: Budget | None = None) -> flint.fmpq_poly | None:
-    """``det(I - T(x))`` up to a non-zero constant, as a polynomial in ``x`` (see the module docstring)."""
+    """``det(I - T(x))`` up to a non-zero constant, as a polynomial in ``x`` (see the module docstring).
+
+    ``T(x) = T(1/3) + (x - 1/3) T1`` with ``T1 = 3 (T(2/3) - T(1/3))``; the determinant of the
+    affine pencil is computed multimodularly (:mod:`kfio.loop._pencil`).
+    """
     x0, x1 = Fraction(1, 3), Fraction(2, 3)
     _tick(budget, "critical value: exact operators")
+    T0 = operator_matrix(build(x0))
+    T1 = (operator_matrix(build(x1)) - T0) * 3  # slope of the affine map
+    return det_polynomial_of(T0 - flint.fmpq(1, 3) * T1, T1, budget)  # T(x) = T(0) + x T1
+
+
+def det_polynomial_rational(build: Callable[[Fraction], Mjls]) -> flint.fmpq_poly | None:
+    """The same polynomial by the rational route: ``A0^-1 T1`` over Q and its characteristic polynomial.
+
+    Kept as an independent check of :func:`det_polynomial` (tests, ``bench/bench_loop.py``): its
+    entries carry denominators of ``det(A0)``'s size, which is what limits it to small operators.
+    """
+    x0, x1 = Fraction(1, 3), Fraction(2, 3)
     T0 = operator_matrix(build(x0))
     T1 = (operator_matrix(build(x1)) - T0) * 3  # slope of the affine map
     size = T0.nrows()
@@ -144,12 +161,10 @@ def det_polynomial(build: Callable[[Fraction], Mjls], budget: Budget | None = No
         eye[i, i] = 1
     for base in (x0, Fraction(1, 2), Fraction(1, 5), Fraction(4, 5), Fraction(1, 7), Fraction(6, 7)):
         A0 = eye - T0 - flint.fmpq((base - x0).numerator, (base - x0).denominator) * T1
-        _tick(budget, "critical value: exact solve")
         try:
             Bm = A0.solve(T1)
         except ZeroDivisionError:
             continue
-        _tick(budget, "critical value: characteristic polynomial")
         chi = Bm.charpoly()  # det(mu I - B), degree size
         coeffs = list(chi.coeffs()) + [flint.fmpq(0)] * (size + 1 - len(chi.coeffs()))
         rev = flint.fmpq_poly(list(reversed(coeffs)))  # det(I - y B)
@@ -223,4 +238,12 @@ def critical_value(
     return Critical(label, parameter, left[1], left[2], intervals, note, minimal, box)
 
 
-__all__ = ["Critical", "MAX_CRITICAL_SIZE", "critical_value", "det_polynomial", "parameter_of", "roots_in_unit"]
+__all__ = [
+    "Critical",
+    "MAX_CRITICAL_SIZE",
+    "critical_value",
+    "det_polynomial",
+    "det_polynomial_rational",
+    "parameter_of",
+    "roots_in_unit",
+]
