@@ -26,11 +26,13 @@ from typing import Any, Callable
 
 import flint
 
+from .._budget import Budget
 from ..errors import NumericalFailure
 from ..model import MarkovChannel
 from ._algebraic import root_text
 from ._mjls import Mjls
 from ._operator import operator_matrix
+from ._pencil import det_polynomial_of
 from ._verdict import decide
 
 #: Largest operator size for which the exact critical value is computed.
@@ -126,8 +128,30 @@ def roots_in_unit(poly: flint.fmpq_poly) -> list[tuple[flint.arb, flint.fmpz_pol
     return out
 
 
-def det_polynomial(build: Callable[[Fraction], Mjls]) -> flint.fmpq_poly | None:
-    """``det(I - T(x))`` up to a non-zero constant, as a polynomial in ``x`` (see the module docstring)."""
+def _tick(budget: Budget | None, what: str) -> None:
+    if budget is not None:
+        budget.tick(what)
+
+
+def det_polynomial(build: Callable[[Fraction], Mjls], budget: Budget | None = None) -> flint.fmpq_poly | None:
+    """``det(I - T(x))`` up to a non-zero constant, as a polynomial in ``x`` (see the module docstring).
+
+    ``T(x) = T(1/3) + (x - 1/3) T1`` with ``T1 = 3 (T(2/3) - T(1/3))``; the determinant of the
+    affine pencil is computed multimodularly (:mod:`kfio.loop._pencil`).
+    """
+    x0, x1 = Fraction(1, 3), Fraction(2, 3)
+    _tick(budget, "critical value: exact operators")
+    T0 = operator_matrix(build(x0))
+    T1 = (operator_matrix(build(x1)) - T0) * 3  # slope of the affine map
+    return det_polynomial_of(T0 - flint.fmpq(1, 3) * T1, T1, budget)  # T(x) = T(0) + x T1
+
+
+def det_polynomial_rational(build: Callable[[Fraction], Mjls]) -> flint.fmpq_poly | None:
+    """The same polynomial by the rational route: ``A0^-1 T1`` over Q and its characteristic polynomial.
+
+    Kept as an independent check of :func:`det_polynomial` (tests, ``bench/bench_loop.py``): its
+    entries carry denominators of ``det(A0)``'s size, which is what limits it to small operators.
+    """
     x0, x1 = Fraction(1, 3), Fraction(2, 3)
     T0 = operator_matrix(build(x0))
     T1 = (operator_matrix(build(x1)) - T0) * 3  # slope of the affine map
@@ -149,8 +173,18 @@ def det_polynomial(build: Callable[[Fraction], Mjls]) -> flint.fmpq_poly | None:
     return None
 
 
-def critical_value(label: str, pointer: str, ch: MarkovChannel, build: Callable[[MarkovChannel], Mjls]) -> Critical:
-    """The exact critical value of the link's parameter (see the module docstring)."""
+def critical_value(
+    label: str,
+    pointer: str,
+    ch: MarkovChannel,
+    build: Callable[[MarkovChannel], Mjls],
+    budget: Budget | None = None,
+) -> Critical:
+    """The exact critical value of the link's parameter (see the module docstring).
+
+    ``budget`` (:class:`kfio.Budget`) is checked between the exact steps; :class:`kfio.errors.BudgetExceeded`
+    when it is spent.
+    """
     par = parameter_of(pointer, ch)
     if par is None:
         return Critical(label, pointer, None, None, (), f"not defined for a {ch.model} channel of order {ch.order}")
@@ -169,7 +203,7 @@ def critical_value(label: str, pointer: str, ch: MarkovChannel, build: Callable[
             (),
             f"not computed: the operator has size {size} > {MAX_CRITICAL_SIZE}, the limit for exact critical values",
         )
-    poly = det_polynomial(system)
+    poly = det_polynomial(system, budget)
     if poly is None:
         return Critical(label, parameter, None, None, (), "not computed: I - T(x) is singular at every base point")
     roots = roots_in_unit(poly)
@@ -183,7 +217,7 @@ def critical_value(label: str, pointer: str, ch: MarkovChannel, build: Callable[
         lo = flint.arb(0) if a[3] is None else a[3]
         hi = flint.arb(1) if b[3] is None else b[3]
         mid = _between(lo, hi)
-        labels.append(decide(system(mid)).verdict)
+        labels.append(decide(system(mid), budget).verdict)
     merged: list[tuple[float, float, str]] = []
     for k, lab in enumerate(labels):  # spurious roots (another eigenvalue crossing 1) join their neighbours
         if merged and merged[-1][2] == lab:
@@ -204,4 +238,12 @@ def critical_value(label: str, pointer: str, ch: MarkovChannel, build: Callable[
     return Critical(label, parameter, left[1], left[2], intervals, note, minimal, box)
 
 
-__all__ = ["Critical", "MAX_CRITICAL_SIZE", "critical_value", "det_polynomial", "parameter_of", "roots_in_unit"]
+__all__ = [
+    "Critical",
+    "MAX_CRITICAL_SIZE",
+    "critical_value",
+    "det_polynomial",
+    "det_polynomial_rational",
+    "parameter_of",
+    "roots_in_unit",
+]

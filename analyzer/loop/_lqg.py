@@ -92,7 +92,7 @@ def with_lqg_gains(req: Any) -> Any:
     return dataclasses.replace(req, K=_exact(K), L=_exact(L), form="predictor")
 
 
-__all__ = ["mare_fixed_point", "with_lqg_gains"]
+__all__ = ["control_critical", "mare_fixed_point", "with_lqg_gains"]
 
 
 def control_critical(req: Any) -> dict[str, Any]:
@@ -112,7 +112,9 @@ def control_critical(req: Any) -> dict[str, Any]:
     square = B.shape[0] == B.shape[1] and abs(np.linalg.det(B)) > 1e-12 * max(1.0, float(np.abs(B).max()) ** B.shape[0])
     scalar = len(req.system.A) == 1 and req.B[0][0] != 0
     equal = square or scalar
+    bracket = _nu_c_bracket(req, lower, exact, bool(equal))
     return {
+        "nu_c": bracket,
         "critical_actuator_arrival_probability_lower_bound": lower,
         "critical_actuator_arrival_probability_lower_bound_exact": exact,
         "bound_is_the_critical_value": bool(equal),
@@ -121,3 +123,49 @@ def control_critical(req: Any) -> dict[str, Any]:
             + ("1 - 1/rho(A)^2" if equal else "a critical value of at least 1 - 1/rho(A)^2")
         ),
     }
+
+
+def _text(x: Fraction) -> str:
+    return str(x.numerator) if x.denominator == 1 else f"{x.numerator}/{x.denominator}"
+
+
+def _nu_c_bracket(req: Any, lower: float, exact: str | None, equal: bool) -> dict[str, Any]:
+    """``nu_c`` exactly (``1 - 1/rho(A)^2``, square invertible or scalar ``B``) or bracketed.
+
+    The control MARE on ``(A, B, W, U)`` is the estimation MARE of the dual
+    system ``(A', B', W, U)`` (Schenato, Sinopoli, Franceschetti, Poolla and
+    Sastry 2007, Sec. V), so the certified ``lambda_upper`` of :func:`kfio.bounds`
+    on the dual (Sinopoli et al. 2004, Theorem 5, its LMI certificate
+    re-checked exactly) is an upper end of the bracket.
+    """
+    if equal:
+        return {
+            "lower": lower,
+            "upper": lower,
+            "exact": exact,
+            "is_exact": True,
+            "from": "1 - 1/rho(A)^2, the critical value for square invertible or scalar B",
+        }
+    from .._api import bounds
+    from .._system import System
+    from ..errors import AnalyzerError
+
+    def tr(m: Any) -> list[list[str]]:
+        return [[_text(m[j][i]) for j in range(len(m))] for i in range(len(m[0]))]
+
+    upper: float | None = None
+    why = "the certified upper bound of the dual estimation problem (A', B', W, U) from kfio.bounds"
+    try:
+        dual = System(
+            A=tr(req.system.A),
+            C=tr(req.B),
+            Q=[[_text(x) for x in row] for row in req.W],
+            R=[[_text(x) for x in row] for row in req.U],
+        )
+        rep = bounds(dual, {"model": "bernoulli", "arrival_probability": _text(req.actuator.table[0])}).to_dict()
+        upper = rep["critical_probability"]["upper"]["value"]
+        if upper is None:
+            why = f"no certified upper bound: {rep['critical_probability']['upper'].get('reason')}"
+    except AnalyzerError as exc:
+        why = f"no certified upper bound: {exc}"
+    return {"lower": lower, "upper": upper, "exact": None, "is_exact": False, "from": why}

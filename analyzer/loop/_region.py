@@ -13,6 +13,7 @@ from __future__ import annotations
 from fractions import Fraction
 from typing import Any
 
+from .._budget import Budget
 from ..model import MarkovChannel, PerSensorChannel
 from ._critical import critical_value
 from ._mjls import Mjls, loop_mjls
@@ -23,8 +24,11 @@ def _bernoulli(x: Fraction) -> MarkovChannel:
     return MarkovChannel("bernoulli", 0, (x,), {"arrival_probability": x})
 
 
-def region(req: LoopRequest, points: int) -> dict[str, Any] | None:
-    """``points`` sensor probabilities ``(i + 1/2) / points`` and the exact critical actuator probability at each."""
+def region(req: LoopRequest, points: int, budget: Budget | None = None) -> dict[str, Any] | None:
+    """``points`` sensor probabilities ``(i + 1/2) / points`` and the exact critical actuator probability at each.
+
+    ``budget`` (:class:`kfio.Budget`) is checked at every point; :class:`kfio.errors.BudgetExceeded` when spent.
+    """
     if (
         isinstance(req.channel, PerSensorChannel)
         or req.channel.model != "bernoulli"
@@ -38,7 +42,7 @@ def region(req: LoopRequest, points: int) -> dict[str, Any] | None:
         def build(ch: MarkovChannel, lam: Fraction = lam) -> Mjls:
             return loop_mjls(req, {"/channel": _bernoulli(lam), "/actuator_channel": ch})
 
-        c = critical_value("actuator", "/actuator_channel", req.actuator, build)
+        c = critical_value("actuator", "/actuator_channel", req.actuator, build, budget)
         rows.append(
             {
                 "sensor_arrival_probability": float(lam),

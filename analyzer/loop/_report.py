@@ -7,14 +7,17 @@ and ``POST /v1/loop`` all validate a loop request with
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Any, Mapping
+from typing import Any, Callable, Mapping
 
+from .._budget import Budget
 from .._reporting import Report
+from ..errors import BudgetExceeded
 from ..model import MarkovChannel, PerSensorChannel, Request, fraction_text
 from ._cost import stationary_cost
-from ._critical import Critical, critical_value
+from ._critical import Critical, critical_value, parameter_of
 from ._mjls import Mjls, estimator_mjls, loop_mjls, sensor_links
 from ._model import LoopRequest
 from ._region import region
@@ -56,8 +59,14 @@ class LoopReport(Report):
     estimator_alone:
         The fixed estimator gain without control, beside the optimal filter's critical value.
     lqg:
-        With ``controller.lqg``: the control MARE's critical actuator probability (lower bound, exact for
-        square invertible ``B`` and scalar plants).
+        With ``controller.lqg``: the control MARE's critical actuator probability ``nu_c`` (exact for
+        square invertible ``B`` and scalar plants, else a bracket) and ``cost_bounds``, the bounds
+        ``J_min <= J_inf <= J_max`` on the optimal TCP-like cost (:mod:`kfio.loop._lqg_bounds`).
+    partial:
+        ``True`` when the time budget ran out after the verdict and cost: the notes name what is missing.
+    udp_region_bounds:
+        With ``protocol: udp``: outer and inner bounds on the optimal UDP-like controller's critical
+        region (:mod:`kfio.loop._udp_bounds`), labelled as bounds.
     region:
         With ``options.loop.region``: the exact boundary of the stable region in the
         (sensor, actuator) arrival-probability plane (:mod:`kfio.loop._region`).
@@ -80,6 +89,8 @@ class LoopReport(Report):
     region: dict[str, Any] | None
     lqg: dict[str, Any] | None = None
     notes: tuple[str, ...] = field(default=())
+    udp_region_bounds: dict[str, Any] | None = None
+    partial: bool = False
 
     _repr_fields = ("verdict", "spectral_radius", "cost")
 
@@ -122,6 +133,7 @@ def loop_report_view(r: LoopReport) -> dict[str, Any]:
         "exact": r.exact,
         "certified": r.certified,
         "certificate": r.certificate,
+        "partial": r.partial,
         "spectral_radius": r.spectral_radius,
         "spectral_radius_exact": r.spectral_radius_exact,
         "operator_size": r.operator_size,
@@ -136,6 +148,7 @@ def loop_report_view(r: LoopReport) -> dict[str, Any]:
         "estimator_alone": r.estimator_alone,
         "region": r.region,
         "lqg": r.lqg,
+        "udp_region_bounds": r.udp_region_bounds,
         "loop": {
             "protocol": req.protocol,
             "on_loss": req.on_loss,
@@ -166,15 +179,17 @@ def _optimal_filter_critical(req: LoopRequest) -> tuple[float | None, str | None
     return rep.critical_arrival_probability, rep.critical_arrival_probability_exact, None
 
 
-def _estimator_alone(req: LoopRequest, with_critical: bool) -> dict[str, Any]:
+def _estimator_alone(req: LoopRequest, with_critical: bool, budget: Budget | None = None) -> dict[str, Any]:
     sys = estimator_mjls(req)
-    dec = decide(sys)
+    dec = decide(sys, budget)
     trace = stationary_cost(sys, dec.moments) if dec.moments is not None else None
     crit = None
     links = sensor_links(req)
     if with_critical and len(links) == 1:
         lk = links[0][0]
-        crit = critical_value(lk.label, lk.pointer, lk.channel, lambda ch: estimator_mjls(req, {lk.pointer: ch}))
+        crit = critical_value(
+            lk.label, lk.pointer, lk.channel, lambda ch: estimator_mjls(req, {lk.pointer: ch}), budget
+        )
     opt, opt_exact, why = _optimal_filter_critical(req)
     mine = None
     if crit is not None and crit.value is not None:
@@ -214,17 +229,42 @@ def _estimator_alone(req: LoopRequest, with_critical: bool) -> dict[str, Any]:
 MAX_OPERATOR_SIZE = 3000
 
 
-def _lqg_part(req: LoopRequest) -> dict[str, Any] | None:
-    """For LQG gains: the control MARE's critical actuator probability (Schenato, Sinopoli, Franceschetti, Poolla and Sastry 2007, Sec. V)."""
+def _lqg_part(req: LoopRequest, budget: Budget | None, with_bounds: bool = True) -> dict[str, Any] | None:
+    """For LQG gains: the control MARE's critical actuator probability and the optimal cost's bounds (Schenato, Sinopoli, Franceschetti, Poolla and Sastry 2007, Sec. V)."""
     if req.controller != "lqg":
         return None
     from ._lqg import control_critical
+    from ._lqg_bounds import lqg_cost_bounds, unavailable
 
-    return control_critical(req)
+    if not with_bounds:
+        return {**control_critical(req), "cost_bounds": unavailable("not computed: the time budget ran out")}
+    return {**control_critical(req), "cost_bounds": lqg_cost_bounds(req, budget)}
 
 
-def analyze_loop(req: LoopRequest, *, critical: bool = True) -> LoopReport:
-    """The whole report for a validated loop request (module docstring of :mod:`kfio.loop`)."""
+def _udp_part(req: LoopRequest, verdict: str) -> dict[str, Any]:
+    """Bounds on the optimal UDP-like critical region, and where the request's point falls (:mod:`kfio.loop._udp_bounds`)."""
+    from ._udp_bounds import udp_region_bounds
+
+    out = udp_region_bounds(req, _optimal_filter_critical(req))
+    outer = out["outer"]
+    if verdict == "stable":
+        out["request_point_inside_optimal_region"] = True  # the inner bound: these gains are stable here
+    elif outer is not None and not isinstance(req.channel, PerSensorChannel):
+        lam, nu = req.channel.table[0], req.actuator.table[0]  # Bernoulli links: checked by udp_region_bounds
+        g, n_ = outer["sensor_arrival_probability_above"], outer["actuator_arrival_probability_above"]
+        if (g is not None and float(lam) < g) or (n_ is not None and float(nu) < n_):
+            out["request_point_inside_optimal_region"] = False
+    return out
+
+
+def analyze_loop(req: LoopRequest, *, critical: bool = True, budget: Budget | None = None) -> LoopReport:
+    """The whole report for a validated loop request (module docstring of :mod:`kfio.loop`).
+
+    ``budget`` (:class:`kfio.Budget`; by default ``options.time_budget_s`` of the request, else none)
+    bounds the exact work.  The verdict and cost come first: if the budget runs out before them,
+    :class:`kfio.errors.BudgetExceeded`; if it runs out later, the report is ``partial`` and its
+    notes name what was not computed (critical values, region, LQG cost bounds).
+    """
     from ..errors import LimitExceeded
     from ._mjls import loop_state_size, sensor_links
 
@@ -241,32 +281,61 @@ def analyze_loop(req: LoopRequest, *, critical: bool = True) -> LoopReport:
             f"coordinates of a {d}x{d} symmetric matrix); the limit is {MAX_OPERATOR_SIZE}: use fewer states or "
             "channels of lower order",
         )
+    work = budget if budget is not None else (Budget(seconds=req.time_budget_s) if req.time_budget_s else None)
     sys = loop_mjls(req)
-    dec = decide(sys)
+    dec = decide(sys, work)  # the headline: no partial answer without it
     cost = stationary_cost(sys, dec.moments) if dec.moments is not None else None
+    skipped: list[str] = []
+
+    def attempt(what: str, fn: Callable[[], Any], fallback: Callable[[], Any]) -> Any:
+        """``fn()``, or ``fallback()`` once the budget is spent (the report is then partial and says what is missing)."""
+        try:
+            return fn()
+        except BudgetExceeded as exc:
+            skipped.append(f"{what} ({exc})")
+            return fallback()
+
     crits: list[Critical] = []
     sensor_c = actuator_c = None
     notes = []
     if critical:
-        for lk, _rows in sensor_links(req):
+        links = [(lk.label, lk.pointer, lk.channel) for lk, _rows in sensor_links(req)]
+        links.append(("actuator", "/actuator_channel", req.actuator))
+        for label, pointer, channel in links:
 
-            def build(ch: MarkovChannel, p: str = lk.pointer) -> Mjls:
+            def build(ch: MarkovChannel, p: str = pointer) -> Mjls:
                 return loop_mjls(req, {p: ch})
 
-            crits.append(critical_value(lk.label, lk.pointer, lk.channel, build))
-        ac = critical_value(
-            "actuator", "/actuator_channel", req.actuator, lambda ch: loop_mjls(req, {"/actuator_channel": ch})
-        )
-        crits.append(ac)
+            crits.append(
+                attempt(
+                    f"critical value of {pointer}",
+                    functools.partial(critical_value, label, pointer, channel, build, work),
+                    functools.partial(_skipped_critical, label, pointer, channel),
+                )
+            )
+        ac = crits[-1]
         if len(crits) == 2 and crits[0].parameter.endswith("arrival_probability"):
             sensor_c = crits[0]
         if ac.parameter.endswith("arrival_probability"):
             actuator_c = ac
+    udp_bounds = None
     if req.protocol == "udp":
+        udp_bounds = _udp_part(req, dec.verdict)
         notes.append(
             "UDP-like: the estimator does not know whether the actuator packet arrived and uses the link's "
             "long-run arrival rate; the verdict is exact for these fixed gains (Schenato, Sinopoli, Franceschetti, Poolla and Sastry 2007, Sec. VI)"
         )
+    alone = attempt(
+        "estimator-alone critical value",
+        lambda: _estimator_alone(req, critical, work),
+        lambda: _estimator_alone(req, False, None),
+    )
+    reg = None
+    if req.region is not None:
+        reg = attempt("region", lambda: region(req, req.region or 0, work), lambda: None)
+    lqg = attempt("LQG cost bounds", lambda: _lqg_part(req, work), lambda: _lqg_part(req, None, with_bounds=False))
+    if skipped:
+        notes.append("partial: the time budget ran out; not computed: " + "; ".join(skipped))
     return LoopReport(
         verdict=dec.verdict,
         exact=dec.exact,
@@ -280,12 +349,19 @@ def analyze_loop(req: LoopRequest, *, critical: bool = True) -> LoopReport:
         critical=tuple(crits),
         sensor_critical=sensor_c,
         actuator_critical=actuator_c,
-        estimator_alone=_estimator_alone(req, critical),
+        estimator_alone=alone,
         request=req,
-        region=region(req, req.region) if req.region is not None else None,
-        lqg=_lqg_part(req),
+        region=reg,
+        lqg=lqg,
         notes=tuple(notes),
+        udp_region_bounds=udp_bounds,
+        partial=bool(skipped),
     )
+
+
+def _skipped_critical(label: str, pointer: str, ch: MarkovChannel) -> Critical:
+    par = parameter_of(pointer, ch)
+    return Critical(label, par[0] if par else pointer, None, None, (), "not computed: the time budget ran out")
 
 
 def loop(
@@ -300,6 +376,7 @@ def loop(
     cost: Mapping[str, Any] | None = None,
     protocol: str = "tcp",
     on_loss: str = "zero",
+    budget: Any = None,
 ) -> LoopReport:
     """Exact mean-square stability, cost and critical link reliabilities of a loop closed over lossy links.
 
@@ -330,6 +407,11 @@ def loop(
     protocol, on_loss:
         ``"tcp"`` (acknowledged actuator packets) or ``"udp"``; ``"zero"``
         (a lost input is zero) or ``"hold"`` (the last input is held).
+    budget:
+        Seconds (as ``options.time_budget_s``, in ``[0.01, 3600]``) or a
+        :class:`kfio.Budget`, as for :func:`kfio.analyze`: the verdict raises
+        :class:`kfio.errors.BudgetExceeded` if it does not fit; later parts
+        are left out of a ``partial`` report.
 
     Returns
     -------
@@ -338,22 +420,21 @@ def loop(
     """
     from ._model import parse_loop_request
 
-    return analyze_loop(
-        parse_loop_request(
-            loop_request(
-                system,
-                controller,
-                channel,
-                actuator_channel,
-                B=B,
-                Q=Q,
-                R=R,
-                cost=cost,
-                protocol=protocol,
-                on_loss=on_loss,
-            )
-        )
+    work = budget if isinstance(budget, Budget) else None
+    tree = loop_request(
+        system,
+        controller,
+        channel,
+        actuator_channel,
+        B=B,
+        Q=Q,
+        R=R,
+        cost=cost,
+        protocol=protocol,
+        on_loss=on_loss,
+        budget=None if work is not None else budget,
     )
+    return analyze_loop(parse_loop_request(tree), budget=work)
 
 
 def loop_request(
@@ -368,8 +449,9 @@ def loop_request(
     cost: Mapping[str, Any] | None = None,
     protocol: str = "tcp",
     on_loss: str = "zero",
+    budget: Any = None,
 ) -> dict[str, Any]:
-    """The loop request file (JSON-ready dict) for the arguments of :func:`loop`."""
+    """The loop request file (JSON-ready dict) for the arguments of :func:`loop` (``budget`` in seconds)."""
     from .._system import System
     from ..errors import InvalidInput
     from ..model import channel_tree, json_ready, python_tree
@@ -402,6 +484,8 @@ def loop_request(
     if cost is not None:
         tree["cost"] = python_tree(dict(cost))
     tree["options"] = {"loop": {"protocol": protocol, "on_loss": on_loss}}
+    if budget is not None:
+        tree["options"]["time_budget_s"] = python_tree(budget)
     return json_ready(tree)
 
 

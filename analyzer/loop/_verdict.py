@@ -30,6 +30,7 @@ from typing import Any
 import flint
 import numpy as np
 
+from .._budget import Budget
 from ..errors import NumericalFailure
 from ..model import is_psd
 from ._algebraic import root_text
@@ -165,8 +166,18 @@ def rounded_certificate(sys: Mjls, digits: int = 12) -> bool:
     return all(positive_definite(X - TX) for X, TX in zip(Y, TY))
 
 
-def decide(sys: Mjls) -> Decision:
-    """The exact verdict (see the module docstring) and the stationary second moments when stable."""
+def _tick(budget: Budget | None, what: str) -> None:
+    if budget is not None:
+        budget.tick(what)
+
+
+def decide(sys: Mjls, budget: Budget | None = None) -> Decision:
+    """The exact verdict (see the module docstring) and the stationary second moments when stable.
+
+    ``budget`` (:class:`kfio.Budget`) is checked between the steps of the exact work (operator,
+    solve, characteristic polynomial); :class:`kfio.errors.BudgetExceeded` when it is spent.
+    """
+    _tick(budget, "loop verdict: float operator")
     Tf = float_operator(sys)
     size = Tf.shape[0]
     rho = float(np.max(np.abs(np.linalg.eigvals(Tf)))) if size else 0.0
@@ -174,7 +185,9 @@ def decide(sys: Mjls) -> Decision:
         ok = rounded_certificate(sys)
         verdict = "stable" if ok else ("unstable" if rho > 1 else "stable")
         return Decision(verdict, False, ok, "rounded Lyapunov certificate" if ok else "none", rho, None, size, None)
+    _tick(budget, "loop verdict: exact operator")
     T = operator_matrix(sys)
+    _tick(budget, "loop verdict: exact Lyapunov solve")
     identity = flint.fmpq_mat(size, size)
     for i in range(size):
         identity[i, i] = 1
@@ -190,11 +203,13 @@ def decide(sys: Mjls) -> Decision:
     try:
         sol = (identity - T).solve(rhs, algorithm="dixon")  # type: ignore[call-arg]
     except ZeroDivisionError:
+        _tick(budget, "loop verdict: characteristic polynomial")
         sign, rho_text = exact_radius(sys, T)
         verdict = "boundary" if sign == 0 else ("unstable" if sign > 0 else "stable")
         if sign < 0:  # cannot happen: 1 is an eigenvalue, so rho >= 1
             raise NumericalFailure("I - T is singular but no eigenvalue >= 1 was found") from None
         return Decision(verdict, True, True, "characteristic polynomial", rho, rho_text, size, None)
+    _tick(budget, "loop verdict: definiteness of the Lyapunov solution")
     Y = _stacked(sys, sol, 0)
     stable = all(positive_definite(X) for X in Y)
     if size <= MAX_EXACT_RADIUS_SIZE:

@@ -127,6 +127,11 @@ LOOP_COMPONENTS: dict[str, dict[str, Any]] = {
             "verdict": {"type": "string", "enum": ["stable", "unstable", "boundary"]},
             "exact": {"type": "boolean"},
             "certified": {"type": "boolean"},
+            "partial": {
+                "type": "boolean",
+                "description": "true when options.time_budget_s ran out after the verdict and cost: the notes "
+                "name what was not computed (critical values, region, LQG cost bounds)",
+            },
             "spectral_radius": {"type": ["number", "null"]},
             "spectral_radius_exact": {"type": ["string", "null"]},
             "cost": {"type": ["number", "null"]},
@@ -141,7 +146,16 @@ LOOP_COMPONENTS: dict[str, dict[str, Any]] = {
             "lqg": {
                 "type": ["object", "null"],
                 "description": "with controller.lqg: the control MARE's critical actuator probability, at least "
-                "1 - 1/rho(A)^2 and equal to it for square invertible B or a scalar plant",
+                "1 - 1/rho(A)^2 and equal to it for square invertible B or a scalar plant (nu_c: exact or a "
+                "bracket), and cost_bounds: lower <= J_inf <= upper for the optimal TCP-like controller "
+                "(Schenato, Sinopoli, Franceschetti, Poolla and Sastry 2007, Sec. V), with what each bound comes "
+                "from, or a reason when not available",
+            },
+            "udp_region_bounds": {
+                "type": ["object", "null"],
+                "description": "with protocol udp: outer bounds (necessary sensor and actuator arrival "
+                "probabilities for any design) and the inner bound (the given gains' exact stable region) on the "
+                "optimal UDP-like controller's critical region, labelled as bounds",
             },
             "loop": {"type": "object"},
         },

@@ -49,6 +49,8 @@ def summary(report: dict) -> str:
     statement = report["estimator_alone"]["statement"]
     if statement:
         lines.append(f"estimator alone: {statement}")
+    if report.get("partial"):
+        lines += [n for n in report["notes"] if n.startswith("partial:")]
     return "\n".join(lines)
 
 
