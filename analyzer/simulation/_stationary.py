@@ -43,6 +43,7 @@ from .._reporting import ReportPart
 from .._verdicts import Verdict
 from ..errors import InvalidInput, LimitExceeded
 from ..model import Request, parse_number
+from ._order import order_indices
 
 Z95 = 1.959963984540054
 QUANTILES = (0.5, 0.9, 0.99, 0.999)
@@ -95,8 +96,13 @@ def wilson(successes: int, n: int, z: float = Z95) -> tuple[float, float]:
 
 def hill(samples: np.ndarray, k: int | None = None) -> tuple[float | None, int]:
     """Hill's estimate of the tail exponent from the ``k`` largest finite samples (default ``M / 20``)."""
-    x = np.sort(samples[np.isfinite(samples) & (samples > 0)])[::-1]
-    k = k or samples.size // 20
+    return _hill_sorted(np.sort(samples), k)
+
+
+def _hill_sorted(s: np.ndarray, k: int | None = None) -> tuple[float | None, int]:
+    """:func:`hill` of samples already sorted in ascending order (``s``, no NaN)."""
+    x = s[np.isfinite(s) & (s > 0)][::-1]
+    k = k or s.size // 20
     if k < 10 or x.size <= k:
         return None, k
     logs = np.log(x[:k]) - math.log(x[k])
@@ -212,12 +218,12 @@ def verdict_headline(
     return exact, sample
 
 
-def _quantile_ci(x: np.ndarray, q: float) -> tuple[float, float, float]:
-    M = x.size
-    s = np.sort(x)
+def _quantile_ci(s: np.ndarray, q: float) -> tuple[float, float, float]:
+    """The inverted-CDF ``q``-quantile of the sorted samples ``s`` and its distribution-free 95% interval."""
+    M = s.size
     j = int(math.floor(M * q - Z95 * math.sqrt(M * q * (1 - q))))
     k = int(math.ceil(M * q + Z95 * math.sqrt(M * q * (1 - q))))
-    value = float(np.quantile(s, q, method="inverted_cdf"))
+    value = float(s[order_indices(M, np.array([q]))[0]])  # numpy.quantile(s, q, method="inverted_cdf")
     lo = float(s[max(j, 0)]) if j >= 0 else 0.0
     hi = float(s[min(k, M - 1)]) if k < M else math.inf
     return value, lo, hi
@@ -246,9 +252,10 @@ def stationary_report(
     """
     x = np.where(np.isfinite(final_traces), final_traces, np.inf)
     M = x.size
-    quantiles = tuple((q, *_quantile_ci(x, q)) for q in QUANTILES)
+    s = np.sort(x)  # one sort for every quantile, their intervals and Hill's estimate
+    quantiles = tuple((q, *_quantile_ci(s, q)) for q in QUANTILES)
     outage = tuple((m, int((x > m).sum()) / M, *wilson(int((x > m).sum()), M)) for m in thresholds)
-    h, k = hill(x)
+    h, k = _hill_sorted(s)
     interval = (h * (1 - Z95 / math.sqrt(k)), h * (1 + Z95 / math.sqrt(k))) if h is not None else None
     kappa = kappa_text = growth = None
     warnings: list[str] = []
@@ -272,7 +279,8 @@ def stationary_report(
     fq: tuple[tuple[float, float, float, float], ...] = ()
     if filtered_traces is not None:
         xf = np.where(np.isfinite(filtered_traces), filtered_traces, np.inf)
-        fq = tuple((q, *_quantile_ci(xf, q)) for q in QUANTILES)
+        sf = np.sort(xf)
+        fq = tuple((q, *_quantile_ci(sf, q)) for q in QUANTILES)
     return StationaryReport(
         step, M, quantiles, outage, h, interval, k, kappa, kappa_text, growth, tuple(warnings), verdict, fq
     )
