@@ -170,9 +170,9 @@ def end_to_end(repeats: int, reference: str) -> None:
     bodies = {
         "target": body(SEED004, bernoulli, 9, 100_000),
         "diverging": body(
-            {"A": [[1.5]], "C": [[1]], "Q": [[1]], "R": [[1]]},
-            {"model": "bernoulli", "arrival_probability": 0.3},
-            120,
+            {"A": [[2]], "C": [[1]], "Q": [[1]], "R": [[1]]},  # 10% of the trajectories diverge by t = 60
+            {"model": "bernoulli", "arrival_probability": 0.2},
+            60,
             2000,
         ),
         "two packets": body(TWO_PACKETS, two, 50, 10_000, seed=3),
