@@ -306,7 +306,7 @@ def run_monte_carlo(
         return g, (g.astype(float) if chan.m == 1 else sim.row_mask(g))
 
     with np.errstate(all="ignore"):
-        mean[0], std[0], pct[:, 0] = recorder.record(traces(P0), alive, all_alive)
+        mean[0], std[0], pct[:, 0] = recorder.record(np.full(M, traces(opts.P0[None])[0]), alive, all_alive)
         for t in range(T):
             if budget is not None:
                 budget.tick("Monte Carlo simulation", M)
@@ -325,13 +325,14 @@ def run_monte_carlo(
                 all_alive = dead == 0
             diverged[t + 1] = dead
             mean[t + 1], std[t + 1], pct[:, t + 1] = recorder.record(tr, alive, all_alive)
-        # The summaries of the last batch (mean matrix, traces), taken on the packed batch:
-        # no full (M, n, n) batch is formed.
-        final_mean, trP = run.summary(all_alive)
+        # The summaries of the last batch (mean matrices, traces), taken on the packed batch:
+        # no full (M, n, n) batch is formed.  The arrivals at T are drawn after every draw
+        # the predictor used: same seed, same predictor output.
+        (final_mean, trP), (final_mean_filtered, ftraces) = run.summaries(draw()[1] if filtered else None, all_alive)
+        assert trP is not None
         final_traces = np.where(alive, trP, np.inf)
         if filtered:
-            # the arrivals at T, drawn after every draw the predictor used: same seed, same predictor output
-            final_mean_filtered, ftraces = run.filtered_summary(draw()[1], all_alive)
+            assert ftraces is not None
             final_filtered_traces = np.where(alive, ftraces, np.inf)
             fmean[T], fstd[T], fpct[:, T] = recorder.record(ftraces, alive, all_alive)
     stats = TraceStatistics(mean=mean, std=std, percentiles=pct, diverged=diverged, trajectories=M)
@@ -351,6 +352,10 @@ def run_monte_carlo(
     )
 
 
+#: A batch's mean matrix (``None`` when not taken) and traces (``None`` when not asked).
+_Summary = tuple[np.ndarray | None, np.ndarray | None]
+
+
 class _PackedRun:
     """The packed batch of :func:`run_monte_carlo`, stepped in place by :meth:`PackedRiccatiStep.advance`."""
 
@@ -365,14 +370,17 @@ class _PackedRun:
     def freeze(self, dead: np.ndarray) -> None:
         self.h[:, dead] = 0.0
 
-    def summary(self, with_mean: bool) -> tuple[np.ndarray | None, np.ndarray]:
-        """The mean ``(n, n)`` of the batch now (if ``with_mean``) and its traces, from the packed batch."""
-        return (self.kernel.mean(self.h) if with_mean else None), self.kernel.traces(self.h)
-
-    def filtered_summary(self, mask: np.ndarray, with_mean: bool) -> tuple[np.ndarray | None, np.ndarray]:
-        """:meth:`summary` of the filtered covariances for the arrivals ``mask`` (the run's packed batch is spent)."""
-        self.kernel.advance(self.h, mask, self.work, posterior=True)  # in place: the last use of the batch
-        return self.summary(with_mean)
+    def summaries(self, mask: np.ndarray | None, with_mean: bool) -> tuple[_Summary, _Summary]:
+        """Mean ``(n, n)`` (if ``with_mean``) and traces of the predictors now, and of their filtered covariances
+        for the arrivals ``mask`` (``None``: not asked), from packed batches (the filtered one a second packed copy).
+        """
+        kernel = self.kernel
+        if mask is None:
+            return ((kernel.mean(self.h) if with_mean else None), kernel.traces(self.h)), (None, None)
+        post = self.h.copy()
+        kernel.advance(post, mask, self.work, posterior=True)
+        means: list[np.ndarray | None] = list(kernel.means(self.h, post)) if with_mean else [None, None]
+        return (means[0], kernel.traces(self.h)), (means[1], kernel.traces(post))
 
 
 class _MatrixRun:
@@ -390,12 +398,12 @@ class _MatrixRun:
     def freeze(self, dead: np.ndarray) -> None:
         self.P[dead] = 0.0
 
-    def summary(self, with_mean: bool) -> tuple[np.ndarray | None, np.ndarray]:
-        return (self.P.mean(axis=0) if with_mean else None), traces(self.P)
-
-    def filtered_summary(self, mask: np.ndarray, with_mean: bool) -> tuple[np.ndarray | None, np.ndarray]:
+    def summaries(self, mask: np.ndarray | None, with_mean: bool) -> tuple[_Summary, _Summary]:
+        pred = (self.P.mean(axis=0) if with_mean else None), traces(self.P)
+        if mask is None:
+            return pred, (None, None)
         post = self.kernel.update(self.P, mask)[0]
-        return (post.mean(axis=0) if with_mean else None), traces(post)
+        return pred, ((post.mean(axis=0) if with_mean else None), traces(post))
 
 
 def simulate(

@@ -76,6 +76,19 @@ def test_packed_mean_and_traces_equal_the_unpacked_batch() -> None:
         P = step.unpack(h)
         assert np.array_equal(step.mean(h), P.mean(axis=0)), (n, M)
         assert np.array_equal(step.traces(h), np.einsum("mii->m", P)), (n, M)
+        h2 = np.ascontiguousarray(h[:, ::-1])  # a second batch summed beside the first
+        both = step.means(h, h2)
+        assert np.array_equal(both[0], P.mean(axis=0)) and np.array_equal(both[1], step.unpack(h2).mean(axis=0))
+
+
+def test_initial_traces_of_the_broadcast_start() -> None:
+    """The run's first record takes ``trace(P0)`` once, where the broadcast batch gave it per trajectory."""
+    rng = np.random.default_rng(8)
+    for n in (1, 2, 3, 6, 13, 40):
+        X = rng.normal(size=(n, n)) * 10.0 ** rng.integers(-5, 5, size=(n, 1))
+        P0 = X @ X.T
+        batch = np.broadcast_to(P0, (50, n, n))
+        assert np.array_equal(np.einsum("mii->m", batch), np.full(50, np.einsum("mii->m", P0[None])[0]))
 
 
 def old_quantile_ci(x: np.ndarray, q: float) -> tuple[float, float, float]:
