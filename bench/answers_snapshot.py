@@ -1,6 +1,6 @@
 """Dump ``kfio analyze --json`` and ``kfio bounds --json`` of every example and page request, to diff.
 
-    python bench/answers_snapshot.py OUTDIR [--reference COMMIT]
+    python bench/answers_snapshot.py OUTDIR [--reference COMMIT] [--commands analyze,bounds,simulate]
     diff -r OUTDIR_BEFORE OUTDIR_AFTER
 
 Issue 25 asks that speed work keep every answer identical: run this on this
@@ -8,7 +8,8 @@ checkout and with ``--reference COMMIT`` (that commit's library, unpacked by
 :mod:`_reference`) and ``diff -r`` the two directories (empty = identical).
 Each file holds the exit code on its first line, then standard output, then
 standard error.  No timing field is printed by these two commands, so nothing
-is masked.
+is masked.  ``--commands`` adds others (``simulate``: the default seeded
+Monte Carlo of each file, whose JSON must stay identical too).
 """
 
 from __future__ import annotations
@@ -40,6 +41,7 @@ def main() -> int:
     parser.add_argument("outdir", type=Path)
     parser.add_argument("--reference", help="commit whose library answers instead of this checkout's")
     parser.add_argument("--jobs", type=int, default=2)
+    parser.add_argument("--commands", default="analyze,bounds", help="comma-separated CLI commands to run")
     args = parser.parse_args()
     args.outdir.mkdir(parents=True, exist_ok=True)
     env = dict(os.environ)
@@ -48,11 +50,12 @@ def main() -> int:
         from _reference import reference_tree
 
         env["PYTHONPATH"] = str(reference_tree(args.reference))
+    commands = args.commands.split(",")
     files = sorted(p for d in DIRS for p in d.glob("*.json") if p.name != "index.json")
     with ThreadPoolExecutor(args.jobs) as pool:
-        for f in [pool.submit(_one, env, c, p, args.outdir) for p in files for c in ("analyze", "bounds")]:
+        for f in [pool.submit(_one, env, c, p, args.outdir) for p in files for c in commands]:
             f.result()
-    print(f"{2 * len(files)} answers in {args.outdir}")
+    print(f"{len(commands) * len(files)} answers in {args.outdir}")
     return 0
 
 

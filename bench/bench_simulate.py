@@ -8,6 +8,17 @@
 3. Masking versus grouping by arrival pattern for a two-packet channel.
 4. The exact enumeration of E[P_t] over 2^20 arrival sequences.
 
+``--end-to-end`` runs instead the target of issue 25: ``simulate`` in process, 10^5 trajectories x 9 steps of the
+same system, everything the report holds (per-step means, bands and percentiles of the predictor and the filtered
+covariance, the final quantiles and tail exponent, the exact verdict beside them), against the **flat-GEMM bound**:
+the step's flop count (``bench/bench_kernel.py``: ``2 N^2 + 2 p n N + p(p+1) N + 2 p N + 2 p^2 n`` per
+trajectory, ``N = n(n+1)/2``) times ``M T``, at the rate of one flat ``(N, N) @ (N, M')`` GEMM measured in the
+same run.  Two rates are given: ``M' N = 6e6`` as in ``bench_kernel.py`` (a batch larger than the caches, the
+rate the kernel's bound was stated at), and ``M' = M`` (this batch, 4.8 MB, which fits in the last-level cache:
+a stricter bound).  The same requests run with the code of ``--reference`` (default: main before this work) in a
+child interpreter, in the same run, and the JSON of every report (a few more requests: a diverging plant, two
+packets, n = 6) is hashed on both codes: they must be identical.
+
 Times are CPU seconds (``time.process_time``; the machine is shared), one BLAS thread
 (``OPENBLAS_NUM_THREADS=1`` unless set).  Row 1 is also run with the previous code (main at
 ``PREVIOUS_COMMIT``, before the blocked kernel) in a child interpreter in the same run
@@ -114,13 +125,127 @@ def python_loop(A, C, Q, R, lam: float, P0, trajectories: int, steps: int, seed:
     return traces
 
 
+#: main before issue 25's statistics work (per-step percentiles on fresh copies, unpacked final batches).
+E2E_REFERENCE = "4d603a0"
+E2E_TIMED = """
+import hashlib, json, time
+from kfio import load_request
+from kfio.simulation._setup import parse_options, sim_system
+from kfio.simulation._simulate import run_monte_carlo, simulate
+out = {"cpu": {}, "hash": {}}
+for name, text in BODIES.items():
+    req = load_request(text)
+    rep = simulate(req)
+    out["hash"][name] = hashlib.sha256(rep.to_json().encode()).hexdigest()[:16]
+    if name in TIMED:
+        sim, opts = sim_system(req), parse_options(req)
+        for what, fn in (("simulate", lambda: simulate(req)), ("run_monte_carlo", lambda: run_monte_carlo(sim, opts))):
+            best = float("inf")
+            for _ in range(REPEATS):
+                t0 = time.process_time()
+                fn()
+                best = min(best, time.process_time() - t0)
+            out["cpu"][f"{name}/{what}"] = best
+print(json.dumps(out))
+"""
+
+
+def end_to_end(repeats: int, reference: str, rounds: int = 3) -> None:
+    """The issue-25 target: ``simulate`` of 10^5 x 9 (n = 3) against the flat-GEMM bound, now and at ``reference``."""
+    bernoulli = {"model": "bernoulli", "arrival_probability": 0.6}
+    two = {
+        "model": "per_sensor",
+        "channels": {
+            "s1": {"model": "bernoulli", "arrival_probability": 0.5},
+            "s2": {"model": "gilbert_elliott", "failure_rate": 0.2, "recovery_rate": 0.4},
+        },
+    }
+    rng = np.random.default_rng(6)
+    six = {
+        "A": (np.round(rng.normal(size=(6, 6)) / 2, 2)).tolist(),
+        "C": [[1, 0, 0, 0, 0, 1]],
+        "Q": np.eye(6).astype(int).tolist(),
+        "R": [[1]],
+    }
+    bodies = {
+        "target": body(SEED004, bernoulli, 9, 100_000),
+        "diverging": body(
+            {"A": [[2]], "C": [[1]], "Q": [[1]], "R": [[1]]},  # 10% of the trajectories diverge by t = 60
+            {"model": "bernoulli", "arrival_probability": 0.2},
+            60,
+            2000,
+        ),
+        "two packets": body(TWO_PACKETS, two, 50, 10_000, seed=3),
+        "n = 6": body(six, {"model": "gilbert_elliott", "failure_rate": 0.3, "recovery_rate": 0.6}, 40, 20_000, seed=5),
+    }
+    timed_names = ["target"]
+    code = f"BODIES = {bodies!r}\nTIMED = {timed_names!r}\nREPEATS = {repeats}\n" + E2E_TIMED
+    now: dict = {"cpu": {}}
+    ref: dict = {"cpu": {}}
+    for _ in range(rounds):  # the two codes take turns, so that a change of load hits both
+        for acc, run in ((now, lambda: run_in_process(code)), (ref, lambda: run_reference(code, commit=reference))):
+            out = run()
+            acc["hash"] = out["hash"]
+            for key, t in out["cpu"].items():
+                acc["cpu"][key] = min(t, acc["cpu"].get(key, float("inf")))
+
+    n, p, M, T = 3, 1, 100_000, 9
+    N = n * (n + 1) // 2
+    flops = M * T * (2 * N * N + 2 * p * n * N + p * (p + 1) * N + 2 * p * N + 2 * p * p * n)
+    Tm = np.random.default_rng(0).normal(size=(N, N))
+    rates = {}
+    for label, cols in (("bench_kernel's batch, M' N = 6e6", int(6e6 / N)), ("this batch, M' = 10^5", M)):
+        h = np.random.default_rng(1).random((N, cols))
+        t, _ = timed(lambda h=h: Tm @ h, 2 * repeats + 5)
+        rates[label] = 2 * N * N * cols / t
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
+    print(
+        f"machine: {platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}, NumPy {np.__version__}, "
+        f"OPENBLAS_NUM_THREADS={os.environ['OPENBLAS_NUM_THREADS']}, load average {load:.1f}"
+    )
+    print(
+        f"simulate, n = 3, {M} trajectories x {T} steps, in process; CPU ms, best of {rounds} x {repeats}; reference {reference}\n"
+    )
+    print("| flat-GEMM rate | GFLOP/s | bound (ms) |")
+    print("|---|---|---|")
+    for label, r in rates.items():
+        print(f"| {label} | {r / 1e9:.2f} | {flops / r * 1e3:.1f} |")
+    print("\n| what | now (ms) | reference (ms) | reference / now | now x bound | reference x bound |")
+    print("|---|---|---|---|---|---|")
+    for what in ("simulate", "run_monte_carlo"):
+        key = f"target/{what}"
+        a, b = now["cpu"][key], ref["cpu"][key]
+        xs = " / ".join(f"{a * r / flops:.1f}x" for r in rates.values())
+        xr = " / ".join(f"{b * r / flops:.1f}x" for r in rates.values())
+        print(f"| `{what}` | {a * 1e3:.1f} | {b * 1e3:.1f} | {b / a:.2f}x | {xs} | {xr} |")
+    print("\n(x bound: against the first rate / the second)\n")
+    for name in bodies:
+        same = now["hash"][name] == ref["hash"][name]
+        print(
+            f"report JSON, {name}: now {now['hash'][name]}, reference {ref['hash'][name]}: {'same' if same else 'DIFFERENT'}"
+        )
+
+
+def run_in_process(code: str) -> dict:
+    """``code`` (which prints one JSON line) run against this checkout, in a child like the reference's."""
+    import subprocess
+
+    out = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True)
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--end-to-end", action="store_true", help="only the issue-25 target against the flat-GEMM bound")
+    ap.add_argument("--reference", default=E2E_REFERENCE, help="commit of the reference for --end-to-end")
     ap.add_argument("--trajectories", type=int, default=100_000)
     ap.add_argument("--steps", type=int, default=200)
     ap.add_argument("--loop-trajectories", type=int, default=300, help="subset run by the Python loop")
     ap.add_argument("--repeats", type=int, default=3)
     args = ap.parse_args()
+    if args.end_to_end:
+        end_to_end(args.repeats if args.repeats != 3 else 7, args.reference)
+        return
     M, T = args.trajectories, args.steps
     rows = []
 

@@ -3,13 +3,15 @@
 The inverted-CDF percentile of ``M`` samples is an order statistic ``x_(k)``
 (Hyndman and Fan (1996), definition 1).  ``numpy.quantile`` selects all the
 requested ``k`` with one multi-pivot ``partition``; selecting them one at a
-time, each in the part of the array left of or right of the previous one
-(``M + 0.9 M + 0.1 M`` element visits for the 50th, 90th and 99th
-percentiles), is about 4x cheaper and returns the same numbers bit for bit,
-since an order statistic does not depend on how it was found.
+time, each in the part of the array left of or right of the previous one, in
+the order that visits the fewest elements (``M + 0.5 M + 0.1 M`` for the 50th,
+90th and 99th percentiles), is about 5x cheaper and returns the same numbers
+bit for bit, since an order statistic does not depend on how it was found.
 """
 
 from __future__ import annotations
+
+from functools import lru_cache
 
 import numpy as np
 
@@ -18,9 +20,15 @@ def order_indices(M: int, q: np.ndarray) -> tuple[int, ...]:
     """The ranks ``k`` (0-based) with ``x_(k)`` the inverted-CDF ``q``-quantile of ``M`` samples.
 
     Taken from ``numpy.quantile`` itself, on ``0, 1, ..., M - 1``, so that the
-    rounding of ``M q`` is numpy's.
+    rounding of ``M q`` is numpy's (remembered per ``M`` and ``q``: at
+    ``M = 10^5`` the call costs about a millisecond).
     """
-    return tuple(int(k) for k in np.quantile(np.arange(M, dtype=float), q, method="inverted_cdf"))
+    return _order_indices(M, tuple(float(x) for x in np.atleast_1d(q)))
+
+
+@lru_cache(maxsize=64)
+def _order_indices(M: int, q: tuple[float, ...]) -> tuple[int, ...]:
+    return tuple(int(k) for k in np.quantile(np.arange(M, dtype=float), np.array(q), method="inverted_cdf"))
 
 
 def order_statistics(x: np.ndarray, ranks: tuple[int, ...], overwrite: bool = False) -> np.ndarray:
@@ -40,19 +48,44 @@ def order_statistics(x: np.ndarray, ranks: tuple[int, ...], overwrite: bool = Fa
     if np.isnan(x).any():
         return np.full(len(ranks), np.nan)
     y = x if overwrite else x.copy()
-    _select(y, sorted(set(ranks)), 0, len(y))
+    select_in_place(y, sorted(set(ranks)))
     return y[list(ranks)]
+
+
+def select_in_place(y: np.ndarray, ks: list[int]) -> None:
+    """Reorder ``y`` so that ``y[k]`` is its order statistic ``y_(k)`` for every ``k`` in ``ks`` (sorted, no NaN in ``y``)."""
+    _select(y, ks, 0, len(y))
 
 
 def _select(y: np.ndarray, ks: list[int], lo: int, hi: int) -> None:
     """Put ``y[k]`` in place for every ``k`` in ``ks`` (sorted, inside ``lo:hi``), touching only ``y[lo:hi]``."""
     if not ks:
         return
-    mid = len(ks) // 2
-    k = ks[mid]
+    i = _first_pivot(tuple(ks), lo, hi)
+    k = ks[i]
     y[lo:hi].partition(k - lo)
-    _select(y, ks[:mid], lo, k)
-    _select(y, ks[mid + 1 :], k + 1, hi)
+    _select(y, ks[:i], lo, k)
+    _select(y, ks[i + 1 :], k + 1, hi)
 
 
-__all__ = ["order_indices", "order_statistics"]
+@lru_cache(maxsize=256)
+def _first_pivot(ks: tuple[int, ...], lo: int, hi: int) -> int:
+    """Which of ``ks`` to select first in ``y[lo:hi]`` so that the partitions visit the fewest elements.
+
+    A partition of ``m`` elements costs about ``m`` visits; selecting ``k_i`` first
+    leaves ``k_1..k_(i-1)`` in ``lo:k_i`` and the rest in ``k_i + 1:hi``.  For the
+    50th, 90th and 99th percentiles: the 50th first (``M + 0.5 M + 0.1 M``), not
+    the 90th (``M + 0.9 M + 0.1 M``).
+    """
+    return min(range(len(ks)), key=lambda i: _visits(ks[:i], lo, ks[i]) + _visits(ks[i + 1 :], ks[i] + 1, hi))
+
+
+@lru_cache(maxsize=256)
+def _visits(ks: tuple[int, ...], lo: int, hi: int) -> int:
+    if not ks:
+        return 0
+    i = _first_pivot(ks, lo, hi)
+    return hi - lo + _visits(ks[:i], lo, ks[i]) + _visits(ks[i + 1 :], ks[i] + 1, hi)
+
+
+__all__ = ["order_indices", "order_statistics", "select_in_place"]

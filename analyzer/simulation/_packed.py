@@ -130,6 +130,39 @@ class PackedRiccatiStep:
         full[:, self.ju, self.iu] = h.T
         return full
 
+    def mean(self, h: np.ndarray) -> np.ndarray:
+        """The sample mean ``(n, n)`` of the batch, without unpacking it: ``unpack(h).mean(axis=0)`` bit for bit.
+
+        NumPy sums ``(M, n, n)`` over its first axis one trajectory after the
+        other, ``((P_0 + P_1) + P_2) + ...``, then divides by ``M`` (for ``n = 1``,
+        a contiguous row, by pairwise summation).  The same sums run here over
+        blocks of columns of ``h`` moved to rows of a small buffer, the running
+        sum added to a block's first row before the block is summed.
+        """
+        return self.means(h)[0]
+
+    def means(self, *hs: np.ndarray) -> list[np.ndarray]:
+        """:meth:`mean` of several packed batches of the same size, summed side by side in one pass.
+
+        Each sum is one chain of additions; summing the batches' entries in the same
+        rows of the buffer runs their chains together, at one loop step per trajectory.
+        """
+        N, M = hs[0].shape
+        if N == 1:  # (M, 1, 1) is summed as one contiguous row: numpy's pairwise sum
+            return [(np.add.reduce(h[0]) / M).reshape(1, 1) for h in hs]
+        k = len(hs)
+        block = np.empty((min(M, 4096), k * N))
+        total = np.empty(k * N)
+        for a in range(0, M, len(block)):
+            w = min(len(block), M - a)
+            for i, h in enumerate(hs):
+                np.copyto(block[:w, i * N : (i + 1) * N], h[:, a : a + w].T)
+            if a:
+                block[0] += total
+            np.add.reduce(block[:w], axis=0, out=total)
+        mean = total / M
+        return [self.unpack(mean[i * N : (i + 1) * N, None])[0] for i in range(k)]
+
     def traces(self, h: np.ndarray) -> np.ndarray:
         """``trace(P_m)`` from the packed batch (the diagonal rows added in order, as in :meth:`advance`)."""
         out = np.empty(h.shape[1])

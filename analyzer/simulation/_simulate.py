@@ -50,7 +50,7 @@ from ..model import Request
 from ._channel import JointChannel
 from ._finite_horizon import FiniteHorizonReport, expected_covariance
 from ._kernel import DIVERGENCE_TRACE, PRECISION_RATIO, GroupedRiccatiStep, RiccatiStep, healthy, traces
-from ._order import order_indices, order_statistics
+from ._order import order_indices
 from ._outage_target import outage_target, parse_outage_target
 from ._packed import PackedRiccatiStep
 from ._setup import (
@@ -63,6 +63,7 @@ from ._setup import (
     sim_system,
 )
 from ._stationary import Z95, StationaryReport, parse_thresholds, stationary_report, verdict_headline
+from ._step_stats import TraceRecorder
 
 #: Seconds the simulation may spend on Theorem 1's report (tail exponent, growth rate) before going without it.
 EXACT_ANALYSIS_S = 5.0
@@ -257,13 +258,6 @@ def _display_times(steps: int, rows: int = 10) -> list[int]:
     return sorted({round(k * steps / rows) for k in range(rows + 1)})
 
 
-def _record(tr: np.ndarray, alive: np.ndarray, ranks: tuple[int, ...]) -> tuple[float, float, np.ndarray]:
-    """Mean, standard deviation and percentiles (order statistics ``ranks``) of the traces (diverged = +inf)."""
-    tr = np.where(alive, tr, np.inf)
-    mean, std = (float(tr.mean()), float(tr.std(ddof=1))) if alive.all() else (math.nan, math.nan)
-    return mean, std, order_statistics(tr, ranks, overwrite=True)  # after the sums: it reorders tr
-
-
 def run_monte_carlo(
     sim: SimSystem,
     opts: SimulateOptions,
@@ -295,7 +289,8 @@ def run_monte_carlo(
         _PackedRun(step, P0) if isinstance(step, PackedRiccatiStep) else _MatrixRun(step, P0.copy())
     )
     alive = np.ones(M, dtype=bool)
-    ranks = order_indices(M, np.array(PERCENTILES) / 100.0)
+    recorder = TraceRecorder(M, order_indices(M, np.array(PERCENTILES) / 100.0))
+    all_alive, dead = True, 0
     mean, std = np.empty(T + 1), np.empty(T + 1)
     pct = np.empty((len(PERCENTILES), T + 1))
     diverged = np.zeros(T + 1, dtype=np.int64)
@@ -303,12 +298,15 @@ def run_monte_carlo(
     fmean, fstd = np.empty(T + 1), np.empty(T + 1)
     fpct = np.empty((len(PERCENTILES), T + 1))
 
+    memoryless = not any(chan.orders)  # Bernoulli packets: the history stays empty and the probability constant
+    constant = chan.arrival_probability(hist[:1]) if memoryless else None
+
     def draw() -> tuple[np.ndarray, np.ndarray]:
-        g = rng.random((M, chan.m)) < chan.arrival_probability(hist)
+        g = rng.random((M, chan.m)) < (chan.arrival_probability(hist) if constant is None else constant)
         return g, (g.astype(float) if chan.m == 1 else sim.row_mask(g))
 
     with np.errstate(all="ignore"):
-        mean[0], std[0], pct[:, 0] = _record(traces(P0), alive, ranks)
+        mean[0], std[0], pct[:, 0] = recorder.record(np.full(M, traces(opts.P0[None])[0]), alive, all_alive)
         for t in range(T):
             if budget is not None:
                 budget.tick("Monte Carlo simulation", M)
@@ -316,28 +314,27 @@ def run_monte_carlo(
             arrivals += g.sum(axis=0)
             ftr, tr, ratio, ok = run.step(mask)  # P(t+1|t), and trace P(t|t) of the same arrivals
             if filtered:
-                fmean[t], fstd[t], fpct[:, t] = _record(ftr, alive, ranks)
-            hist = chan.advance(hist, g)
+                fmean[t], fstd[t], fpct[:, t] = recorder.record(ftr, alive, all_alive)
+            if constant is None:
+                hist = chan.advance(hist, g)
             ok &= ratio <= PRECISION_RATIO
-            if not ok[alive].all():
+            if not (ok.all() if all_alive else ok[alive].all()):
                 alive &= ok
                 run.freeze(~alive)  # keeps NaN and overflow out of later arithmetic
-            diverged[t + 1] = M - int(alive.sum())
-            mean[t + 1], std[t + 1], pct[:, t + 1] = _record(tr, alive, ranks)
-        # One full (M, n, n) batch at a time beside the packed one: the predictors' summaries
-        # are taken and the batch dropped before the filtered batch is unpacked.
-        P = run.predictors()
-        final_mean = P.mean(axis=0) if alive.all() else None
-        final_traces = np.where(alive, traces(P), np.inf)
-        del P
+                dead = M - int(alive.sum())
+                all_alive = dead == 0
+            diverged[t + 1] = dead
+            mean[t + 1], std[t + 1], pct[:, t + 1] = recorder.record(tr, alive, all_alive)
+        # The summaries of the last batch (mean matrices, traces), taken on the packed batch:
+        # no full (M, n, n) batch is formed.  The arrivals at T are drawn after every draw
+        # the predictor used: same seed, same predictor output.
+        (final_mean, trP), (final_mean_filtered, ftraces) = run.summaries(draw()[1] if filtered else None, all_alive)
+        assert trP is not None
+        final_traces = np.where(alive, trP, np.inf)
         if filtered:
-            # the arrivals at T, drawn after every draw the predictor used: same seed, same predictor output
-            PfT = run.filtered(draw()[1])
-            ftraces = traces(PfT)
-            final_mean_filtered = PfT.mean(axis=0) if alive.all() else None
-            del PfT
+            assert ftraces is not None
             final_filtered_traces = np.where(alive, ftraces, np.inf)
-            fmean[T], fstd[T], fpct[:, T] = _record(ftraces, alive, ranks)
+            fmean[T], fstd[T], fpct[:, T] = recorder.record(ftraces, alive, all_alive)
     stats = TraceStatistics(mean=mean, std=std, percentiles=pct, diverged=diverged, trajectories=M)
     out = MonteCarloRun(
         stats=stats,
@@ -355,6 +352,10 @@ def run_monte_carlo(
     )
 
 
+#: A batch's mean matrix (``None`` when not taken) and traces (``None`` when not asked).
+_Summary = tuple[np.ndarray | None, np.ndarray | None]
+
+
 class _PackedRun:
     """The packed batch of :func:`run_monte_carlo`, stepped in place by :meth:`PackedRiccatiStep.advance`."""
 
@@ -369,14 +370,17 @@ class _PackedRun:
     def freeze(self, dead: np.ndarray) -> None:
         self.h[:, dead] = 0.0
 
-    def predictors(self) -> np.ndarray:
-        """The batch ``(M, n, n)`` now."""
-        return self.kernel.unpack(self.h)
-
-    def filtered(self, mask: np.ndarray) -> np.ndarray:
-        """The filtered covariances of the batch now, for the arrivals ``mask`` (the run's packed batch is spent)."""
-        self.kernel.advance(self.h, mask, self.work, posterior=True)  # in place: the last use of the batch
-        return self.kernel.unpack(self.h)
+    def summaries(self, mask: np.ndarray | None, with_mean: bool) -> tuple[_Summary, _Summary]:
+        """Mean ``(n, n)`` (if ``with_mean``) and traces of the predictors now, and of their filtered covariances
+        for the arrivals ``mask`` (``None``: not asked), from packed batches (the filtered one a second packed copy).
+        """
+        kernel = self.kernel
+        if mask is None:
+            return ((kernel.mean(self.h) if with_mean else None), kernel.traces(self.h)), (None, None)
+        post = self.h.copy()
+        kernel.advance(post, mask, self.work, posterior=True)
+        means: list[np.ndarray | None] = list(kernel.means(self.h, post)) if with_mean else [None, None]
+        return (means[0], kernel.traces(self.h)), (means[1], kernel.traces(post))
 
 
 class _MatrixRun:
@@ -394,11 +398,12 @@ class _MatrixRun:
     def freeze(self, dead: np.ndarray) -> None:
         self.P[dead] = 0.0
 
-    def predictors(self) -> np.ndarray:
-        return self.P
-
-    def filtered(self, mask: np.ndarray) -> np.ndarray:
-        return self.kernel.update(self.P, mask)[0]
+    def summaries(self, mask: np.ndarray | None, with_mean: bool) -> tuple[_Summary, _Summary]:
+        pred = (self.P.mean(axis=0) if with_mean else None), traces(self.P)
+        if mask is None:
+            return pred, (None, None)
+        post = self.kernel.update(self.P, mask)[0]
+        return pred, ((post.mean(axis=0) if with_mean else None), traces(post))
 
 
 def simulate(

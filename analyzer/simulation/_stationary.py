@@ -43,6 +43,7 @@ from .._reporting import ReportPart
 from .._verdicts import Verdict
 from ..errors import InvalidInput, LimitExceeded
 from ..model import Request, parse_number
+from ._order import order_indices, select_in_place
 
 Z95 = 1.959963984540054
 QUANTILES = (0.5, 0.9, 0.99, 0.999)
@@ -95,13 +96,24 @@ def wilson(successes: int, n: int, z: float = Z95) -> tuple[float, float]:
 
 def hill(samples: np.ndarray, k: int | None = None) -> tuple[float | None, int]:
     """Hill's estimate of the tail exponent from the ``k`` largest finite samples (default ``M / 20``)."""
-    x = np.sort(samples[np.isfinite(samples) & (samples > 0)])[::-1]
-    k = k or samples.size // 20
+    return _hill_sorted(np.sort(samples), k)
+
+
+def _hill_sorted(s: np.ndarray, k: int | None = None) -> tuple[float | None, int]:
+    """:func:`hill` of samples already sorted in ascending order (``s``, no NaN)."""
+    x = s[np.isfinite(s) & (s > 0)]
+    k = k or s.size // 20
     if k < 10 or x.size <= k:
         return None, k
+    return _hill_top(x[-(k + 1) :], k), k
+
+
+def _hill_top(top: np.ndarray, k: int) -> float | None:
+    """Hill's estimate from the ``k + 1`` largest finite positive samples, ``top`` (contiguous, ascending)."""
+    x = top[::-1]
     logs = np.log(x[:k]) - math.log(x[k])
     mean = float(logs.mean())
-    return (1.0 / mean if mean > 0 else None), k
+    return 1.0 / mean if mean > 0 else None
 
 
 @dataclass(frozen=True)
@@ -212,15 +224,38 @@ def verdict_headline(
     return exact, sample
 
 
-def _quantile_ci(x: np.ndarray, q: float) -> tuple[float, float, float]:
-    M = x.size
-    s = np.sort(x)
+def _quantile_ranks(M: int, q: float) -> tuple[int, int, int]:
+    """Ranks of the inverted-CDF ``q``-quantile of ``M`` samples and of its distribution-free 95% interval.
+
+    The quantile is ``x_(v)`` (``numpy.quantile(x, q, method="inverted_cdf")``); the interval
+    ``[x_(j), x_(k)]``, with ``j < 0`` read as ``0`` and ``k >= M`` as ``inf``.
+    """
     j = int(math.floor(M * q - Z95 * math.sqrt(M * q * (1 - q))))
     k = int(math.ceil(M * q + Z95 * math.sqrt(M * q * (1 - q))))
-    value = float(np.quantile(s, q, method="inverted_cdf"))
+    return order_indices(M, np.array([q]))[0], j, k
+
+
+def _quantile_ci(s: np.ndarray, q: float) -> tuple[float, float, float]:
+    """The ``q``-quantile and its 95% interval from ``s``, whose entries at the ranks of :func:`_quantile_ranks`
+    are the order statistics of the samples (``s`` sorted, or selected at those ranks)."""
+    M = s.size
+    v, j, k = _quantile_ranks(M, q)
     lo = float(s[max(j, 0)]) if j >= 0 else 0.0
     hi = float(s[min(k, M - 1)]) if k < M else math.inf
-    return value, lo, hi
+    return float(s[v]), lo, hi
+
+
+def _selected(x: np.ndarray, top: int = 0) -> np.ndarray:
+    """A copy of ``x`` (no NaN) holding its order statistics at the ranks of every quantile of
+    :data:`QUANTILES` and its interval, and its ``top`` largest samples sorted at the end: what
+    ``numpy.sort(x)`` holds at those places, found by selection (:mod:`kfio.simulation._order`)."""
+    M = x.size
+    y = x.copy()
+    a = M - top
+    ks = {min(max(r, 0), M - 1) for q in QUANTILES for r in _quantile_ranks(M, q)}
+    select_in_place(y, sorted({r for r in ks if r < a} | ({a} if 0 < a < M else set())))
+    y[a:].sort()
+    return y
 
 
 def stationary_report(
@@ -246,9 +281,14 @@ def stationary_report(
     """
     x = np.where(np.isfinite(final_traces), final_traces, np.inf)
     M = x.size
-    quantiles = tuple((q, *_quantile_ci(x, q)) for q in QUANTILES)
+    # Hill's estimate reads the k + 1 largest finite positive samples, below the diverged ones (inf)
+    k = M // 20
+    diverged, positive = int(np.count_nonzero(np.isinf(x))), int(np.count_nonzero((x > 0) & (x < np.inf)))
+    hill_ok = k >= 10 and positive > k
+    s = _selected(x, diverged + k + 1 if hill_ok else 0)  # numpy.sort(x) where the report reads it
+    quantiles = tuple((q, *_quantile_ci(s, q)) for q in QUANTILES)
     outage = tuple((m, int((x > m).sum()) / M, *wilson(int((x > m).sum()), M)) for m in thresholds)
-    h, k = hill(x)
+    h = _hill_top(s[M - diverged - k - 1 : M - diverged], k) if hill_ok else None
     interval = (h * (1 - Z95 / math.sqrt(k)), h * (1 + Z95 / math.sqrt(k))) if h is not None else None
     kappa = kappa_text = growth = None
     warnings: list[str] = []
@@ -272,7 +312,8 @@ def stationary_report(
     fq: tuple[tuple[float, float, float, float], ...] = ()
     if filtered_traces is not None:
         xf = np.where(np.isfinite(filtered_traces), filtered_traces, np.inf)
-        fq = tuple((q, *_quantile_ci(xf, q)) for q in QUANTILES)
+        sf = _selected(xf)
+        fq = tuple((q, *_quantile_ci(sf, q)) for q in QUANTILES)
     return StationaryReport(
         step, M, quantiles, outage, h, interval, k, kappa, kappa_text, growth, tuple(warnings), verdict, fq
     )
