@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from ._blind import Margins, Objective, SlotSpace, search
 from ._blind_batch import enumerate_orbits
+from ._cyclic import largest_blind_bound
 from ._pareto import FrontBudgetExceeded, PartialFront, pareto_search
 
 __all__ = [
@@ -18,6 +19,7 @@ __all__ = [
     "PartialFront",
     "SlotSpace",
     "enumerate_orbits",
+    "largest_blind_bound",
     "pareto_search",
     "search",
 ]

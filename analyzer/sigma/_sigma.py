@@ -26,6 +26,7 @@ sets themselves come from :mod:`kfio.search._blind`; with one Markov packet
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 from dataclasses import dataclass
@@ -44,6 +45,7 @@ from ..search import (
     PartialFront,
     SlotSpace,
     enumerate_orbits,
+    largest_blind_bound,
     pareto_search,
     search,
 )
@@ -530,6 +532,7 @@ class _Found:
 
 def _find_worst(
     space: SlotSpace,
+    block_exponents: Sequence[int],
     channels: Sequence[MarkovChannel],
     period: int,
     degenerate: bool,
@@ -551,12 +554,19 @@ def _find_worst(
         )
     objective = _objective(channels, space.n_phases, period)
     if space.n_groups == 1:
+        bound = None
+        if channels[0].order == 0 and space.rows.shape[1] == 1:
+            bound = largest_blind_bound(space.n_phases, block_exponents, budget)
+            if bound is not None:
+                objective = dataclasses.replace(objective, enough=float(bound))
         res = search(space, budget, margins, objective)
         what = "largest blind set (Corollary 2)" if channels[0].order == 0 else "blind set of largest rho(M_F)"
         method = (
             f"branch and bound for the {what}: {res.nodes} flats expanded, {res.planes} resolved in batch, "
             f"window {res.window}"
         )
+        if res.stopped:
+            method += f", stopped at the cyclic-code bound (no blind set holds more than {int(bound or 0)} phases)"
         return _Found(res.maximal[0], (), False, method)
     if all(ch.order == 0 for ch in channels):
         res = pareto_search(space, budget, margins)
@@ -839,7 +849,7 @@ def compute_sigma(block: PhaseBlock, channels: Sequence[MarkovChannel], budget: 
     phase0 = space.mask([(0, g) for g in range(space.n_groups)])
     degenerate = space.rank(phase0, margins) < L
     try:
-        found = _find_worst(space, channels, period, degenerate, fully_blind, budget, margins)
+        found = _find_worst(space, block.exponents, channels, period, degenerate, fully_blind, budget, margins)
     except FrontBudgetExceeded as exc:
         raise SigmaBudgetExceeded(str(exc), sigma_bracket(block, space, channels, exc.found)) from exc
     exponents = _unblind_shares(space, found.worst, channels)
