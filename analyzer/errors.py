@@ -9,6 +9,8 @@ service to status 422.  A missing optional package is not bad input: it is
 
 from __future__ import annotations
 
+from typing import Any
+
 
 class AnalyzerError(Exception):
     """Base class of every error raised by :mod:`kfio`."""
@@ -44,7 +46,18 @@ class LimitExceeded(InvalidInput):
 
 
 class BudgetExceeded(AnalyzerError, TimeoutError):
-    """A computation needed more work than its budget allows."""
+    """A computation needed more work than its budget allows.
+
+    Attributes
+    ----------
+    partial:
+        What the computation had proved when it stopped, as a JSON-ready
+        dict, or ``None``.  The multi-sensor search of ``sigma_k`` sets it to
+        the certified bracket on ``sigma_k`` (docs/sigma.md, "When the budget
+        runs out"); the HTTP problem and the CLI show it.
+    """
+
+    partial: dict[str, Any] | None = None
 
 
 class NumericalFailure(AnalyzerError, ArithmeticError):

@@ -78,6 +78,9 @@ class Problem:
         ``"body"`` or ``"query"``: where ``field`` points.
     retry_after:
         Seconds after which a retry may succeed (sent as ``Retry-After``).
+    partial:
+        What a computation cut short by its budget had proved
+        (:attr:`kfio.errors.BudgetExceeded.partial`), sent as extension members.
     """
 
     status: int
@@ -88,6 +91,7 @@ class Problem:
     rule: str | None = None
     location: str | None = None
     retry_after: int | None = None
+    partial: dict[str, Any] | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON document (members that are ``None`` are left out)."""
@@ -103,6 +107,8 @@ class Problem:
                 doc[key] = escaped(getattr(self, key))
         if self.location is not None:
             doc["in"] = self.location
+        if self.partial is not None:
+            doc.update(self.partial)  # extension members (RFC 9457, section 3.2)
         return doc
 
     def response(self) -> JSONResponse:
@@ -157,7 +163,11 @@ def problem_from_exception(exc: BaseException) -> Problem:
         return input_problem("invalid-input", "Invalid request", exc)
     if isinstance(exc, BudgetExceeded):
         return Problem(
-            504, "budget-exceeded", "Time budget exceeded", f"the computation did not finish within its budget: {exc}"
+            504,
+            "budget-exceeded",
+            "Time budget exceeded",
+            f"the computation did not finish within its budget: {exc}",
+            partial=exc.partial,
         )
     if isinstance(exc, PoolTimeout):
         return Problem(504, "budget-exceeded", "Time budget exceeded", str(exc))

@@ -9,6 +9,17 @@ from __future__ import annotations
 
 from ._blind import Margins, Objective, SlotSpace, search
 from ._blind_batch import enumerate_orbits
-from ._pareto import pareto_search
+from ._cyclic import largest_blind_bound
+from ._pareto import FrontBudgetExceeded, PartialFront, pareto_search
 
-__all__ = ["Margins", "Objective", "SlotSpace", "enumerate_orbits", "pareto_search", "search"]
+__all__ = [
+    "FrontBudgetExceeded",
+    "Margins",
+    "Objective",
+    "PartialFront",
+    "SlotSpace",
+    "enumerate_orbits",
+    "largest_blind_bound",
+    "pareto_search",
+    "search",
+]

@@ -87,11 +87,18 @@ class Objective:
         ``c`` slots may still score as high (``None``: no sharper than
         ``max_weight``).  A sharper window bound than averaging
         ``max_weight`` over the windows.
+    enough:
+        Optional: a score no set exceeds (proved elsewhere, e.g.
+        :func:`kfio.search._cyclic.largest_blind_bound`).  The search stops
+        once the incumbent reaches it; the incumbent only changes to a
+        strictly higher score, so the set returned is the one the full
+        search returns.  Only without ``window_misses``.
     """
 
     score: Score
     max_weight: Callable[[float], int]
     window_misses: Callable[[float, int, int], int | None] | None = None
+    enough: float | None = None
 
 
 @dataclass
@@ -447,6 +454,8 @@ class SearchResult:
     checked:
         Flats of one group checked by the two-group front proof
         (:mod:`kfio.search._pareto_proof`), ``None`` when the walk finished alone.
+    stopped:
+        Branch and bound stopped at :attr:`Objective.enough`, reached by the set found.
     """
 
     maximal: tuple[np.ndarray, ...]
@@ -454,6 +463,7 @@ class SearchResult:
     planes: int
     window: int
     checked: int | None = None
+    stopped: bool = False
 
 
 @dataclass
@@ -477,7 +487,7 @@ class _Incumbent:
 
     def max_misses(self) -> int:
         """Most slots a set may miss and still beat the incumbent (all of them if there is none)."""
-        if self.objective is None or self.mask is None:
+        if self.objective is None or not np.isfinite(self.value):
             return self.space.size
         return self.objective.max_weight(self.value)
 
@@ -522,30 +532,18 @@ def _child(exp: Expansion, c: int) -> Flat:
     return Flat(exp.masks[c], int(exp.cores[c]), exp.kernel, exp.cuts[c], int(exp.cut_ranks[c]))
 
 
-def search(space: SlotSpace, budget: Budget, margins: Margins, objective: Objective | None = None) -> SearchResult:
-    """Depth-first closure search over flats in canonical rotation.
-
-    Parameters
-    ----------
-    objective:
-        ``None`` enumerates every maximal blind set (one per shift orbit);
-        otherwise branch and bound returns one maximal blind set of largest
-        score.
-
-    Enumeration walks flats one at a time;
-    :func:`kfio.search._blind_batch.enumerate_orbits` finds the same
-    orbits in batches, and this walk is its test oracle.
-
-    Raises
-    ------
-    BudgetExceeded
-        When ``budget`` runs out (one tick per expanded or resolved flat).
-    """
+def _walk(
+    space: SlotSpace, budget: Budget, margins: Margins, objective: Objective | None, W: int, floor: float | None
+) -> tuple[_Incumbent, int, int]:
+    """The depth-first walk of :func:`search`; ``floor``: start as if a set of that score were known."""
     best = _Incumbent(space, objective)
-    W = space.window(margins)
+    if floor is not None:
+        best.value = floor
     stack: list[tuple[Flat, float]] = [(root(space, margins), np.inf)]
     nodes = resolved = 0
     while stack:
+        if objective is not None and objective.enough is not None and best.value >= objective.enough:
+            break  # nothing scores higher: the rest of the walk could not change the incumbent
         flat, bound = stack.pop()
         if best.beats(bound):
             continue
@@ -570,6 +568,41 @@ def search(space: SlotSpace, budget: Budget, margins: Margins, objective: Object
         deeper = np.flatnonzero(inner & (exp.dims > 2))
         # Ascending push order: the most promising child is expanded first.
         stack.extend((_child(exp, c), float(bounds[c])) for c in deeper[np.argsort(bounds[deeper], kind="stable")])
+    return best, nodes, resolved
+
+
+def search(space: SlotSpace, budget: Budget, margins: Margins, objective: Objective | None = None) -> SearchResult:
+    """Depth-first closure search over flats in canonical rotation.
+
+    Parameters
+    ----------
+    objective:
+        ``None`` enumerates every maximal blind set (one per shift orbit);
+        otherwise branch and bound returns one maximal blind set of largest
+        score.  With :attr:`Objective.enough`, a walk that keeps only the
+        sets reaching it runs first, and the search stops when it finds
+        one: the same set as the full walk returns (tested against it).
+
+    Enumeration walks flats one at a time;
+    :func:`kfio.search._blind_batch.enumerate_orbits` finds the same
+    orbits in batches, and this walk is its test oracle.
+
+    Raises
+    ------
+    BudgetExceeded
+        When ``budget`` runs out (one tick per expanded or resolved flat).
+    """
+    W = space.window(margins)
+    if objective is not None and objective.enough is not None:
+        assert objective.window_misses is None  # its bound depends on the incumbent's set, not only its score
+        # First only the sets that reach the bound: every test below is monotone in the
+        # incumbent's score, so this walk visits part of the full walk's flats in the same
+        # order and meets the full walk's first set of the top score, if it reaches the bound.
+        floor = objective.enough - 1e-9 * max(1.0, abs(objective.enough))
+        best, nodes, resolved = _walk(space, budget, margins, objective, W, floor)
+        if best.mask is not None:
+            return SearchResult(maximal=(best.mask,), nodes=nodes, planes=resolved, window=W, stopped=True)
+    best, nodes, resolved = _walk(space, budget, margins, objective, W, None)
     if objective is None:
         found = tuple(best.found[k] for k in sorted(best.found))
         return SearchResult(maximal=found, nodes=nodes, planes=0, window=W)

@@ -37,10 +37,12 @@ found).  The test oracles are the enumeration of every orbit
 from __future__ import annotations
 
 import functools
+from dataclasses import dataclass
 
 import numpy as np
 
 from .._budget import Budget
+from ..errors import BudgetExceeded
 from ._blind import Margins, Objective, SearchResult, SlotSpace, group_space, search
 
 #: Flats the walk over both groups may expand before a two-group front is
@@ -156,6 +158,33 @@ def _held(masks: np.ndarray) -> np.ndarray:
     return masks.sum(axis=1).astype(float)
 
 
+@dataclass(frozen=True)
+class PartialFront:
+    """What a Pareto search had established when its budget ran out.
+
+    Attributes
+    ----------
+    masks:
+        Maximal blind sets found (numerical ranks), one per undominated miss
+        vector of the front so far; each is a lower bound on ``sigma``.
+    lower:
+        ``m_g`` of :func:`group_extremes` (every blind set misses at least
+        ``m_g`` slots of group ``g``), or ``None`` when the one-group
+        searches did not finish.
+    """
+
+    masks: tuple[np.ndarray, ...]
+    lower: np.ndarray | None
+
+
+class FrontBudgetExceeded(BudgetExceeded):
+    """:class:`~kfio.errors.BudgetExceeded` of :func:`pareto_search`, with the front found so far."""
+
+    def __init__(self, message: str, found: PartialFront) -> None:
+        super().__init__(message)
+        self.found = found
+
+
 def pareto_search(space: SlotSpace, budget: Budget, margins: Margins) -> SearchResult:
     """One maximal blind set per undominated miss vector (Rohr, Marelli and Fu (2014), Corollary 2).
 
@@ -176,15 +205,27 @@ def pareto_search(space: SlotSpace, budget: Budget, margins: Margins) -> SearchR
 
     Raises
     ------
-    BudgetExceeded
+    FrontBudgetExceeded
         When ``budget`` runs out (one tick per expanded flat, also in the
-        one-group searches for ``m_g``).
+        one-group searches for ``m_g``), with the sets and bounds found so far.
     """
+    lower: np.ndarray | None = None
+    front: Front | None = None
+    try:
+        lower, seeds = group_extremes(space, budget, margins)
+        front = Front(space, lower)
+        return _pareto_search(space, budget, margins, front, seeds)
+    except BudgetExceeded as exc:
+        masks = tuple(front.masks) if front is not None else ()
+        raise FrontBudgetExceeded(str(exc), PartialFront(masks, lower)) from exc
+
+
+def _pareto_search(
+    space: SlotSpace, budget: Budget, margins: Margins, front: Front, seeds: list[np.ndarray]
+) -> SearchResult:
     from ._blind_batch import NodeCap, real_space, walk  # local: _blind_batch is heavier and imports _blind too
     from ._pareto_proof import prove_front
 
-    lower, seeds = group_extremes(space, budget, margins)
-    front = Front(space, lower)
     if seeds:
         front.offer(np.array(seeds))
     real = real_space(space)

@@ -7,9 +7,11 @@ exact sign of ``|alpha_k|^2 sigma_k - 1`` (:mod:`_decide`).
 from __future__ import annotations
 
 from ._decide import VERDICTS, bernoulli_factor, compare_rate_bernoulli, compare_rate_markov, rho_poly, spectral_radius
-from ._sigma import SigmaResult, compute_sigma, period_transfer_matrix
+from ._sigma import SigmaBracket, SigmaBudgetExceeded, SigmaResult, compute_sigma, period_transfer_matrix
 
 __all__ = [
+    "SigmaBracket",
+    "SigmaBudgetExceeded",
     "SigmaResult",
     "VERDICTS",
     "rho_poly",

@@ -26,6 +26,7 @@ sets themselves come from :mod:`kfio.search._blind`; with one Markov packet
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 from dataclasses import dataclass
@@ -35,9 +36,19 @@ from typing import Sequence
 import numpy as np
 
 from .._budget import Budget
-from ..errors import AssumptionViolation, InvalidInput, NumericalFailure
+from ..errors import AssumptionViolation, BudgetExceeded, InvalidInput, NumericalFailure
 from ..model import MarkovChannel
-from ..search import Margins, Objective, SlotSpace, enumerate_orbits, pareto_search, search
+from ..search import (
+    FrontBudgetExceeded,
+    Margins,
+    Objective,
+    PartialFront,
+    SlotSpace,
+    enumerate_orbits,
+    largest_blind_bound,
+    pareto_search,
+    search,
+)
 from ..structure import PhaseBlock
 
 #: Closure-search steps allowed when the caller passes no budget.
@@ -521,6 +532,7 @@ class _Found:
 
 def _find_worst(
     space: SlotSpace,
+    block_exponents: Sequence[int],
     channels: Sequence[MarkovChannel],
     period: int,
     degenerate: bool,
@@ -542,12 +554,19 @@ def _find_worst(
         )
     objective = _objective(channels, space.n_phases, period)
     if space.n_groups == 1:
+        bound = None
+        if channels[0].order == 0 and space.rows.shape[1] == 1:
+            bound = largest_blind_bound(space.n_phases, block_exponents, budget)
+            if bound is not None:
+                objective = dataclasses.replace(objective, enough=float(bound))
         res = search(space, budget, margins, objective)
         what = "largest blind set (Corollary 2)" if channels[0].order == 0 else "blind set of largest rho(M_F)"
         method = (
             f"branch and bound for the {what}: {res.nodes} flats expanded, {res.planes} resolved in batch, "
             f"window {res.window}"
         )
+        if res.stopped:
+            method += f", stopped at the cyclic-code bound (no blind set holds more than {int(bound or 0)} phases)"
         return _Found(res.maximal[0], (), False, method)
     if all(ch.order == 0 for ch in channels):
         res = pareto_search(space, budget, margins)
@@ -663,6 +682,105 @@ def _sigma_values(
     return math.exp(log_rho / period), math.exp(log_rho)
 
 
+@dataclass(frozen=True)
+class SigmaBracket:
+    """A certified bracket on ``sigma_k`` of independent Bernoulli sensors, from a search cut short.
+
+    With Bernoulli channels ``rho(P_F) = prod_g (1 - lambda_g)^{z_g}`` over the
+    ``N0`` base phases (Rohr, Marelli and Fu (2014), Corollary 2), so
+    ``sigma^N0`` lies in ``[lower, upper]``:
+
+    * ``lower`` is attained by a blind set (its rank drop is confirmed in exact
+      arithmetic when ``lower_exact``; the empty set, always blind, when the
+      search found nothing better): ``sigma >= lower^(1/N0)``;
+    * every blind set misses at least ``upper_misses[g]`` phases of sensor
+      ``g`` (each sensor alone: a subset of a blind set is blind), so
+      ``sigma <= upper^(1/N0)`` with ``upper = prod_g (1 - lambda_g)^{upper_misses[g]}``
+      (``1`` when those one-sensor searches did not finish).
+
+    Attributes
+    ----------
+    phases:
+        ``N0``, the base period of the block.
+    lower, upper:
+        ``sigma^N0`` bounds, exact rationals.
+    lower_set:
+        Slots ``(n, g)`` of the blind set attaining ``lower``.
+    lower_misses, upper_misses:
+        Per sensor, the phases missed by ``lower_set``, and the proved least
+        misses (``None``: not proved).
+    lower_exact:
+        Whether ``lower_set``'s rank drop was confirmed in exact arithmetic.
+    found:
+        Miss vectors of every blind set the search had kept.
+    """
+
+    phases: int
+    lower: Fraction
+    upper: Fraction
+    lower_set: tuple[tuple[int, int], ...]
+    lower_misses: tuple[int, ...]
+    upper_misses: tuple[int, ...] | None
+    lower_exact: bool
+    found: tuple[tuple[int, ...], ...]
+
+
+class SigmaBudgetExceeded(BudgetExceeded):
+    """:class:`~kfio.errors.BudgetExceeded` of :func:`compute_sigma` with the bracket proved so far."""
+
+    def __init__(self, message: str, bracket: SigmaBracket) -> None:
+        super().__init__(message)
+        self.bracket = bracket
+
+
+def sigma_bracket(
+    block: PhaseBlock, space: SlotSpace, channels: Sequence[MarkovChannel], found: PartialFront
+) -> SigmaBracket:
+    """The bracket of :class:`SigmaBracket` from what a cut-short Pareto search found.
+
+    Candidates for the lower end are the sets found and the empty set (blind
+    whenever the block has a column); the best one whose rank drop the exact
+    oracle confirms is taken (numerically decided sets count only when there
+    is no oracle, and ``lower_exact`` then says so).  No budget is charged:
+    one exact rank per candidate at most.
+    """
+    loss = [1 - ch.table[0] for ch in channels]
+    N0, G = space.n_phases, space.n_groups
+
+    def misses(mask: np.ndarray) -> tuple[int, ...]:
+        return tuple(int(z) for z in N0 - mask.reshape(N0, G).sum(axis=0))
+
+    def value(z: Sequence[int]) -> Fraction:
+        return math.prod((q**k for q, k in zip(loss, z)), start=Fraction(1))
+
+    empty = np.zeros(space.size, dtype=bool)
+    candidates = sorted(list(found.masks) + [empty], key=lambda m: value(misses(m)), reverse=True)
+    oracle = block.exact_rank
+    lower_set, lower_exact = empty, True
+    for mask in candidates:
+        if not mask.any():
+            break  # the empty set: rank 0 < L
+        rank = oracle(space.slots(mask)) if oracle is not None else None
+        if rank is None:
+            lower_set, lower_exact = mask, False
+            break
+        if rank < space.n_columns:
+            lower_set = mask
+            break
+    up = None if found.lower is None else tuple(int(m) for m in found.lower)
+    upper = Fraction(1) if up is None else value(up)
+    return SigmaBracket(
+        phases=N0,
+        lower=value(misses(lower_set)),
+        upper=upper,
+        lower_set=tuple((int(n), int(g)) for n, g in space.slots(lower_set)),
+        lower_misses=misses(lower_set),
+        upper_misses=up,
+        lower_exact=lower_exact,
+        found=tuple(misses(m) for m in found.masks),
+    )
+
+
 def compute_sigma(block: PhaseBlock, channels: Sequence[MarkovChannel], budget: Budget | None = None) -> SigmaResult:
     """``sigma_k`` of a reduced FMO block (Rohr, Marelli and Fu (2014), Lemmas 2-3, Corollary 2).
 
@@ -702,7 +820,9 @@ def compute_sigma(block: PhaseBlock, channels: Sequence[MarkovChannel], budget: 
     AssumptionViolation
         An arrival probability of 0 or 1 (Rohr, Marelli and Fu (2014), Assumption 1).
     BudgetExceeded
-        The closure search or the exact checks need more than ``budget``.
+        The closure search or the exact checks need more than ``budget``;
+        :class:`SigmaBudgetExceeded` (with the bracket proved so far) when the
+        search over several Bernoulli sensors was cut short.
     NumericalFailure
         Exact arithmetic contradicts a numerical rank decision.
 
@@ -728,7 +848,10 @@ def compute_sigma(block: PhaseBlock, channels: Sequence[MarkovChannel], budget: 
     fully_blind = space.rank(np.ones(space.size, dtype=bool), margins) < L
     phase0 = space.mask([(0, g) for g in range(space.n_groups)])
     degenerate = space.rank(phase0, margins) < L
-    found = _find_worst(space, channels, period, degenerate, fully_blind, budget, margins)
+    try:
+        found = _find_worst(space, block.exponents, channels, period, degenerate, fully_blind, budget, margins)
+    except FrontBudgetExceeded as exc:
+        raise SigmaBudgetExceeded(str(exc), sigma_bracket(block, space, channels, exc.found)) from exc
     exponents = _unblind_shares(space, found.worst, channels)
     sigma, rho = _sigma_values(space, found, channels, period, exponents)
     certified, cert_note = _certify(
@@ -759,6 +882,8 @@ def _margin_note(margins: Margins) -> str:
 
 __all__ = [
     "DEFAULT_MAX_STEPS",
+    "SigmaBracket",
+    "SigmaBudgetExceeded",
     "SigmaResult",
     "compute_sigma",
     "period_transfer_matrix",

@@ -38,6 +38,8 @@ from ..model import MarkovChannel, PerSensorChannel, Request, packets_of, requir
 from ..model import SystemRecord as System
 from ..sigma import (
     VERDICTS,
+    SigmaBracket,
+    SigmaBudgetExceeded,
     SigmaResult,
     bernoulli_factor,
     compare_rate_bernoulli,
@@ -255,6 +257,58 @@ def _sigma_exact(res: SigmaResult, c: Fraction | None) -> RealRadical | None:
     return RealRadical.of(c, res.period)
 
 
+def sigma_bracket_json(block: FmoBlock, bracket: SigmaBracket) -> dict[str, Any]:
+    """The bracket on ``sigma_k`` a cut-short search proved, and what it decides (Theorem 1).
+
+    ``sigma`` lies between the two ends (:class:`kfio.sigma.SigmaBracket` says
+    what proves each); ``|alpha|^2 sigma_lower > 1`` already proves that the
+    expected covariance diverges, ``|alpha|^2 sigma_upper < 1`` that this
+    block does not make it diverge (Rohr, Marelli and Fu (2014), Theorem 1).
+    The comparisons are exact (``sigma^N0`` is rational) when ``|alpha|^2``
+    has an exact form, else from its certified enclosure.
+    """
+    N0 = bracket.phases
+    ends: dict[str, Any] = {}
+    signs = []
+    for name, c in (("lower", bracket.lower), ("upper", bracket.upper)):
+        root = RealRadical.of(c, N0)
+        sign, exact = compare_rate_bernoulli(block.modulus_sq, block.modulus_sq_float, N0, c, block.compare_power)
+        signs.append((sign, exact))
+        ends[name] = {"sigma": float(root.approx(20)), "sigma_exact": root.text()}
+    ends["lower"]["blind_set"] = [list(slot) for slot in bracket.lower_set]
+    ends["lower"]["miss_counts"] = list(bracket.lower_misses)
+    ends["lower"]["proof"] = (
+        "the empty set, blind in every block"
+        if not bracket.lower_set
+        else "a maximal blind set the search found, its rank drop "
+        + ("confirmed in exact arithmetic" if bracket.lower_exact else "decided numerically (no exact oracle)")
+    )
+    ends["upper"]["miss_counts_at_least"] = None if bracket.upper_misses is None else list(bracket.upper_misses)
+    ends["upper"]["proof"] = (
+        "sigma <= 1 (the search for each sensor alone did not finish)"
+        if bracket.upper_misses is None
+        else "each sensor alone: its largest blind set (one-sensor branch and bound) bounds the phases every blind "
+        "set misses"
+    )
+    (lo, lo_exact), (hi, hi_exact) = signs
+    if lo > 0:
+        implies = "unstable: |alpha|^2 sigma > 1 already at the lower end, so the expected covariance diverges"
+    elif hi < 0:
+        implies = "this block is stable: |alpha|^2 sigma < 1 at the upper end (other blocks were not all decided)"
+    else:
+        implies = "undecided: |alpha|^2 sigma - 1 changes sign inside the bracket"
+    return {
+        "block_eigenvalues": list(block.eigenvalue_texts),
+        "modulus": _modulus_float(block),
+        "phases": N0,
+        "sigma_lower": ends["lower"],
+        "sigma_upper": ends["upper"],
+        "found_miss_counts": [list(z) for z in bracket.found],
+        "implies": implies,
+        "exact_comparison": bool((lo_exact if lo > 0 else True) and (hi_exact if hi < 0 else True)),
+    }
+
+
 def _analyze_block(
     block: FmoBlock, channels: list[MarkovChannel], basis: str, budget: Budget
 ) -> tuple[BlockReport, Optional[SigmaResult]]:
@@ -287,7 +341,11 @@ def _analyze_block(
             **base,
         ), None
     assert block.phase is not None  # the zero class has |alpha| = 0 < 1
-    res = compute_sigma(block.phase, channels, budget)
+    try:
+        res = compute_sigma(block.phase, channels, budget)
+    except SigmaBudgetExceeded as exc:
+        exc.partial = {"sigma_bracket": sigma_bracket_json(block, exc.bracket)}
+        raise
     N = res.period
     lambdas = [ch.bernoulli_lambda for ch in channels]
     all_bernoulli = all(lam is not None and ch.model == "bernoulli" for lam, ch in zip(lambdas, channels))

@@ -590,6 +590,12 @@ COMPONENTS: dict[str, dict[str, Any]] = {
                 "description": "Where `field` points: a JSON pointer into the body, or the name of a query "
                 "parameter, path parameter or header",
             },
+            "sigma_bracket": {
+                "type": "object",
+                "description": "budget-exceeded only, when the search for sigma_k over several Bernoulli sensors "
+                "was cut short: the bracket on sigma_k it had proved (sigma_lower, sigma_upper, each with what "
+                "proves it) and what the bracket already decides (docs/sigma.md)",
+            },
         },
         "required": ["type", "title", "status", "detail"],
         "examples": [

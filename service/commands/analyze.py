@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+from typing import Any
 
 from .. import exitcodes
 from ..io import add_request_arguments, dump_json, emit, run_request_command
@@ -31,15 +32,35 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=_run, quick_exit=True)
 
 
+def partial_summary(partial: dict[str, Any]) -> str:
+    """Text of :attr:`kfio.errors.BudgetExceeded.partial` for the terminal (the bracket on ``sigma_k``)."""
+    b = partial.get("sigma_bracket")
+    if b is None:
+        return "kfio: proved before the budget ran out: " + ", ".join(sorted(partial))
+    lo, hi = b["sigma_lower"], b["sigma_upper"]
+    return (
+        f"Budget exceeded in the search for sigma_k (block |alpha| = {b['modulus']:.6g}, {b['phases']} phases); "
+        f"proved so far:\n"
+        f"  sigma_k >= {lo['sigma_exact']} = {lo['sigma']:.6g}: {lo['proof']}\n"
+        f"  sigma_k <= {hi['sigma_exact']} = {hi['sigma']:.6g}: {hi['proof']}\n"
+        f"  {b['implies']}"
+    )
+
+
 def _run(args: argparse.Namespace) -> int:
-    from kfio import Budget, Request, analyze  # here, not at import: `kfio --help` stays fast
+    from kfio import Budget, BudgetExceeded, Request, analyze  # here, not at import: `kfio --help` stays fast
 
     def work(request: Request, budget: Budget) -> int:
         grid = args.ge_grid if args.ge_grid is not None else (41 if args.ge_plot else None)
         if grid is not None:
             opts = {**request.options.get("analyze", {}), "ge_grid": grid}
             request = dataclasses.replace(request, options={**request.options, "analyze": opts})
-        report = analyze(request, budget=budget)
+        try:
+            report = analyze(request, budget=budget)
+        except BudgetExceeded as exc:
+            if exc.partial is not None:  # what was proved before the budget ran out, then exit code 4
+                emit(dump_json(exc.partial) if args.json else partial_summary(exc.partial))
+            raise
         if args.ge_plot:
             from ..plots import draw_ge_region
 
