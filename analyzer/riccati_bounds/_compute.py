@@ -27,13 +27,13 @@ from ..errors import InvalidInput
 from ..model import Request, to_float
 from ._certificate import ExactPlant
 from ._filtered import filtered_bounds, filtered_mean
-from ._lmi import v_bar_sdp
 from ._options import BoundsOptions, parse_bounds_options
 from ._phat import PHat, p_hat_sequence
 from ._report import BoundsReport, CovarianceBounds, CriticalInterval, PHatBounds, RegionMap
 from ._riccati import ArrivalModel, arrival_model, lyapunov_residual, s_bar, solve_v_bar, spectral_radius, subset_rows
 from ._search import CertifiedSearch
 from ._targets import parse_trace_target, smallest_arrival_for_trace
+from ._vbar_sdp import v_bar_sdp
 
 __all__ = ["BoundsReport", "compute_bounds", "critical_lower_bound", "hypotheses"]
 

@@ -4,8 +4,7 @@
   0 < Y <= I`` and its ``m``-packet generalization (Liu and Goldsmith (2004), eq. 20 is
   ``m = 2``), built once with CVXPY parameters and re-solved at every
   bisection step (DPP: each parameter multiplies a variable exactly once).
-* :func:`v_bar_sdp` is Theorem 6(b) of Sinopoli et al. (2004) (with the ``Q`` that its
-  printed block omits, a typo; Liu and Goldsmith (2004) eq. 21 has it) for ``m`` packets.
+* the ``V_bar`` SDP of Theorem 6(b) is :mod:`kfio.riccati_bounds._vbar_sdp`.
 
 Solver answers are hypotheses: :mod:`kfio.riccati_bounds._certificate` re-checks
 them.  The solver is Clarabel (interior point; CVXPY's ``warm_start`` only
@@ -21,8 +20,6 @@ from typing import Sequence
 import cvxpy as cp
 import numpy as np
 import scipy.linalg
-
-from ._riccati import ArrivalModel
 
 SOLVER = cp.CLARABEL
 #: Clarabel options for the stability LMI: its defaults (1e-8).  Looser ones (1e-7) save a fifth
@@ -155,55 +152,3 @@ class StabilityLMI:
             return LMISolution(status, None, None, None)
         Y = 0.5 * (self._Y.value + self._Y.value.T)
         return LMISolution(status, float(self._t.value), Y, tuple(np.array(Z.value) for Z in self._Z))
-
-
-@dataclass(frozen=True)
-class SDPSolution:
-    """``V_bar`` from :func:`v_bar_sdp`: the matrix (or ``None``), CVXPY status and solve time."""
-
-    status: str
-    matrix: np.ndarray | None
-    solve_time: float | None
-
-
-def v_bar_sdp(model: ArrivalModel) -> SDPSolution:
-    r"""``V_bar`` as the SDP of Sinopoli et al. (2004) Theorem 6(b), generalized to ``m`` packets (Liu and Goldsmith (2004), eq. 21).
-
-    .. math::
-
-        \max \operatorname{tr} V \ \text{s.t.}\
-        \begin{bmatrix}
-            A V A' + Q - V & \sqrt{\pi(S_1)} A V C_{S_1}' & \cdots \\
-            \ast & C_{S_1} V C_{S_1}' + R_{S_1 S_1} & 0 \\
-            \vdots & 0 & \ddots
-        \end{bmatrix} \succeq 0,\quad V \succeq 0.
-
-    The Schur complement of the constraint is ``g(V) - V >= 0``; ``V_bar`` is
-    the greatest element of that set (Sinopoli et al. (2004), proof of Theorem 6), so it
-    maximizes the trace.  Sinopoli et al. (2004) prints the top-left block without ``Q``:
-    a typo (without ``Q`` the SDP is homogeneous and its answer is 0 or
-    unbounded).
-    """
-    A, Q = model.A, model.Q
-    n = model.n
-    V = cp.Variable((n, n), symmetric=True)
-    active = model.active()
-    top = [A @ V @ A.T + Q - V] + [np.sqrt(w) * A @ V @ C.T for w, C, _ in active]
-    rows = [top]
-    for i, (w, C, R) in enumerate(active):
-        row = [np.sqrt(w) * C @ V @ A.T]
-        for j, (_, Cj, _) in enumerate(active):
-            row.append(C @ V @ C.T + R if i == j else np.zeros((C.shape[0], Cj.shape[0])))
-        rows.append(row)
-    gamma = cp.bmat(rows)
-    problem = cp.Problem(cp.Maximize(cp.trace(V)), [0.5 * (gamma + gamma.T) >> 0, V >> 0])
-    try:
-        with warnings.catch_warnings():  # an inaccurate answer shows in the status and in the cross-check
-            warnings.simplefilter("ignore", UserWarning)
-            problem.solve(solver=SOLVER)
-    except cp.SolverError:
-        return SDPSolution("solver_error", None, None)
-    status = str(problem.status)
-    if status not in (cp.OPTIMAL, cp.OPTIMAL_INACCURATE) or V.value is None:
-        return SDPSolution(status, None, problem.solver_stats.solve_time if problem.solver_stats else None)
-    return SDPSolution(status, 0.5 * (V.value + V.value.T), problem.solver_stats.solve_time)

@@ -20,10 +20,10 @@ from .._verdicts import Verdict
 from ..model import Packet
 from ._certificate import StabilityCertificate
 from ._filtered import FilteredBounds
-from ._lmi import SDPSolution
 from ._phat import PHat
 from ._riccati import VBarIteration
 from ._search import UpperBound
+from ._vbar_sdp import SDPSolution
 
 if TYPE_CHECKING:  # the exact grid is computed by kfio.stability, which imports no bounds
     from ..stability import RegionGrid

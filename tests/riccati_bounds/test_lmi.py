@@ -11,8 +11,9 @@ import scipy.optimize
 
 from kfio.riccati_bounds import _riccati as riccati
 from kfio.riccati_bounds._certificate import ExactPlant, certify, exact_check, float_check, lyapunov_certificate
-from kfio.riccati_bounds._lmi import StabilityLMI, balancing_scaling, v_bar_sdp
+from kfio.riccati_bounds._lmi import StabilityLMI, balancing_scaling
 from kfio.riccati_bounds._search import CertifiedSearch
+from kfio.riccati_bounds._vbar_sdp import v_bar_sdp
 
 THREE_Q = (
     (Fraction(5, 4), Fraction(1), Fraction(0)),
