@@ -153,7 +153,7 @@ def _loop_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[s
     """``kfio loop``: the closed loop's exact verdict, cost and critical probabilities (:mod:`kfio.loop`)."""
     from kfio.loop import analyze_loop, load_loop_request
 
-    return report_json(analyze_loop(load_loop_request(body, settings.limits())))
+    return report_json(analyze_loop(load_loop_request(body, settings.limits()), budget=budget))
 
 
 def _loop_region_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[str, Any]) -> JobOutput:

@@ -36,7 +36,7 @@ from ._pencil import det_polynomial_of
 from ._verdict import decide
 
 #: Largest operator size for which the exact critical value is computed.
-MAX_CRITICAL_SIZE = 160
+MAX_CRITICAL_SIZE = 200
 
 
 @dataclass(frozen=True)

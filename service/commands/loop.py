@@ -66,9 +66,11 @@ def _run(args: argparse.Namespace) -> int:
 
         def child() -> int:
             def work() -> int:
+                from kfio import Budget
                 from kfio.loop import analyze_loop, load_loop_request  # here: `kfio --help` stays fast
 
-                report = analyze_loop(load_loop_request(data)).to_dict()
+                # the same seconds as the watchdog, as `kfio analyze`: work that checks in stops first (a partial report)
+                report = analyze_loop(load_loop_request(data), budget=Budget(seconds=seconds)).to_dict()
                 emit(dump_json(report) if args.json else summary(report))  # emit: user text made safe
                 return exitcodes.BY_VERDICT[report["verdict"]]
 
