@@ -11,7 +11,7 @@ all solve
 one term per arrival pattern (``K_0 = 0`` for the empty one; Sinopoli et al. (2004), Lemma 3;
 Liu and Goldsmith (2004), eq. 16).  On ``vech`` this is an ``m x m`` system with ``m = n(n+1)/2``:
 ``O(n^6)`` work, 820 unknowns at ``n = 40``.  With several terms it is a *generalized* Stein
-equation, which Bartels and Stewart's method does not solve directly; but every term is ``A``
+equation, which the Bartels-Stewart method does not solve directly; but every term is ``A``
 plus a low-rank change, so
 
 .. math::
@@ -22,8 +22,8 @@ plus a low-rank change, so
 and the equation is one Stein equation ``X - c A X A' = W + (low rank)`` corrected by the
 Sherman-Morrison-Woodbury formula over the ``r = n sum_i p_i`` entries of the ``G_i``
 (``p_i`` rows of ``C_i``): ``r + 1`` Stein solves with the complex Schur form ``A = Z T Z^H``
-(computed once per ``A``; each solve is a column recursion of triangular solves, Bartels and
-Stewart 1972) and one ``r x r`` system.  The answer is substituted back; if the residual is not
+(computed once per ``A``; each solve is a column recursion of triangular solves, the
+Bartels-Stewart method) and one ``r x r`` system.  The answer is substituted back; if the residual is not
 at rounding level (an ill-conditioned ``X - c A X A'``, when two eigenvalues of ``A`` have
 ``c theta_i theta_j`` near 1) the dense ``vech`` solve answers instead, so the result is always
 the one of :func:`solve_dense` up to rounding.  Below :data:`MIN_N` states the dense solve
@@ -64,7 +64,7 @@ def _schur(A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _stein_schur(T: np.ndarray, Z: np.ndarray, c: float, R: np.ndarray) -> np.ndarray:
-    """Solve ``X - c A X A' = R_k`` for a batch ``R`` (``b x n x n``), ``A = Z T Z^H`` (Bartels and Stewart 1972).
+    """Solve ``X - c A X A' = R_k`` for a batch ``R`` (``b x n x n``), ``A = Z T Z^H``.
 
     In Schur coordinates ``Y = Z^H X Z`` the equation is ``Y - c T Y T^H = Z^H R Z``; column
     ``j`` of ``T Y T^H`` is ``T sum_{l >= j} Y_l conj(T_jl)``, so the columns are found from
