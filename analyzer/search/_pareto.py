@@ -37,6 +37,7 @@ found).  The test oracles are the enumeration of every orbit
 from __future__ import annotations
 
 import functools
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -116,7 +117,9 @@ class Front:
             self.masks = [m for m, k in zip(self.masks, keep) if k] + [masks[i].copy()]
 
 
-def group_extremes(space: SlotSpace, budget: Budget, margins: Margins) -> tuple[np.ndarray, list[np.ndarray]]:
+def group_extremes(
+    space: SlotSpace, budget: Budget, margins: Margins, exponents: Sequence[int] | None = None
+) -> tuple[np.ndarray, list[np.ndarray]]:
     """``m_g``, the fewest slots of group ``g`` that a blind set misses, and a maximal blind set attaining each.
 
     A subset of a blind set is blind, so ``D`` blind gives ``D cap g`` blind
@@ -125,7 +128,18 @@ def group_extremes(space: SlotSpace, budget: Budget, margins: Margins) -> tuple[
     group ``g`` alone is rank-deficient).  That largest set has rank
     ``L - 1``; the zero set of its kernel line over every group is a
     maximal blind set with ``z_g = m_g``, returned to seed the front.
+
+    With the block's ``exponents`` and one row per slot, each one-group
+    search stops at :func:`kfio.search._cyclic.largest_blind_bound` (a
+    group of full rank alone has no zero ``c_j`` and distinct exponents),
+    which gives the same set.
     """
+    from ._cyclic import largest_blind_bound  # local: _cyclic imports search from _blind, as this module does
+
+    enough = None
+    if exponents is not None and space.rows.shape[1] == 1:
+        bound = largest_blind_bound(space.n_phases, exponents, budget)
+        enough = None if bound is None else float(bound)
     out = np.zeros(space.n_groups, dtype=int)
     seeds = []
     index = np.arange(space.size)
@@ -133,7 +147,7 @@ def group_extremes(space: SlotSpace, budget: Budget, margins: Margins) -> tuple[
         sub = group_space(space, g)
         if sub.rank(np.ones(sub.size, dtype=bool), margins) < sub.n_columns:
             continue
-        objective = Objective(score=_held, max_weight=functools.partial(_most_misses, sub.size))
+        objective = Objective(score=_held, max_weight=functools.partial(_most_misses, sub.size), enough=enough)
         best = search(sub, budget, margins, objective).maximal[0]
         out[g] = space.n_phases - int(best.sum())
         held = np.isin(index, np.flatnonzero(best) * space.n_groups + g)
@@ -185,7 +199,9 @@ class FrontBudgetExceeded(BudgetExceeded):
         self.found = found
 
 
-def pareto_search(space: SlotSpace, budget: Budget, margins: Margins) -> SearchResult:
+def pareto_search(
+    space: SlotSpace, budget: Budget, margins: Margins, exponents: Sequence[int] | None = None
+) -> SearchResult:
     """One maximal blind set per undominated miss vector (Rohr, Marelli and Fu (2014), Corollary 2).
 
     The batched closure walk of :func:`kfio.search._blind_batch.walk`
@@ -195,6 +211,9 @@ def pareto_search(space: SlotSpace, budget: Budget, margins: Margins) -> SearchR
     start) and :func:`kfio.search._pareto_proof.prove_front` completes
     the front from the big flats of one group at a time (the walk over both
     groups grows like ``C(S, L - 1) / N0`` with dense sensor rows).
+
+    ``exponents`` (the block's, optional) let the one-group searches for
+    ``m_g`` stop early (:func:`group_extremes`).
 
     Returns
     -------
@@ -212,7 +231,7 @@ def pareto_search(space: SlotSpace, budget: Budget, margins: Margins) -> SearchR
     lower: np.ndarray | None = None
     front: Front | None = None
     try:
-        lower, seeds = group_extremes(space, budget, margins)
+        lower, seeds = group_extremes(space, budget, margins, exponents)
         front = Front(space, lower)
         return _pareto_search(space, budget, margins, front, seeds)
     except BudgetExceeded as exc:

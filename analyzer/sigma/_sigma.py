@@ -569,7 +569,7 @@ def _find_worst(
             method += f", stopped at the cyclic-code bound (no blind set holds more than {int(bound or 0)} phases)"
         return _Found(res.maximal[0], (), False, method)
     if all(ch.order == 0 for ch in channels):
-        res = pareto_search(space, budget, margins)
+        res = pareto_search(space, budget, margins, block_exponents)
         vectors = f"{len(res.maximal)} undominated vector{'' if len(res.maximal) == 1 else 's'}"
         proof = f"proved from the big flats of one sensor at a time ({res.checked} checked)"
         if res.checked is None:
