@@ -37,18 +37,60 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=_run, quick_exit=True)
 
 
+def _probability(value: float | None, exact: str | None) -> str:
+    """``0.5625`` or ``0.372842 (exact: 15625.../41908...)``: the decimal first, the exact text beside it when it differs."""
+    text = f"{value:.6g}"
+    return text if exact is None or exact == text else f"{text} (exact: {exact})"
+
+
 def summary(report: dict) -> str:
-    """A few lines for people: the verdict first, then the cost and the critical probabilities."""
-    lines = [f"verdict: {report['verdict']} (spectral radius {report['spectral_radius']:.6g})"]
+    """A few lines for people: the exact verdict first, then the cost, the critical probabilities and the bounds.
+
+    Every number is read from ``report`` (the JSON of ``--json``); a test compares them.
+    """
+    verdict = report["verdict"]
+    lines = [
+        f"verdict: {verdict.upper()}  (exact mean-square verdict, Costa, Fragoso and Marques 2005, Thm 3.9; "
+        f"spectral radius {report['spectral_radius']:.6g})"
+    ]
     cost = report["cost"]
-    lines.append(f"stationary cost: {'unbounded' if cost is None else f'{cost:.6g}'}")
-    for key, name in (("sensor", "sensor"), ("actuator", "actuator")):
-        v = report[f"critical_{key}_arrival_probability_exact"]
-        if v is not None:
-            lines.append(f"critical {name} arrival probability: {v}")
+    lines.append(f"stationary cost of these gains: {'unbounded' if cost is None else f'{cost:.6g}'}")
+    for key in ("sensor", "actuator"):
+        exact = report[f"critical_{key}_arrival_probability_exact"]
+        if exact is not None:
+            value = _probability(report[f"critical_{key}_arrival_probability"], exact)
+            lines.append(f"critical {key} arrival probability: {value}")
     statement = report["estimator_alone"]["statement"]
     if statement:
         lines.append(f"estimator alone: {statement}")
+    lqg = report.get("lqg") or {}
+    nu_c = lqg.get("nu_c")
+    if nu_c:
+        if nu_c.get("is_exact"):
+            lines.append(
+                f"control equation converges iff actuator arrival probability > {_probability(nu_c['lower'], nu_c['exact'])}"
+            )
+        elif nu_c.get("upper") is not None:
+            lines.append(
+                f"control equation's critical actuator probability: in [{nu_c['lower']:.6g}, {nu_c['upper']:.6g}]"
+            )
+    bounds = lqg.get("cost_bounds") or {}
+    if bounds.get("lower") is not None and bounds.get("upper") is not None:
+        lines.append(
+            f"optimal TCP-like LQG cost: between {bounds['lower']:.6g} and {bounds['upper']:.6g} (bounds, "
+            "Schenato, Sinopoli, Franceschetti, Poolla and Sastry 2007, Sec. V)"
+        )
+    udp = report.get("udp_region_bounds") or {}
+    outer = udp.get("outer") or {}
+    if outer.get("sensor_arrival_probability_above") is not None:
+        parts = [
+            f"sensor > {_probability(outer['sensor_arrival_probability_above'], outer['sensor_arrival_probability_above_exact'])}"
+        ]
+        if outer.get("actuator_arrival_probability_above") is not None:
+            parts.append(
+                f"actuator > {_probability(outer['actuator_arrival_probability_above'], outer['actuator_arrival_probability_above_exact'])}"
+            )
+        lines.append(f"optimal UDP-like controller needs (bound): {', '.join(parts)}")
     if report.get("partial"):
         lines += [n for n in report["notes"] if n.startswith("partial:")]
     return "\n".join(lines)
