@@ -449,9 +449,43 @@ function renderLoop(r) {
     ["its critical sensor arrival probability", loopCritical(est.critical_sensor_arrival_probability, est.critical_sensor_arrival_probability_exact, est.critical_value)],
     ["the optimal time-varying filter's (Rohr, Marelli and Fu 2014)", loopCritical(est.optimal_filter_critical_arrival_probability, est.optimal_filter_critical_arrival_probability_exact, { note: est.optimal_filter_note })],
   ]));
-  if (r.lqg) out.append(el("h3", "LQG gains"), el("pre", JSON.stringify(r.lqg, null, 1), "note"));
+  if (r.lqg) out.append(...renderLqg(r.lqg));
+  if (r.udp_region_bounds) out.append(...renderUdpBounds(r.udp_region_bounds));
   out.append(list("Notes", [r.theorem, r.model, ...(r.notes || [])]));
   return out;
+}
+
+/** The optimal TCP-like LQG part of a loop report: the control equation's critical value and the cost bounds. */
+function renderLqg(lqg) {
+  const nu = lqg.nu_c || {};
+  const b = lqg.cost_bounds || {};
+  const nuText = nu.is_exact ? num(nu.exact, nu.lower)
+    : nu.upper !== null && nu.upper !== undefined ? `between ${dec(nu.lower)} and ${dec(nu.upper)} (bracket)` : "not available";
+  const bounds = b.lower !== null && b.lower !== undefined && b.upper !== null && b.upper !== undefined
+    ? `between ${dec(b.lower)} and ${dec(b.upper)}` : `not available${b.reason ? `: ${b.reason}` : ""}`;
+  const d = facts([
+    ["the control equation converges iff the actuator arrival probability exceeds", nuText],
+    ["optimal TCP-like LQG cost J (bounds, Schenato, Sinopoli, Franceschetti, Poolla and Sastry 2007, Sec. V)", bounds],
+    ["lower bound from", b.lower_from],
+    ["upper bound from", b.upper_from],
+    ["the paper's upper bound", b.paper_upper === null || b.paper_upper === undefined ? undefined : dec(b.paper_upper)],
+  ]);
+  d.id = "loop-lqg";
+  const src = el("p", `${b.formula || ""}${b.applies_to ? `. ${b.applies_to}.` : ""}`, "note");
+  return [el("h3", "Optimal LQG over the lossy links (TCP-like): bounds beside the exact analysis of the gains"), d, src];
+}
+
+/** Bounds on the optimal UDP-like controller's critical region (labelled as bounds). */
+function renderUdpBounds(u) {
+  const o = u.outer || {};
+  const above = (v, exact) => (v === null || v === undefined ? "no bound here" : put(el("span"), "above ", num(exact, v)));
+  const d = facts([
+    ["sensor arrival probability", above(o.sensor_arrival_probability_above, o.sensor_arrival_probability_above_exact)],
+    ["actuator arrival probability", above(o.actuator_arrival_probability_above, o.actuator_arrival_probability_above_exact)],
+    ["the request's point inside the outer bound", u.request_point_inside_optimal_region === null || u.request_point_inside_optimal_region === undefined ? undefined : (u.request_point_inside_optimal_region ? "yes" : "no")],
+  ]);
+  d.id = "loop-udp";
+  return [el("h3", "Optimal UDP-like controller: what any design needs (bounds)"), d, el("p", `${u.kind || ""}. Inner bound: ${u.inner || ""}.`, "note")];
 }
 
 // ---------------------------------------------------------------- plots beside the numbers

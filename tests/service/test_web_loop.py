@@ -62,3 +62,29 @@ def test_loop_example_headlines_the_exact_verdict_and_shows_the_reports_numbers(
     ARTIFACTS.mkdir(parents=True, exist_ok=True)
     page.locator("#results").screenshot(path=str(ARTIFACTS / "web-loop.png"))
     assert outside == []
+
+
+@pytest.mark.parametrize("example", ["loop-lqg", "loop-udp"])
+def test_lqg_and_udp_bounds_are_shown_as_the_report_has_them(
+    server: LiveServer, browser_context: tuple[Any, list[str]], example: str
+) -> None:
+    context, outside = browser_context
+    outside.clear()
+    page = open_page(context, server.url + "/")
+    report = run_example(page, example, "loop")
+    verdict, word, _ = headline(page)
+    assert verdict == word == report["verdict"]  # the exact verdict first, the bounds below it
+    if example == "loop-lqg":
+        facts = page.locator("#loop-lqg").inner_text()
+        bounds, nu_c = report["lqg"]["cost_bounds"], report["lqg"]["nu_c"]
+        assert f"between {dec(bounds['lower'])} and {dec(bounds['upper'])}" in facts
+        assert nu_c["exact"] == "9/25" and f"9/25 = {dec(nu_c['lower'])}" in facts
+        assert page.locator("#loop-udp").count() == 0
+    else:
+        outer = report["udp_region_bounds"]["outer"]
+        facts = page.locator("#loop-udp").inner_text()
+        for link in ("sensor", "actuator"):
+            exact, value = outer[f"{link}_arrival_probability_above_exact"], outer[f"{link}_arrival_probability_above"]
+            assert f"above {exact} = {dec(value)}" in facts
+        assert page.locator("#loop-lqg").count() == 0
+    assert outside == []

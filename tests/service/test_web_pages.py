@@ -118,7 +118,8 @@ def test_shipped_examples_are_valid_requests_matching_the_repository_examples(cl
         body = client.get(f"/static/requests/{example['id']}.json").content
         if example["endpoint"] == "loop":  # a loop request (docs/loop.md), the repository example
             load_loop_request(body)  # raises on an invalid loop request
-            assert json.loads(body) == json.loads((REPO / "examples" / "loop_scalar.json").read_text())
+            repo_example = REPO / "examples" / f"{example['id'].replace('-', '_')}.json"  # loop-lqg: loop_lqg.json
+            assert json.loads(body) == json.loads(repo_example.read_text())
         else:
             load_request(body)  # raises on an invalid request
     # the 2x2 example is the one of the browser test: A = [[1.25, 0], [1, 1.1]], C = [1 1], Q = 20 I, R = 2.5
