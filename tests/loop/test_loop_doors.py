@@ -114,7 +114,7 @@ def test_exit_codes_follow_the_verdict(capsys, tmp_path, nu, code):
     body = json.loads((ROOT / "examples" / "loop_scalar.json").read_text())
     body["actuator_channel"]["arrival_probability"] = nu
     got, out, _ = _cli(capsys, tmp_path, body)
-    assert got == code and out.startswith("verdict: " + ("stable" if code == 0 else "unstable"))
+    assert got == code and out.startswith("verdict: " + ("STABLE  " if code == 0 else "UNSTABLE  "))
 
 
 def test_the_loop_report_and_request_validate_against_their_published_schemas(capsys, tmp_path):
