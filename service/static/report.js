@@ -471,7 +471,7 @@ function renderLqg(lqg) {
     ["the paper's upper bound", b.paper_upper === null || b.paper_upper === undefined ? undefined : dec(b.paper_upper)],
   ]);
   d.id = "loop-lqg";
-  const src = el("p", `${b.formula || ""}${b.applies_to ? `. ${b.applies_to}.` : ""}`, "note");
+  const src = el("p", [b.formula, b.applies_to].filter(Boolean).map(capitalized).join(". ") + ".", "note");
   return [el("h3", "Optimal LQG over the lossy links (TCP-like): bounds beside the exact analysis of the gains"), d, src];
 }
 
@@ -485,7 +485,12 @@ function renderUdpBounds(u) {
     ["the request's point inside the outer bound", u.request_point_inside_optimal_region === null || u.request_point_inside_optimal_region === undefined ? undefined : (u.request_point_inside_optimal_region ? "yes" : "no")],
   ]);
   d.id = "loop-udp";
-  return [el("h3", "Optimal UDP-like controller: what any design needs (bounds)"), d, el("p", `${u.kind || ""}. Inner bound: ${u.inner || ""}.`, "note")];
+  return [el("h3", "Optimal UDP-like controller: what any design needs (bounds)"), d, el("p", `${capitalized(u.kind || "")}. Inner bound: ${u.inner || ""}.`, "note")];
+}
+
+/** ``text`` with its first letter in upper case (report strings start a sentence on the page). */
+function capitalized(text) {
+  return text ? text.charAt(0).toUpperCase() + text.slice(1) : text;
 }
 
 // ---------------------------------------------------------------- plots beside the numbers
