@@ -54,6 +54,11 @@ def _exact(m: np.ndarray) -> tuple[tuple[Fraction, ...], ...]:
     return tuple(tuple(Fraction(Decimal(repr(float(x)))) for x in row) for row in m)
 
 
+def lqg_floats(req: Any) -> tuple[np.ndarray, ...]:
+    """``A, B, C, Q, R, W, U`` of an LQG loop request as float64 arrays (the data both MAREs read)."""
+    return tuple(to_float(m) for m in (req.system.A, req.B, req.system.C, req.system.Q, req.system.R, req.W, req.U))
+
+
 def with_lqg_gains(req: Any) -> Any:
     """``req`` (a :class:`kfio.loop._model.LoopRequest`) with the stationary TCP-like gains ``K`` and ``L``.
 
@@ -69,9 +74,7 @@ def with_lqg_gains(req: Any) -> Any:
         raise InvalidInput("/actuator_channel", "LQG gains need a Bernoulli actuator channel (the control MARE's nu)")
     if isinstance(req.channel, PerSensorChannel) or req.channel.model != "bernoulli":
         raise InvalidInput("/channel", "LQG gains need one Bernoulli sensor packet (the estimation MARE's lambda)")
-    A, B, C = to_float(req.system.A), to_float(req.B), to_float(req.system.C)
-    Q, R = to_float(req.system.Q), to_float(req.system.R)
-    W, U = to_float(req.W), to_float(req.U)
+    A, B, C, Q, R, W, U = lqg_floats(req)
     nu, lam = float(req.actuator.table[0]), float(req.channel.table[0])
     S = mare_fixed_point(A, B, W, U, nu)
     if S is None:

@@ -42,8 +42,8 @@ from typing import Any
 
 import numpy as np
 
-from ..model import PerSensorChannel, Request, to_float
-from ._lqg import mare_fixed_point
+from ..model import PerSensorChannel, Request
+from ._lqg import lqg_floats, mare_fixed_point
 
 #: How the bounds are named in the report.
 PAPER = "Schenato, Sinopoli, Franceschetti, Poolla and Sastry 2007, Sec. V"
@@ -91,9 +91,7 @@ def lqg_cost_bounds(req: Any, budget: Any = None) -> dict[str, Any]:
         return unavailable("kfio's covariance bounds need one Bernoulli sensor packet here")
     if req.actuator.model != "bernoulli":
         return unavailable("the control modified Riccati equation needs a Bernoulli actuator link")
-    A, B, C = to_float(req.system.A), to_float(req.B), to_float(req.system.C)
-    Q, R = to_float(req.system.Q), to_float(req.system.R)
-    W, U = to_float(req.W), to_float(req.U)
+    A, B, C, Q, R, W, U = lqg_floats(req)
     lam, nu = float(req.channel.table[0]), float(req.actuator.table[0])
     S = mare_fixed_point(A, B, W, U, nu)
     if S is None:

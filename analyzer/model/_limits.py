@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from functools import lru_cache
 
 
 @dataclass(frozen=True)
@@ -28,6 +29,7 @@ class Limits:
     max_outputs: int = 40
     max_sensors: int = 8
 
+    @lru_cache(maxsize=64)  # noqa: B019 - frozen, hashable and few: a sweep asks once per point
     def for_command(self, command: str | None) -> Limits:
         """The limits a request for ``command`` is validated with.
 

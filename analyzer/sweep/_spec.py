@@ -460,10 +460,11 @@ def check_points(
         from ..loop import parse_loop_request
 
         validate = parse_loop_request
+    point_limits = limits.for_command(spec.command)  # once, not per point
     n = 0
     for p in points(spec):
         try:
-            validate(p.request, limits.for_command(spec.command))
+            validate(p.request, point_limits)
         except InvalidInput as exc:
             raise SweepPointInvalid(p.index, exc.field if exc.field != "/" else "", exc.rule) from None
         if keep is not None:
