@@ -87,10 +87,12 @@ class BatchedMare:
     def correction(self, h: np.ndarray) -> np.ndarray:
         """``vech(A X C'(C X C' + R)^-1 C X A')`` for a batch ``h`` of ``vech(X)`` rows."""
         AXC = h @ self._AXC
-        S = h @ self._CXC + self._r
+        S = h @ self._CXC
+        S += self._r
         if self.p == 1:
-            G = AXC / np.sqrt(S)
-            return G[:, self._iu] * G[:, self._ju]
+            np.sqrt(S, out=S)
+            AXC /= S  # in place: the same quotients, the same layout
+            return AXC[:, self._iu] * AXC[:, self._ju]
         L = np.linalg.cholesky(S.reshape(-1, self.p, self.p))
         G = np.linalg.solve(L, AXC.reshape(-1, self.n, self.p).transpose(0, 2, 1))
         return np.einsum("bki,bki->bi", G[:, :, self._iu], G[:, :, self._ju])

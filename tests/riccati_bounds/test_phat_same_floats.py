@@ -16,6 +16,17 @@ from kfio.riccati_bounds._phat import BatchedMare, p_hat_sequence
 from kfio.riccati_bounds._vech import vech
 
 
+def reference_correction(op: BatchedMare, h: np.ndarray) -> np.ndarray:
+    AXC = h @ op._AXC
+    S = h @ op._CXC + op._r
+    if op.p == 1:
+        G = AXC / np.sqrt(S)
+        return G[:, op._iu] * G[:, op._ju]
+    L = np.linalg.cholesky(S.reshape(-1, op.p, op.p))
+    G = np.linalg.solve(L, AXC.reshape(-1, op.n, op.p).transpose(0, 2, 1))
+    return np.einsum("bki,bki->bi", G[:, :, op._iu], G[:, :, op._ju])
+
+
 def reference_descend(op: BatchedMare, level: np.ndarray, w: np.ndarray, depth: int) -> np.ndarray:
     lam = op.lam
     while depth > 1:
@@ -29,10 +40,10 @@ def reference_descend(op: BatchedMare, level: np.ndarray, w: np.ndarray, depth: 
         phi0 += op._q
         nxt = np.empty((2 * b, level.shape[1]))
         nxt[:b] = phi0
-        np.subtract(phi0, op.correction(level), out=nxt[b:])
+        np.subtract(phi0, reference_correction(op, level), out=nxt[b:])
         level, w = nxt, np.concatenate([w * (1.0 - lam), w * lam])
         depth -= 1
-    return (w @ level) @ op._AXA + w.sum() * op._q - lam * (w @ op.correction(level))
+    return (w @ level) @ op._AXA + w.sum() * op._q - lam * (w @ reference_correction(op, level))
 
 
 def random_plant(rng: np.random.Generator, n: int, p: int):
