@@ -94,7 +94,7 @@ def test_no_usable_preconditioner_declines() -> None:
     assert solve_stein([(1.0, A)], [np.eye(14)]) is None  # its own Stein equation is not stable
 
 
-def test_callers_keep_the_dense_route_up_to_twelve_states(monkeypatch) -> None:
+def test_callers_keep_the_dense_route_up_to_dense_max_n(monkeypatch) -> None:
     def boom(*args, **kwargs):
         raise AssertionError("the GMRES route was used at n <= DENSE_MAX_N")
 
@@ -108,7 +108,7 @@ def test_callers_keep_the_dense_route_up_to_twelve_states(monkeypatch) -> None:
         assert it.newton_steps >= 1
 
 
-@pytest.mark.parametrize("n", [14, 18])
+@pytest.mark.parametrize("n", [DENSE_MAX_N + 1, DENSE_MAX_N + 4])
 def test_policy_evaluation_and_certificate_match_the_dense_route(n: int, monkeypatch) -> None:
     rng = np.random.default_rng(n)
     A = rng.normal(size=(n, n))
