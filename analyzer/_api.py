@@ -271,7 +271,7 @@ def bounds(
         As in :func:`analyze`.
     options:
         ``options.bounds`` of a request: ``tolerance``, ``horizon``, ``grid``,
-        ``arrival_probability``, ``trace_target``.
+        ``arrival_probability``, ``trace_target``, ``sdp_cross_check``.
 
     Returns
     -------

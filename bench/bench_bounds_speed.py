@@ -1,12 +1,13 @@
 """``kfio bounds`` end to end (issue 25): CPU of ``compute_bounds`` against a reference commit, same run.
 
-    python bench/bench_bounds_speed.py [--reference 13e923d] [--sizes 3,10,20]
+    python bench/bench_bounds_speed.py [--reference 13e923d] [--sizes 3,10,20] [--examples FILE,...] [--repeat R]
 
 For each size, one system of ``bench_bounds.random_system`` (seed 0, two outputs, ``Q = I``,
 ``R = I``, Bernoulli ``0.9``) goes through :func:`kfio.riccati_bounds._compute.compute_bounds` (the work of
 ``kfio bounds``: interval, covariance bounds with the SDP cross-check, ``P_hat``), timed with
 ``time.process_time`` here and in a child interpreter on the reference code (:mod:`_reference`).
-The JSON of both reports is compared too.
+The JSON of both reports is compared too.  ``--examples`` times request files instead (the
+median of ``--repeat`` runs each, after one warm-up run: a small request is milliseconds).
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import subprocess
 import sys
 from pathlib import Path
 
@@ -60,16 +62,48 @@ def measure(sizes: list[int]) -> dict:
     return out
 
 
+def measure_files(paths: list[str], repeat: int) -> dict:
+    """Median CPU seconds of ``compute_bounds`` over ``repeat`` runs per request file, and its JSON text."""
+    import statistics
+    import time
+
+    from kfio import load_request
+    from kfio.riccati_bounds._compute import compute_bounds
+
+    out = {}
+    for path in paths:
+        text = Path(path).read_text()
+        report = compute_bounds(load_request(text))  # imports, CVXPY's first solve, compiled SDP
+        times = []
+        for _ in range(repeat):
+            req = load_request(text)
+            t = time.process_time()
+            report = compute_bounds(req)
+            times.append(time.process_time() - t)
+        out[Path(path).name] = [statistics.median(times), json.dumps(report.to_dict(), sort_keys=True, default=str)]
+    return out
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--reference", default="13e923d", help="commit whose code is timed beside this one")
     ap.add_argument("--sizes", default="3,10,20")
+    ap.add_argument("--examples", default="", help="comma-separated request files, timed instead of --sizes")
+    ap.add_argument("--repeat", type=int, default=20)
     args = ap.parse_args()
     sizes = [int(s) for s in args.sizes.split(",") if s]
     bench = str(Path(__file__).resolve().parent)
-    child = f"import json, sys; sys.path.insert(0, {bench!r}); from bench_bounds_speed import measure\n"
-    old = run_reference(child + f"print(json.dumps(measure({sizes})))", args.reference)
-    now = measure(sizes)
+    child = f"import json, sys; sys.path.insert(0, {bench!r}); from bench_bounds_speed import measure, measure_files\n"
+    if args.examples:
+        files = [str(Path(f).resolve()) for f in args.examples.split(",") if f]
+        code = child + f"print(json.dumps(measure_files({files}, {args.repeat})))"
+    else:
+        code = child + f"print(json.dumps(measure({sizes})))"
+    old = run_reference(code, args.reference)
+    # this checkout in a fresh interpreter too: timed in this process after the child, the same
+    # small request measured 1.6x slower than in a fresh process (the ratio would be the harness's)
+    done = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True)
+    now = json.loads(done.stdout.strip().splitlines()[-1])
     print(f"load average {os.getloadavg()[0]:.1f}; CPU s of compute_bounds (time.process_time), same run")
     print(f"| n | now | {args.reference} | ratio | same JSON |")
     print("|---|---|---|---|---|")

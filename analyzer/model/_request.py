@@ -22,7 +22,7 @@ from ._types import Channel, MarkovChannel, Matrix, PerSensorChannel, Request, S
 #: refuses an unknown key in any group (the contract says so), and validates the values of its own.
 OPTION_KEYS: dict[str, frozenset[str]] = {
     "analyze": frozenset({"ge_grid", "critical_parameter"}),
-    "bounds": frozenset({"tolerance", "horizon", "grid", "arrival_probability", "trace_target"}),
+    "bounds": frozenset({"tolerance", "horizon", "grid", "arrival_probability", "trace_target", "sdp_cross_check"}),
     "simulate": frozenset(
         {
             "steps",

@@ -35,7 +35,8 @@ import numpy as np
 
 from .._reporting import ReportPart
 from ..model import Matrix
-from ._riccati import ArrivalModel, closed_loop_operator
+from ._riccati import ArrivalModel, closed_loop_operator, closed_loop_terms
+from ._stein import DENSE_MAX_N, solve_stein
 from ._vech import unvech, vech
 
 #: Rounding allowance of the float check, in units of ``n * eps * scale``.
@@ -83,8 +84,17 @@ class StabilityCertificate(ReportPart):
 
 
 def lyapunov_certificate(model: ArrivalModel, K: Sequence[np.ndarray]) -> np.ndarray | None:
-    """The ``X`` with ``X - L_K(X) = I`` (``vech`` linear solve), or ``None`` if singular."""
+    """The ``X`` with ``X - L_K(X) = I``, or ``None`` if singular.
+
+    A ``vech`` linear solve, or above :data:`kfio.riccati_bounds._stein.DENSE_MAX_N` states
+    :func:`kfio.riccati_bounds._stein.solve_stein` (the dense solve where that declines).
+    Either way the certificate is then re-proved exactly, whatever solved for ``X``.
+    """
     n = model.n
+    if n > DENSE_MAX_N:
+        sol = solve_stein(closed_loop_terms(model, K), [np.eye(n)])
+        if sol is not None:
+            return sol[0]
     M = np.eye(n * (n + 1) // 2) - closed_loop_operator(model, K)
     try:
         h = np.linalg.solve(M, vech(np.eye(n)))

@@ -33,7 +33,7 @@ from ._report import BoundsReport, CovarianceBounds, CriticalInterval, PHatBound
 from ._riccati import ArrivalModel, arrival_model, lyapunov_residual, s_bar, solve_v_bar, spectral_radius, subset_rows
 from ._search import CertifiedSearch
 from ._targets import parse_trace_target, smallest_arrival_for_trace
-from ._vbar_sdp import v_bar_sdp
+from ._vbar_sdp import SDPSolution, v_bar_sdp
 
 __all__ = ["BoundsReport", "compute_bounds", "critical_lower_bound", "hypotheses"]
 
@@ -108,7 +108,12 @@ def _verdict(search: CertifiedSearch, model: ArrivalModel, rho: float, lams: tup
     return "undecided", "between the bounds: the lower bound does not diverge and no LMI certificate was found", None
 
 
-def _covariance(model: ArrivalModel, budget: Budget) -> CovarianceBounds:
+def _covariance(model: ArrivalModel, budget: Budget, opts: BoundsOptions) -> CovarianceBounds:
+    """``S_bar`` and ``V_bar``; the SDP of Sinopoli et al. (2004) Theorem 6(b) cross-checks ``V_bar`` per ``opts``.
+
+    ``V_bar`` itself always comes from the MARE iteration (:func:`solve_v_bar`); the SDP only
+    confirms it, so skipping it (above 12 states by default) changes no bound.
+    """
     p0 = model.loss_probability
     S = s_bar(model.A, model.Q, p0)
     res = None if S is None else lyapunov_residual(S, model.A, model.Q, p0)
@@ -118,6 +123,9 @@ def _covariance(model: ArrivalModel, budget: Budget) -> CovarianceBounds:
         return CovarianceBounds(
             S, res, it, None, "not solved: V_bar does not exist, the SDP would be unbounded", filtered
         )
+    why = opts.sdp_skipped_because(model.n)
+    if why is not None:
+        return CovarianceBounds(S, res, it, SDPSolution("skipped", None, None), why, filtered)
     return CovarianceBounds(S, res, it, v_bar_sdp(model), None, filtered)
 
 
@@ -206,7 +214,7 @@ def compute_bounds(
 
     critical = tuple(_interval(search, s, opts, rho) for s in range(len(opts.packets)))
     verdict, reason, cert = _verdict(search, model, rho, lams)
-    covariance = _covariance(model, budget)
+    covariance = _covariance(model, budget, opts)
     one = len(opts.packets) == 1
     p_hat = None
     if one and opts.horizon is not None:

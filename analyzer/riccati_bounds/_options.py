@@ -27,6 +27,7 @@ from ..model import (
     parse_number,
 )
 from ._phat import max_horizon
+from ._vbar_sdp import COMPILED_MAX_N
 
 DEFAULT_TOLERANCE = 1e-6
 MIN_TOLERANCE, MAX_TOLERANCE = 1e-9, 1e-1
@@ -34,6 +35,12 @@ DEFAULT_HORIZON = 8
 MIN_GRID, MAX_GRID = 2, 41
 #: The stability LMI has ``n (2^m + 1)`` rows for ``n`` states and ``m`` packets.
 MAX_LMI_ROWS = 200
+#: Values of ``options.bounds.sdp_cross_check``; ``"auto"`` solves the ``V_bar`` SDP up to
+#: :data:`SDP_AUTO_MAX_N` states.
+SDP_CROSS_CHECK = ("auto", "always", "never")
+#: Largest ``n`` at which ``"auto"`` solves the ``V_bar`` SDP (the compiled problems' limit,
+#: :data:`kfio.riccati_bounds._vbar_sdp.COMPILED_MAX_N`; 20 s of Clarabel at ``n = 40``).
+SDP_AUTO_MAX_N = COMPILED_MAX_N
 
 #: Largest entry magnitude (``10^MAX_FLOAT_EXPONENT``) of A, C, Q, R for the floating-point bounds.
 MAX_FLOAT_EXPONENT = 30
@@ -59,6 +66,8 @@ class BoundsOptions:
         Largest ``N`` of Rohr, Marelli and Fu (2010)'s ``P_hat_N`` (one packet only), else ``None``.
     grid:
         Side ``K`` of the region map (two packets only), or ``None``.
+    sdp_cross_check:
+        ``"auto"``, ``"always"`` or ``"never"``: whether the ``V_bar`` SDP cross-check is solved.
     """
 
     packets: tuple[Packet, ...]
@@ -66,10 +75,26 @@ class BoundsOptions:
     tolerance: float
     horizon: int | None
     grid: int | None
+    sdp_cross_check: str = "auto"
+
+    def solve_sdp(self, n: int) -> bool:
+        """Whether the ``V_bar`` SDP is solved for ``n`` states."""
+        return self.sdp_cross_check == "always" or (self.sdp_cross_check == "auto" and n <= SDP_AUTO_MAX_N)
+
+    def sdp_skipped_because(self, n: int) -> str | None:
+        """Why the ``V_bar`` SDP is not solved for ``n`` states (the report's reason), or ``None``."""
+        if self.solve_sdp(n):
+            return None
+        if self.sdp_cross_check == "never":
+            return "not solved: options.bounds.sdp_cross_check is 'never'"
+        return (
+            f"not solved: the cross-check is skipped above {SDP_AUTO_MAX_N} states (n = {n}; it costs seconds to "
+            "minutes there); V_bar is the MARE iteration's; set options.bounds.sdp_cross_check to 'always' to solve it"
+        )
 
 
 def _source(key: str, flags: Mapping[str, Any]) -> str:
-    return f" (given as --{key})" if key in flags else ""
+    return f" (given as --{key.replace('_', '-')})" if key in flags else ""
 
 
 #: Integer options are range-checked against this before conversion (the precise
@@ -216,6 +241,17 @@ def parse_bounds_options(request: Request, flags: Mapping[str, Any] | None = Non
             raise LimitExceeded(at, f"grid must lie in [{MIN_GRID}, {MAX_GRID}]; got {k}{_source('grid', flags)}")
         grid = k
 
+    sdp = "auto"
+    if "sdp_cross_check" in merged:
+        sdp = merged["sdp_cross_check"]
+        if not isinstance(sdp, str) or sdp not in SDP_CROSS_CHECK:
+            shown = repr(sdp[:64]) if isinstance(sdp, str) else "a value that is not a string"
+            raise InvalidInput(
+                f"{_WHERE}/sdp_cross_check",
+                f"sdp_cross_check must be one of {', '.join(repr(v) for v in SDP_CROSS_CHECK)}; got {shown}"
+                f"{_source('sdp_cross_check', flags)}",
+            )
+
     if "arrival_probability" in merged:
         lams = _arrival_overrides(merged["arrival_probability"], packets, lams)
-    return BoundsOptions(packets, lams, tolerance, horizon, grid)
+    return BoundsOptions(packets, lams, tolerance, horizon, grid, sdp)

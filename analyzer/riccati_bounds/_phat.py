@@ -82,14 +82,17 @@ class BatchedMare:
         self._CXC = np.ascontiguousarray((np.kron(C, C) @ dup).T)
         self._q = vech(0.5 * (Q + Q.T))
         self._r = R.ravel().copy()
+        self._weights: dict[int, list[np.ndarray]] = {}
 
     def correction(self, h: np.ndarray) -> np.ndarray:
         """``vech(A X C'(C X C' + R)^-1 C X A')`` for a batch ``h`` of ``vech(X)`` rows."""
         AXC = h @ self._AXC
-        S = h @ self._CXC + self._r
+        S = h @ self._CXC
+        S += self._r
         if self.p == 1:
-            G = AXC / np.sqrt(S)
-            return G[:, self._iu] * G[:, self._ju]
+            np.sqrt(S, out=S)
+            AXC /= S  # in place: the same quotients, the same layout
+            return AXC[:, self._iu] * AXC[:, self._ju]
         L = np.linalg.cholesky(S.reshape(-1, self.p, self.p))
         G = np.linalg.solve(L, AXC.reshape(-1, self.n, self.p).transpose(0, 2, 1))
         return np.einsum("bki,bki->bi", G[:, :, self._iu], G[:, :, self._ju])
@@ -98,23 +101,47 @@ class BatchedMare:
         """``vech(g_N(X))`` for one ``h = vech(X)`` (Rohr, Marelli and Fu (2010), eq. 11)."""
         if N < 1:
             raise InvalidInput("/options/bounds/horizon", "N must be at least 1")
-        return self._descend(h[None, :], np.ones(1), N)
+        return self._descend(h[None, :], 0, N, self._tree_weights(N))
 
-    def _descend(self, level: np.ndarray, w: np.ndarray, depth: int) -> np.ndarray:
-        """Weighted sum over the ``2^depth`` continuations of the batch ``level`` (weights ``w``)."""
-        lam = self.lam
+    def _tree_weights(self, N: int) -> list[np.ndarray]:
+        """``P(S)`` of every prefix ``S`` of length ``k = 0, ..., N - 1``, in the order of the levels.
+
+        They do not depend on ``X``, so they are formed once per ``N`` (by the same products
+        ``w (1 - lam)`` and ``w lam`` as before, so the same floats).
+        """
+        ws = self._weights.get(N)
+        if ws is None:
+            ws = [np.ones(1)]
+            for _ in range(N - 1):
+                w = ws[-1]
+                ws.append(np.concatenate([w * (1.0 - self.lam), w * self.lam]))
+            self._weights[N] = ws
+        return ws
+
+    def _descend(self, level: np.ndarray, k: int, depth: int, ws: list[np.ndarray] | None, w=None) -> np.ndarray:
+        """Weighted sum over the ``2^depth`` continuations of the batch ``level``.
+
+        The weights are ``ws[k]`` (the whole level ``k`` of the tree from one root) or, for a
+        chunk of a level, ``w`` (then ``ws`` is ``None``).
+        """
+        lam, m = self.lam, level.shape[1]
         while depth > 1:
             b = level.shape[0]
             if b > 1 and b << (depth - 1) > 1 << CHUNK_LEVELS:
+                w = ws[k] if ws is not None else w
                 half = b // 2  # depth first above the chunk size keeps memory bounded
-                return self._descend(level[:half], w[:half], depth) + self._descend(level[half:], w[half:], depth)
-            phi0 = level @ self._AXA
+                return self._descend(level[:half], k, depth, None, w[:half]) + self._descend(
+                    level[half:], k, depth, None, w[half:]
+                )
+            nxt = np.empty((2 * b, m))
+            phi0 = nxt[:b]
+            np.matmul(level, self._AXA, out=phi0)
             phi0 += self._q
-            nxt = np.empty((2 * b, level.shape[1]))
-            nxt[:b] = phi0
             np.subtract(phi0, self.correction(level), out=nxt[b:])
-            level, w = nxt, np.concatenate([w * (1.0 - lam), w * lam])
-            depth -= 1
+            if ws is None:
+                w = np.concatenate([w * (1.0 - lam), w * lam])
+            level, k, depth = nxt, k + 1, depth - 1
+        w = ws[k] if ws is not None else w
         # Last step: sum_i w_i [(1-lam) Phi_0(X_i) + lam Phi_1(X_i)]
         #          = (sum_i w_i X_i) A-congruence + (sum_i w_i) Q - lam sum_i w_i corr_i.
         return (w @ level) @ self._AXA + w.sum() * self._q - lam * (w @ self.correction(level))
@@ -161,17 +188,19 @@ def _fixed_point(
     h = h0
     cap = DIVERGENCE_RATIO * (1.0 + float(np.abs(op._q).max()))
     step = float("inf")
-    for k in range(1, max_iter + 1):
-        if budget is not None:
-            budget.tick(f"P_hat_{N}", 1 + (1 << N) // 4096)
-        with np.errstate(over="ignore", invalid="ignore"):  # divergence is detected just below
+    what, ticks = f"P_hat_{N}", 1 + (1 << N) // 4096
+    with np.errstate(over="ignore", invalid="ignore"):  # divergence is detected just below
+        for k in range(1, max_iter + 1):
+            if budget is not None:
+                budget.tick(what, ticks)
             h_next = op.g_n(h, N)
-        if not np.all(np.isfinite(h_next)) or np.abs(h_next).max() > cap:
-            return PHat(N, None, k, None, start, f"the iteration of g_{N} diverges: P_hat_{N} does not exist here")
-        step = float(np.abs(h_next - h).max() / max(1e-300, np.abs(h_next).max()))
-        h = h_next
-        if step <= rtol:
-            return PHat(N, unvech(h, n), k, step, start)
+            top = np.abs(h_next).max()
+            if not top <= cap:  # also NaN and infinity
+                return PHat(N, None, k, None, start, f"the iteration of g_{N} diverges: P_hat_{N} does not exist here")
+            step = float(np.abs(h_next - h).max() / max(1e-300, top))
+            h = h_next
+            if step <= rtol:
+                return PHat(N, unvech(h, n), k, step, start)
     origin = f"from P_hat_{start}" if start else "from 0"
     return PHat(N, None, max_iter, step, start, f"the iteration of g_{N} {origin} did not converge in {max_iter} steps")
 

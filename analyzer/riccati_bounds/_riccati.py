@@ -27,6 +27,7 @@ import numpy as np
 import scipy.linalg
 
 from .._budget import Budget
+from ._stein import DENSE_MAX_N, solve_stein
 from ._vech import congruence_matrix, unvech, vech
 
 #: ``trace(V) / (1 + trace(Q))`` above which the monotone iteration is declared divergent.
@@ -172,6 +173,12 @@ def gains(X: np.ndarray, model: ArrivalModel) -> tuple[np.ndarray, ...]:
     return tuple(-np.linalg.solve(C @ X @ C.T + R, C @ AX.T).T for C, R in zip(model.C_S, model.R_S))
 
 
+def closed_loop_terms(model: ArrivalModel, K: Sequence[np.ndarray]) -> list[tuple[float, np.ndarray]]:
+    r"""The terms ``(pi(S), F_S)`` of :math:`\mathcal L_K` with ``pi(S) > 0`` (``F_empty = A``, ``F_S = A + K_S C_S``)."""
+    terms = [(model.weights[0], model.A)] if model.weights[0] > 0 else []
+    return terms + [(w, model.A + Ks @ C) for w, Ks, C in zip(model.weights[1:], K, model.C_S) if w > 0]
+
+
 def closed_loop_operator(model: ArrivalModel, K: Sequence[np.ndarray]) -> np.ndarray:
     r"""Matrix of :math:`\mathcal L_K(X) = \pi(\emptyset) A X A' + \sum_S \pi(S) F_S X F_S'` on ``vech``.
 
@@ -193,12 +200,30 @@ def policy_evaluation(model: ArrivalModel, K: Sequence[np.ndarray]) -> np.ndarra
     ``Y = sum_k L_K^k(I) > 0`` exists iff ``rho(L_K) < 1``).  When it is, the
     solution satisfies ``X = phi(K, X) >= g(X)``, so ``X >= V_bar``
     (Sinopoli et al. (2004), Theorem 1 and Lemma 1(b)): an upper bound.
+
+    Above :data:`kfio.riccati_bounds._stein.DENSE_MAX_N` states the equations are solved
+    in ``O(n^3)`` work per operator application (:func:`kfio.riccati_bounds._stein.solve_stein`),
+    else (or where that declines) on ``vech``.
+    There, when ``W > 0``, ``X > 0`` replaces the test on ``Y``: ``X - L_K(X) = W > 0`` with
+    ``X > 0`` gives ``rho(L_K) < 1`` (Lyapunov's theorem for positive operators), and
+    ``rho(L_K) < 1`` gives ``X = sum_k L_K^k(W) > 0``.
     """
     n = model.n
     W = model.Q.copy()
     for w, Ks, R in zip(model.weights[1:], K, model.R_S):
         if w > 0:
             W += w * Ks @ R @ Ks.T
+    if n > DENSE_MAX_N:
+        terms = closed_loop_terms(model, K)
+        if np.linalg.eigvalsh(_sym(W)).min() > 0:
+            # W > 0: X > 0 with X - L_K(X) = W > 0 is itself the proof that rho(L_K) < 1, no Y needed
+            fast = solve_stein(terms, [W])
+            if fast is not None:
+                return fast[0] if np.linalg.eigvalsh(fast[0]).min() > 0 else None
+        else:
+            fast = solve_stein(terms, [W, np.eye(n)])
+            if fast is not None:
+                return fast[0] if np.linalg.eigvalsh(fast[1]).min() > 0 else None
     M = np.eye(n * (n + 1) // 2) - closed_loop_operator(model, K)
     try:
         sol = np.linalg.solve(M, np.column_stack([vech(_sym(W)), vech(np.eye(n))]))

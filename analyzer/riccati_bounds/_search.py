@@ -29,12 +29,14 @@ from fractions import Fraction
 from typing import Callable, Sequence
 
 import numpy as np
+import scipy.linalg
 
 from .._budget import Budget
 from ._certificate import ExactPlant, StabilityCertificate, certify
 from ._gains import annihilating_gains, normalized_model, policy_gains
 from ._lmi import StabilityLMI, balancing_scaling
 from ._riccati import ArrivalModel, gains, pattern_weights, solve_v_bar, subset_rows
+from ._stein import DENSE_MAX_N, solve_near
 from ._vech import congruence_matrix, unvech, vech
 
 #: Bisection points are rounded to this grid so that exact values print as short decimals.
@@ -283,19 +285,33 @@ class CertifiedSearch:
         finishes the search.
         """
         n = self.A.shape[0]
-        terms = [congruence_matrix(self.A)] + [congruence_matrix(self.A + k @ c) for k, c in zip(K, self.C_S)]
+        closed = [self.A] + [self.A + k @ c for k, c in zip(K, self.C_S)]
+        terms = [congruence_matrix(F) for F in closed]
         eye = np.eye(len(terms[0]))
         rhs = vech(np.eye(n))
+        near: list = []  # above DENSE_MAX_N states: the LU factors of the last operator factored
 
         def stable(x: float) -> bool:
             self._tick("slide")
             weights = self._float_weights(at(Fraction(x)))
-            L = eye.copy()
-            for w, T in zip(weights, terms):
-                if w > 0:
-                    L -= w * T
+            y = None
+            if near:
+                y = solve_near([(w, F) for w, F in zip(weights, closed) if w > 0], near[0], rhs, near[1])
+            if y is None:
+                L = eye.copy()
+                for w, T in zip(weights, terms):
+                    if w > 0:
+                        L -= w * T
+                try:
+                    if n > DENSE_MAX_N:
+                        factor = scipy.linalg.lu_factor(L, check_finite=False)
+                        y = scipy.linalg.lu_solve(factor, rhs, check_finite=False)
+                        near[:] = [factor, y]
+                    else:
+                        y = np.linalg.solve(L, rhs)
+                except (np.linalg.LinAlgError, ValueError):
+                    return False
             try:
-                y = np.linalg.solve(L, rhs)
                 np.linalg.cholesky(unvech(y, n))
             except np.linalg.LinAlgError:
                 return False

@@ -1,38 +1,29 @@
-r"""The generalized Stein equation of the bounds' search in ``O(n^3)`` work per right-hand side.
+r"""The generalized Stein equation of the bounds' search, in ``O(n^3)`` work per operator application.
 
 Policy evaluation, the certificates' ``X - L_K(X) = I`` and the continuation's stability test
 all solve
 
 .. math::
 
-    X - \mathcal L(X) = W, \qquad
-    \mathcal L(X) = \sum_i w_i (A + K_i C_i) X (A + K_i C_i)',
+    X - \mathcal L(X) = W, \qquad \mathcal L(X) = \sum_i w_i M_i X M_i',
 
-one term per arrival pattern (``K_0 = 0`` for the empty one; Sinopoli et al. (2004), Lemma 3;
-Liu and Goldsmith (2004), eq. 16).  On ``vech`` this is an ``m x m`` system with ``m = n(n+1)/2``:
-``O(n^6)`` work, 820 unknowns at ``n = 40``.  With several terms it is a *generalized* Stein
-equation, which the Bartels-Stewart method does not solve directly; but every term is ``A``
-plus a low-rank change, so
+one term per arrival pattern (``M_0 = A``, ``M_S = A + K_S C_S``; Sinopoli et al. (2004),
+Lemma 3; Liu and Goldsmith (2004), eq. 16).  On ``vech`` this is an ``m x m`` system with
+``m = n(n+1)/2``: ``O(n^6)`` work and an ``O(n^4)`` matrix per term, 820 unknowns at ``n = 40``.
+With several terms it is a *generalized* Stein equation, which the Bartels-Stewart method does
+not solve directly.  Above :data:`DENSE_MAX_N` states it is solved here by GMRES (Saad and
+Schultz 1986) on the operator itself, ``X -> X - sum_i w_i M_i X M_i'`` (two ``n x n`` products
+per term), preconditioned by the exact inverse of the single-term Stein equation
+``X - w_d M_d X M_d' = R`` of the dominant term (the largest ``w_i rho(M_i)^2``): with
+``M_d = V D V^-1``, ``X = V [(V^-1 R V^-H)_jk / (1 - w_d d_j conj(d_k))] V^H``.  For positive
+operators ``X - L(X) = P(X) - (P(X) - X + L(X))`` is a regular splitting, so the preconditioned
+fixed-point iteration already converges exactly when ``rho(L) < 1``; GMRES accelerates it.
 
-.. math::
-
-    \mathcal L(X) = c\, A X A' + \sum_{i} w_i \bigl(G_i(X) K_i' + K_i G_i(X)'\bigr),
-    \qquad G_i(X) = A X C_i' + \tfrac12 K_i C_i X C_i', \qquad c = \sum_i w_i,
-
-and the equation is one Stein equation ``X - c A X A' = W + (low rank)`` corrected by the
-Sherman-Morrison-Woodbury formula over the ``r = n sum_i p_i`` entries of the ``G_i``
-(``p_i`` rows of ``C_i``): ``r + 1`` Stein solves with the complex Schur form ``A = Z T Z^H``
-(computed once per ``A``; each solve is a column recursion of triangular solves, the
-Bartels-Stewart method) and one ``r x r`` system.  The answer is substituted back; if the residual is not
-at rounding level (an ill-conditioned ``X - c A X A'``, when two eigenvalues of ``A`` have
-``c theta_i theta_j`` near 1) the dense ``vech`` solve answers instead, so the result is always
-the one of :func:`solve_dense` up to rounding.  Below :data:`MIN_N` states the dense solve
-answers as before.
-
-Status: the solver and its tests are in place, but :func:`kfio.riccati_bounds._riccati.policy_evaluation`,
-the certificates and the continuation still solve on ``vech``: at ``n = 40`` (one packet, two
-outputs) one solve here takes 27 ms against 62 ms dense, since the ``r + 2`` Stein solves cost
-``O(p n^4)``, not the ``O(n^3)`` of a single Stein equation.
+Every answer is substituted back: unless ``||X - L(X) - W||_F`` is at the level of
+:data:`RESIDUAL_RTOL` times the size of the terms, the dense ``vech`` solve answers instead
+(the callers' fallback), so the result is always that of the dense solve up to rounding.  Up to
+:data:`DENSE_MAX_N` states the dense solve answers as before, so the floats of every request
+of that size are what they were.
 """
 
 from __future__ import annotations
@@ -42,144 +33,183 @@ from typing import Sequence
 import numpy as np
 import scipy.linalg
 
-from ._vech import congruence_matrix, unvech, vech
+from ._vech import unvech, vech_layout
 
-#: Below this many states the dense ``vech`` solve is as fast (n = 20: 2.0 ms against 3.1 ms), and it answers.
-MIN_N = 30
-#: Substitute-back residual allowed, in units of ``n * eps`` times the scale of the terms.
-RESIDUAL_FACTOR = 1e4
+#: Up to this many states the dense ``vech`` solve answers, as before: it is faster there (a whole
+#: ``kfio bounds`` request at ``n = 20``: 1.1 s against 2.0 s; at ``n = 30``: 3.9 s against 3.3 s).
+DENSE_MAX_N = 24
+#: GMRES's relative residual target and the substitute-back check's, relative to the terms' size.
+RESIDUAL_RTOL = 1e-12
+#: GMRES's restart length, and the restarts allowed before the dense solve takes over.
+RESTART, MAX_RESTARTS = 40, 10
+#: ``w_d rho(M_d)^2`` at or above which a term cannot precondition (its own Stein equation is singular).
+PRECONDITIONER_MAX_RADIUS = 0.999
+#: Condition number of the eigenvector matrix ``V`` above which the preconditioner is not used.
+MAX_EIGENVECTOR_CONDITION = 1e8
 
-_SCHUR: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
-
-
-def _schur(A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    key = A.tobytes()
-    hit = _SCHUR.get(key)
-    if hit is None:
-        if len(_SCHUR) > 16:
-            _SCHUR.clear()
-        T, Z = scipy.linalg.schur(A, output="complex")
-        hit = _SCHUR[key] = (T, Z)
-    return hit
+Term = tuple[float, np.ndarray]
 
 
-def _stein_schur(T: np.ndarray, Z: np.ndarray, c: float, R: np.ndarray) -> np.ndarray:
-    """Solve ``X - c A X A' = R_k`` for a batch ``R`` (``b x n x n``), ``A = Z T Z^H``.
-
-    In Schur coordinates ``Y = Z^H X Z`` the equation is ``Y - c T Y T^H = Z^H R Z``; column
-    ``j`` of ``T Y T^H`` is ``T sum_{l >= j} Y_l conj(T_jl)``, so the columns are found from
-    the last to the first, each by one triangular solve with ``I - c conj(T_jj) T``.
-    """
-    n = T.shape[0]
-    Zh = Z.conj().T
-    Rt = (Zh @ R @ Z).transpose(0, 2, 1).copy()  # Rt[b, j] is column j of Z^H R_b Z
-    Yt = np.zeros_like(Rt)  # Yt[b, j] is column j of Y_b
-    eye = np.eye(n)
-    TT = T.T.copy()
-    for j in range(n - 1, -1, -1):
-        rhs = Rt[:, j]
-        if j < n - 1:
-            rhs = rhs + c * (T[j, j + 1 :].conj() @ Yt[:, j + 1 :]) @ TT
-        M = eye - c * np.conj(T[j, j]) * T
-        Yt[:, j] = scipy.linalg.solve_triangular(M, rhs.T, check_finite=False).T
-    return (Z @ Yt.transpose(0, 2, 1) @ Zh).real
-
-
-def _apply(A: np.ndarray, terms: Sequence[tuple[float, np.ndarray]], X: np.ndarray) -> np.ndarray:
+def apply(terms: Sequence[Term], X: np.ndarray) -> np.ndarray:
+    """``L(X) = sum_i w_i M_i X M_i'``."""
     out = np.zeros_like(X)
     for w, M in terms:
-        out += w * M @ X @ M.T
+        out += w * (M @ X @ M.T)
     return out
 
 
-def solve_dense(terms: Sequence[tuple[float, np.ndarray]], rhs: Sequence[np.ndarray]) -> list[np.ndarray] | None:
-    """``X - sum_i w_i M_i X M_i' = W`` for each ``W`` in ``rhs`` by one dense ``vech`` solve; ``None`` if singular."""
+class _SteinInverse:
+    """The exact inverse of ``X -> X - w M X M'`` through the eigenvectors of ``M`` (or ``None`` if unusable)."""
+
+    def __init__(self, w: float, M: np.ndarray) -> None:
+        d, V = np.linalg.eig(M)
+        self.usable = bool(np.all(np.isfinite(V))) and np.linalg.cond(V) < MAX_EIGENVECTOR_CONDITION
+        if self.usable:
+            self.V, self.Vh = V, V.conj().T
+            self.Vi = np.linalg.inv(V)
+            self.Vih = self.Vi.conj().T
+            self.denom = 1.0 - w * d[:, None] * d.conj()[None, :]
+
+    def __call__(self, R: np.ndarray) -> np.ndarray:
+        Z = self.Vi @ R @ self.Vih
+        Z /= self.denom
+        return (self.V @ Z @ self.Vh).real
+
+
+def _preconditioner(terms: Sequence[Term]) -> _SteinInverse | None:
+    radii = [w * max(abs(np.linalg.eigvals(M))) ** 2 for w, M in terms]
+    order = sorted(range(len(terms)), key=lambda i: -radii[i])
+    for i in order:
+        if radii[i] < PRECONDITIONER_MAX_RADIUS:
+            P = _SteinInverse(*terms[i])
+            if P.usable:
+                return P
+    return None
+
+
+def _gmres(op, pre, b: np.ndarray, x: np.ndarray, tol: float, cycles: int = 0) -> np.ndarray:
+    """Right-preconditioned restarted GMRES (Saad and Schultz 1986) for ``op(x) = b`` from ``x``.
+
+    The Arnoldi basis is orthogonalized twice by classical Gram-Schmidt (as matrix products);
+    Givens rotations keep the least-squares residual, which with right preconditioning is the
+    residual of ``x`` up to rounding.  Stops when that is at most ``tol`` or after ``cycles``
+    (default :data:`MAX_RESTARTS`) cycles of :data:`RESTART` steps.
+    """
+    N = b.size
+    for _ in range(cycles or MAX_RESTARTS):
+        r = b - op(x)
+        beta = float(np.linalg.norm(r))
+        if not beta > tol:  # also NaN
+            return x
+        V = np.empty((RESTART + 1, N))
+        Z = np.empty((RESTART, N))
+        R = np.zeros((RESTART, RESTART))  # the rotated Hessenberg matrix, upper triangular
+        cs: list[float] = []
+        sn: list[float] = []
+        g = [beta]
+        V[0] = r / beta
+        k = 0
+        for j in range(RESTART):
+            Z[j] = pre(V[j])
+            w = op(Z[j])
+            h = V[: j + 1] @ w
+            w -= h @ V[: j + 1]
+            h2 = V[: j + 1] @ w
+            w -= h2 @ V[: j + 1]
+            col = (h + h2).tolist()
+            sub = float(np.linalg.norm(w))
+            for i in range(j):
+                a, c = col[i], col[i + 1]
+                col[i], col[i + 1] = cs[i] * a + sn[i] * c, -sn[i] * a + cs[i] * c
+            rho = float(np.hypot(col[j], sub))
+            if not rho > 0:
+                break
+            cs.append(col[j] / rho)
+            sn.append(sub / rho)
+            col[j] = rho
+            g.append(-sn[j] * g[j])
+            g[j] = cs[j] * g[j]
+            R[: j + 1, j] = col
+            k = j + 1
+            if not abs(g[j + 1]) > tol or not sub > 0:
+                break
+            V[j + 1] = w / sub
+        if k:
+            y = scipy.linalg.solve_triangular(R[:k, :k], np.array(g[:k]), check_finite=False)
+            x = x + y @ Z[:k]
+    return x
+
+
+def solve_stein(terms: Sequence[Term], rhs: Sequence[np.ndarray]) -> list[np.ndarray] | None:
+    r"""``X - sum_i w_i M_i X M_i' = W`` for each ``W`` in ``rhs`` by preconditioned GMRES on ``n x n`` matrices.
+
+    ``terms`` are the pairs ``(w_i, M_i)`` with ``w_i > 0``; GMRES starts from the
+    preconditioner's answer.  Returns ``None`` where it declines.
+
+    Declines (the caller then solves densely) when no term can precondition, when GMRES does not
+    reach :data:`RESIDUAL_RTOL` in :data:`MAX_RESTARTS` cycles, or when the substituted-back
+    residual is larger than that.
+    """
     n = rhs[0].shape[0]
-    L = np.eye(n * (n + 1) // 2)
-    for w, M in terms:
-        L -= w * congruence_matrix(M)
-    try:
-        sol = np.linalg.solve(L, np.column_stack([vech(0.5 * (W + W.T)) for W in rhs]))
-    except np.linalg.LinAlgError:
+    P = _preconditioner(terms)
+    if P is None:
         return None
-    return [unvech(sol[:, k], n) for k in range(len(rhs))]
+    scale = 1.0 + sum(w * np.linalg.norm(M, 2) ** 2 for w, M in terms)
 
+    def op(x: np.ndarray) -> np.ndarray:
+        X = x.reshape(n, n)
+        return (X - apply(terms, X)).ravel()
 
-def solve_low_rank(
-    A: np.ndarray,
-    K: Sequence[np.ndarray],
-    C: Sequence[np.ndarray],
-    weights: Sequence[float],
-    rhs: Sequence[np.ndarray],
-) -> list[np.ndarray] | None:
-    r"""``X - w_0 A X A' - sum_i w_i (A + K_i C_i) X (A + K_i C_i)' = W`` for each ``W`` in ``rhs``.
+    def pre(x: np.ndarray) -> np.ndarray:
+        return P(x.reshape(n, n)).ravel()
 
-    By the Sherman-Morrison-Woodbury formula around ``X - c A X A'`` (module docstring);
-    ``weights[0]`` is the weight of ``A`` alone, ``weights[i + 1]`` that of ``K[i]``, ``C[i]``.
-    Returns ``None`` when the small system is singular or the substituted-back residual is
-    not at rounding level; no fallback here (see :func:`solve_stein`).
-    """
-    A = np.asarray(A, float)
-    n = A.shape[0]
-    lows = [(float(w), Ki, Ci) for w, Ki, Ci in zip(weights[1:], K, C) if w > 0]
-    c = float(weights[0]) + sum(w for w, _, _ in lows)
-    T, Z = _schur(A)
-    basis = []
-    for w, Ki, _ in lows:
-        for i in range(n):
-            for col in range(Ki.shape[1]):
-                E = np.zeros((n, n))
-                E[i, :] += w * Ki[:, col]
-                E[:, i] += w * Ki[:, col]
-                basis.append(E)
-    Ws = np.array([0.5 * (W + W.T) for W in rhs])
-    batch = np.concatenate([Ws, np.array(basis).reshape(-1, n, n)]) if basis else Ws
+    out = []
     with np.errstate(all="ignore"):
-        S = _stein_schur(T, Z, c, batch)
-        X0, Xq = S[: len(rhs)], S[len(rhs) :]
-
-        def g(Xs: np.ndarray) -> np.ndarray:
-            parts = []
-            for _, Ki, Ci in lows:
-                XC = Xs @ Ci.T
-                parts.append((A @ XC + 0.5 * Ki @ (Ci @ XC)).reshape(len(Xs), -1))
-            return np.concatenate(parts, axis=1) if parts else np.zeros((len(Xs), 0))
-
-        if basis:
-            H = g(Xq).T  # column q: G(S0^-1(basis_q))
-            try:
-                coef = np.linalg.solve(np.eye(H.shape[0]) - H, g(X0).T)
-            except np.linalg.LinAlgError:
+        for W in rhs:
+            W = 0.5 * (W + W.T)
+            b = W.ravel()
+            x = _gmres(op, pre, b, P(W).ravel(), RESIDUAL_RTOL * float(np.linalg.norm(b)))
+            X = x.reshape(n, n)
+            X = 0.5 * (X + X.T)
+            if not np.all(np.isfinite(X)):
                 return None
-            X = X0 + np.einsum("qk,qij->kij", coef, Xq)
-        else:
-            X = X0
-        terms = [(float(weights[0]), A)] + [(w, A + Ki @ Ci) for w, Ki, Ci in lows]
-        scale = 1.0 + sum(w * np.linalg.norm(M, 2) ** 2 for w, M in terms)
-        out = []
-        for Xk, W in zip(X, Ws):
-            Xk = 0.5 * (Xk + Xk.T)
-            res = Xk - _apply(A, terms, Xk) - W
-            size = scale * np.linalg.norm(Xk) + np.linalg.norm(W)
-            if not np.all(np.isfinite(Xk)) or np.linalg.norm(res) > RESIDUAL_FACTOR * n * np.finfo(float).eps * size:
+            res = np.linalg.norm(X - apply(terms, X) - W)
+            if res > 100 * RESIDUAL_RTOL * (scale * np.linalg.norm(X) + np.linalg.norm(W)):
                 return None
-            out.append(Xk)
+            out.append(X)
     return out
 
 
-def solve_stein(
-    A: np.ndarray,
-    K: Sequence[np.ndarray],
-    C: Sequence[np.ndarray],
-    weights: Sequence[float],
-    rhs: Sequence[np.ndarray],
-) -> list[np.ndarray] | None:
-    """:func:`solve_low_rank` from :data:`MIN_N` states on; ``None`` below, or where it declines.
+def solve_near(
+    terms: Sequence[Term], factor: tuple[np.ndarray, np.ndarray], rhs: np.ndarray, start: np.ndarray
+) -> np.ndarray | None:
+    r"""``vech`` of the solution of ``X - sum_i w_i M_i X M_i' = W`` (``rhs = vech(W)``), preconditioned by a nearby operator.
 
-    Callers then solve on ``vech`` as before (:func:`solve_dense` is that solve), so below
-    :data:`MIN_N` states every float is what it was.
+    ``factor`` is ``scipy.linalg.lu_factor`` of the ``vech`` matrix of a nearby operator
+    ``I - L'`` (the same ``M_i``, other weights): the continuation's stability test at the
+    next point of its bisection.  The preconditioned operator ``(I - L')^-1 (I - L)`` is the
+    identity plus a multiple of the weights' change, so GMRES needs a few steps (one cycle
+    of :data:`RESTART` at most, else ``None`` and the caller factors afresh).  ``start`` is
+    the first guess.  The substituted-back residual is checked as in :func:`solve_stein`.
     """
-    A = np.asarray(A, float)
-    if A.shape[0] < MIN_N:
-        return None
-    return solve_low_rank(A, K, C, weights, rhs)
+    n = int(round((np.sqrt(8 * rhs.size + 1) - 1) / 2))
+    iu, ju, _ = vech_layout(n)
+    scale = 1.0 + sum(w * np.linalg.norm(M, 2) ** 2 for w, M in terms)
+
+    def op(h: np.ndarray) -> np.ndarray:
+        X = unvech(h, n)
+        return h - (apply(terms, X))[iu, ju]
+
+    def pre(h: np.ndarray) -> np.ndarray:
+        return scipy.linalg.lu_solve(factor, h, check_finite=False)
+
+    tol = RESIDUAL_RTOL * float(np.linalg.norm(rhs))
+    with np.errstate(all="ignore"):
+        h = _gmres(op, pre, rhs, start, tol, cycles=1)
+        if not np.all(np.isfinite(h)):
+            return None
+        X = unvech(h, n)
+        res = np.linalg.norm(X - apply(terms, X) - unvech(rhs, n))
+        if res > 100 * RESIDUAL_RTOL * (scale * np.linalg.norm(X) + np.linalg.norm(unvech(rhs, n))):
+            return None
+    return h

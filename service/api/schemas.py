@@ -396,7 +396,9 @@ COMPONENTS: dict[str, dict[str, Any]] = {
                 "description": (
                     "Options of the bounds command.  trace_target: a positive number T; the report's trace_target "
                     "gives the smallest arrival probability at which the certified upper bound trace(V_bar) is at "
-                    "most T (one Bernoulli packet; bisection, V_bar decreases with lambda: Sinopoli et al. 2004)."
+                    "most T (one Bernoulli packet; bisection, V_bar decreases with lambda: Sinopoli et al. 2004).  "
+                    'sdp_cross_check: "auto" (default: solve the V_bar SDP cross-check up to 12 states, skip it '
+                    'above, where V_bar comes from the MARE iteration alone), "always" or "never".'
                 ),
                 "propertyNames": {"enum": sorted(OPTION_KEYS["bounds"])},
             },

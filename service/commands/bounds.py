@@ -1,4 +1,4 @@
-"""``kfio bounds FILE [--json] [--grid K] [--horizon N] [--tolerance T]``: the bounds of docs/theory.md
+"""``kfio bounds FILE [--json] [--grid K] [--horizon N] [--tolerance T] [--sdp-cross-check WHEN]``: the bounds of docs/theory.md
 
 Takes the same request JSON as ``kfio analyze``.  Flags override
 ``options.bounds`` of the request.  Exit 0 on success, 2 on invalid input
@@ -25,6 +25,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--grid", type=int, metavar="K", help="K x K region map of two sensors' probabilities (2..41)")
     p.add_argument("--horizon", type=int, metavar="N", help="largest N of P_hat_N (one packet; default 8)")
     p.add_argument("--tolerance", type=float, metavar="T", help="bisection tolerance of lambda_upper (default 1e-6)")
+    p.add_argument(
+        "--sdp-cross-check",
+        dest="sdp_cross_check",
+        metavar="WHEN",
+        help="solve the V_bar SDP cross-check: auto (default: up to 12 states), always or never",
+    )
     p.set_defaults(func=_run, quick_exit=True)
 
 
@@ -33,7 +39,11 @@ def _run(args: argparse.Namespace) -> int:
     from kfio.riccati_bounds import compute_bounds
 
     def work(request: Request, budget: Budget) -> int:
-        flags = {k: getattr(args, k) for k in ("grid", "horizon", "tolerance") if getattr(args, k) is not None}
+        flags = {
+            k: getattr(args, k)
+            for k in ("grid", "horizon", "tolerance", "sdp_cross_check")
+            if getattr(args, k) is not None
+        }
         report = compute_bounds(request, flags=flags, budget=budget)
         emit(dump_json(report.to_dict()) if args.json else report.summary())  # emit: user text made safe
         return exitcodes.STABLE

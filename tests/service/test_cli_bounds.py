@@ -99,6 +99,16 @@ def test_region_grid_flag(write, capsys) -> None:
         ({"system": SCALAR, "channel": bernoulli(0.4)}, ["--horizon", "21"], "/options/bounds/horizon"),
         ({"system": SCALAR, "channel": bernoulli(0.4)}, ["--tolerance", "1"], "/options/bounds/tolerance"),
         (
+            {"system": SCALAR, "channel": bernoulli(0.4)},
+            ["--sdp-cross-check", "yes"],
+            "/options/bounds/sdp_cross_check",
+        ),
+        (
+            {"system": SCALAR, "channel": bernoulli(0.4), "options": {"bounds": {"sdp_cross_check": 1}}},
+            [],
+            "/options/bounds/sdp_cross_check",
+        ),
+        (
             {"system": SCALAR, "channel": bernoulli(0.4), "options": {"bounds": {"grid": 3, "colour": 1}}},
             [],
             "/options/bounds/colour",

@@ -119,6 +119,13 @@ def test_invalid_input_is_422_naming_field_and_rule(client: TestClient) -> None:
     assert "columns" in doc["rule"] and doc["type"] == "urn:kfio:problem:invalid-input"
 
 
+def test_bad_sdp_cross_check_is_422_naming_the_choices(client: TestClient) -> None:
+    body = with_channel(SCALAR, arrival_probability=0.5) | {"options": {"bounds": {"sdp_cross_check": "often"}}}
+    r = client.post("/v1/bounds", json=body)
+    assert r.status_code == 422 and r.json()["field"] == "/options/bounds/sdp_cross_check"
+    assert "'auto', 'always', 'never'" in r.json()["rule"]
+
+
 def test_probability_out_of_range_names_its_pointer(client: TestClient) -> None:
     r = client.post("/v1/bounds", json=with_channel(SCALAR, arrival_probability=1.5))
     assert r.status_code == 422 and r.json()["field"] == "/channel/arrival_probability"
