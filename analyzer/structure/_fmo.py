@@ -448,6 +448,7 @@ def _cyclotomic_form(
         return None
     b = beta.rational
     orders = []
+    divides: dict[tuple[int, int], bool] = {}  # (factor, m) -> f | x^(2m) - beta^m: one test per factor, not per root
     with mpmath.workdps(DIGITS + 10):
         r = mpmath.sqrt(mpmath.mpf(b.numerator) / b.denominator)
         for fi, ri in members:
@@ -456,8 +457,10 @@ def _cyclotomic_form(
             if rel is None:
                 return None
             m, k = rel
-            target = power_minus(2 * m, QQ(b.numerator**m, b.denominator**m))
-            if not target.rem(f.poly).is_zero:
+            if (fi, m) not in divides:
+                target = power_minus(2 * m, QQ(b.numerator**m, b.denominator**m))
+                divides[(fi, m)] = target.rem(f.poly).is_zero
+            if not divides[(fi, m)]:
                 return None
             orders.append((m, k))
     L = reduce(math.lcm, (m for m, _ in orders), 1)
