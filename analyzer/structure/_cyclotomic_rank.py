@@ -153,6 +153,7 @@ class CyclotomicRows:
                 continue
             inv = self._inverse(s)
             self.ratios.append([fmpq_poly(1) if c == s else (c * inv) % self.phi for c in col])
+        self._unit_ratios = all(c.is_one() for col in self.ratios for c in col)
         self._monomials = [fmpq_poly([0] * e + [1]) for e in range(L)]
         self._prime_list: list[_Prime] = []
         self._prime_iter = _primes(L)
@@ -197,7 +198,10 @@ class CyclotomicRows:
         P = self._prime(index)
         pw, img, L, p = P.powers[k], images[k], self.L, P.p
         ex = self.exponents
-        flat = [img[j][i] * pw[ex[j] * n % L] % p for n, i in keys for j in range(self.n_columns)]
+        if self._unit_ratios:  # every entry a power of zeta (one row, scaled columns): no products
+            flat = [pw[ex[j] * n % L] for n, _ in keys for j in range(self.n_columns)]
+        else:
+            flat = [img[j][i] * pw[ex[j] * n % L] % p for n, i in keys for j in range(self.n_columns)]
         return nmod_mat(len(keys), self.n_columns, flat, p)
 
     def __call__(self, slots: Iterable[Slot]) -> int:

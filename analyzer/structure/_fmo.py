@@ -529,21 +529,26 @@ def _cyclotomic_oracle(
     num, den = math.isqrt(b.numerator), math.isqrt(b.denominator)
     if num * num != b.numerator or den * den != b.denominator or L <= 2 or euler_phi(L) > MAX_EXACT_FIELD_DEGREE:
         return None
-    r = Fraction(num, den)
+    r = fmpq(num, den)
     k_of = dict(zip(members, ks))
     phi = cyclotomic(L)
+    weighted: dict[int, list[fmpq]] = {}  # id of a coefficient list -> c_t r^t (the roots of one factor share it)
     columns = []
     exponents = []
     for root, coeffs in exact_cols:
         k = k_of[root]
         col = []
         for cs in coeffs:
-            acc = [Fraction(0)] * L
-            power = Fraction(1)
-            for t, c in enumerate(cs):
-                acc[t * k % L] += c * power
-                power *= r
-            col.append(fmpq_poly([fmpq(a.numerator, a.denominator) for a in acc]) % phi)
+            if id(cs) not in weighted:
+                power, w = fmpq(1), []
+                for c in cs:
+                    w.append(fmpq(c.numerator, c.denominator) * power)
+                    power *= r
+                weighted[id(cs)] = w
+            acc = [fmpq(0)] * L
+            for t, c in enumerate(weighted[id(cs)]):
+                acc[t * k % L] += c
+            col.append(fmpq_poly(acc) % phi)
         columns.append(col)
         exponents.append((k - ks[0]) % L)
     return CyclotomicRows(L, columns, exponents, row_groups, period)
