@@ -546,8 +546,8 @@ def _cyclotomic_oracle(
                     power *= r
                 weighted[id(cs)] = w
             acc = [fmpq(0)] * L
-            for t, c in enumerate(weighted[id(cs)]):
-                acc[t * k % L] += c
+            for t, wt in enumerate(weighted[id(cs)]):
+                acc[t * k % L] += wt
             col.append(fmpq_poly(acc) % phi)
         columns.append(col)
         exponents.append((k - ks[0]) % L)
