@@ -12,10 +12,10 @@ Cases: dense random integer matrices (entries -3..3, ``C = e_1``, Bernoulli
 1/2) of size 16, 24, 40; the seed systems and structured cases of
 ``bench_verdict.py`` (period 60, 12 x 12 repeated Jordan blocks); two sensors
 on periods 15, 21, 36, 60 (``2 * companion(Phi_m)`` blocks, rows ``e_1`` and
-``e_2``).
+``e_2``); one sensor at periods 120, 168, 210 (companion of ``1.1 zeta_N``, issue 25).
 
 Run: ``git worktree add /tmp/kfio-before 736f7c6`` then
-``python bench/bench_structure.py --before /tmp/kfio-before [--limit 120]``.
+``python bench/bench_structure.py --before /tmp/kfio-before [--limit 120] [--only TEXT]``.
 """
 
 from __future__ import annotations
@@ -27,8 +27,10 @@ import random
 import subprocess
 import sys
 import tempfile
+from fractions import Fraction
 
 from bench_verdict import cases as verdict_cases
+from flint import fmpz_poly
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tests"))
 
@@ -38,6 +40,8 @@ CHILD = r"""
 import json, sys, time
 from kfio import analyze, load_request
 from kfio._budget import Budget
+from kfio.model._limits import DEFAULT_LIMITS
+LIMITS = DEFAULT_LIMITS.for_command("analyze")  # the states kfio analyze accepts (48 at period 210)
 body = sys.stdin.read()
 # Warm up first: kfio imports SymPy, SciPy and python-flint on first use, which would
 # otherwise land in the timed call of one side and not the other (an eager import
@@ -51,7 +55,7 @@ for warm in (
     analyze(load_request(warm))
 t = time.process_time()
 try:
-    rep = analyze(load_request(body), budget=Budget(seconds=float(sys.argv[1])))
+    rep = analyze(load_request(body, LIMITS), budget=Budget(seconds=float(sys.argv[1])))
     out = {"cpu": time.process_time() - t, "verdict": rep.verdict,
            "certified": sum(b.certified for b in rep.blocks), "blocks": len(rep.blocks)}
 except Exception as exc:
@@ -91,9 +95,30 @@ def two_sensor_bodies() -> list[tuple[str, str]]:
     return out
 
 
+def zeta_companion(N: int) -> tuple[str, list, list, dict]:
+    """Companion of the minimal polynomial of ``1.1 zeta_N`` (``C = e_1``, Bernoulli 1/2): one sensor at period ``N``.
+
+    The monic polynomial ``(11/10)^d Phi_N(10 x / 11)``, ``d = phi(N)``: its roots
+    ``1.1 zeta_N^k`` form one FMO block over ``Q(zeta_N)`` (issue 25).
+    """
+    c = [int(x) for x in fmpz_poly.cyclotomic(N).coeffs()]
+    d = len(c) - 1
+    m = [Fraction(c[i]) * Fraction(11, 10) ** (d - i) for i in range(d + 1)]
+    A = [["0"] * d for _ in range(d)]
+    for i in range(1, d):
+        A[i][i - 1] = "1"
+    for i in range(d):
+        A[i][d - 1] = str(-m[i])
+    return f"companion of 1.1 zeta_{N} ({d} states)", A, [["1"] + ["0"] * (d - 1)], BERNOULLI
+
+
+BERNOULLI = {"model": "bernoulli", "arrival_probability": "1/2"}
+
+
 def bodies() -> list[tuple[str, str]]:
     out = []
-    for name, A, C, ch in [dense(16), dense(24), dense(40)] + verdict_cases():
+    cases = [dense(16), dense(24), dense(40)] + verdict_cases() + [zeta_companion(N) for N in (120, 168, 210)]
+    for name, A, C, ch in cases:
         out.append((name, json.dumps({"system": {"A": A, "C": C}, "channel": ch})))
     return out + two_sensor_bodies()
 
@@ -126,6 +151,7 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--before", help="checkout of the previous code (holds analyzer/)")
     ap.add_argument("--limit", type=float, default=120.0)
+    ap.add_argument("--only", help="run only the cases whose name contains this text")
     args = ap.parse_args()
     before_path = None
     if args.before:
@@ -133,6 +159,8 @@ def main() -> None:
         os.symlink(os.path.join(os.path.abspath(args.before), "analyzer"), os.path.join(before_path, "kfio"))
     print(f"{'case':42s} | {'now':40s} | {'before':40s} | ratio")
     for name, body in bodies():
+        if args.only and args.only not in name:
+            continue
         now = run(body, args.limit, None)
         old = run(body, args.limit, before_path) if before_path else None
         ratio = ""

@@ -28,7 +28,7 @@ from typing import Any, Callable, Iterable, Optional, Sequence
 
 import mpmath
 import numpy as np
-from flint import arb, fmpq, fmpq_mat
+from flint import arb, fmpq, fmpq_mat, fmpq_poly
 from sympy import QQ
 from sympy.polys.matrices import DomainMatrix
 from sympy.polys.polyerrors import BasePolynomialError
@@ -39,6 +39,7 @@ from ..model import SystemRecord as System
 from ._adjugate import to_fmpq_mat
 from ._algebraic import AlgebraicReal, power_minus
 from ._balls import MAX_PREC, START_PREC, horner, precision, sign, to_float
+from ._cyclotomic_rank import CyclotomicRows, cyclotomic
 from ._eigen import DIGITS, EigenFactor, eigen_factors
 from ._modp import ModP
 from ._modulus import modulus_squared
@@ -447,6 +448,7 @@ def _cyclotomic_form(
         return None
     b = beta.rational
     orders = []
+    divides: dict[tuple[int, int], bool] = {}  # (factor, m) -> f | x^(2m) - beta^m: one test per factor, not per root
     with mpmath.workdps(DIGITS + 10):
         r = mpmath.sqrt(mpmath.mpf(b.numerator) / b.denominator)
         for fi, ri in members:
@@ -455,8 +457,10 @@ def _cyclotomic_form(
             if rel is None:
                 return None
             m, k = rel
-            target = power_minus(2 * m, QQ(b.numerator**m, b.denominator**m))
-            if not target.rem(f.poly).is_zero:
+            if (fi, m) not in divides:
+                target = power_minus(2 * m, QQ(b.numerator**m, b.denominator**m))
+                divides[(fi, m)] = target.rem(f.poly).is_zero
+            if not divides[(fi, m)]:
                 return None
             orders.append((m, k))
     L = reduce(math.lcm, (m for m, _ in orders), 1)
@@ -500,6 +504,54 @@ def _member_field_and_values(
         K = f.field
         return K, {members[0]: K.from_sympy(K.ext) if K != QQ else QQ.convert(-f.poly.TC())}
     return None, {}
+
+
+def _cyclotomic_oracle(
+    members: Sequence[Root],
+    factors: Sequence[EigenFactor],
+    beta: AlgebraicReal | None,
+    exact_cols: Sequence[tuple[Root, list[list[Fraction]]]],
+    row_groups: Sequence[Sequence[int]],
+    period: int,
+) -> CyclotomicRows | None:
+    """The FLINT rank oracle over ``Q(zeta_L)`` when every member is ``r zeta_L^k`` with ``r`` rational, ``L > 2``.
+
+    The same class of blocks as the first case of :func:`_member_field_and_values` with a
+    rational ``sqrt(beta)``, and the same field-degree limit: column ``j`` of member
+    ``theta = r zeta_L^k`` is ``C v(theta)``, the polynomial ``sum_t c_t r^t y^(t k)``
+    reduced modulo ``Phi_L``, and ``omega_j = theta / theta_head = zeta_L^(k - k_head)``.
+    ``None`` for every other class (the SymPy route decides those).
+    """
+    form = _cyclotomic_form(members, factors, beta)
+    if form is None:
+        return None
+    b, L, ks = form
+    num, den = math.isqrt(b.numerator), math.isqrt(b.denominator)
+    if num * num != b.numerator or den * den != b.denominator or L <= 2 or euler_phi(L) > MAX_EXACT_FIELD_DEGREE:
+        return None
+    r = fmpq(num, den)
+    k_of = dict(zip(members, ks))
+    phi = cyclotomic(L)
+    weighted: dict[int, list[fmpq]] = {}  # id of a coefficient list -> c_t r^t (the roots of one factor share it)
+    columns = []
+    exponents = []
+    for root, coeffs in exact_cols:
+        k = k_of[root]
+        col = []
+        for cs in coeffs:
+            if id(cs) not in weighted:
+                power, w = fmpq(1), []
+                for c in cs:
+                    w.append(fmpq(c.numerator, c.denominator) * power)
+                    power *= r
+                weighted[id(cs)] = w
+            acc = [fmpq(0)] * L
+            for t, wt in enumerate(weighted[id(cs)]):
+                acc[t * k % L] += wt
+            col.append(fmpq_poly(acc) % phi)
+        columns.append(col)
+        exponents.append((k - ks[0]) % L)
+    return CyclotomicRows(L, columns, exponents, row_groups, period)
 
 
 def _output_columns(Cq: fmpq_mat, f: EigenFactor, p: int) -> list[list[list[Fraction]]]:
@@ -582,7 +634,9 @@ def build_block(
         oracle: RankOracle | None = _SingleRows(only, [c for _, c in exact_cols], row_groups)
         return _block(members, texts, values, sizes, mod_sq, ball, phase_of(oracle), certified, block_notes)
 
-    oracle = None
+    oracle = _cyclotomic_oracle(members, factors, mod_sq, exact_cols, row_groups, N0)
+    if oracle is not None:
+        return _block(members, texts, values, sizes, mod_sq, ball, phase_of(oracle), certified, block_notes)
     try:
         K, member_vals = _member_field_and_values(members, factors, mod_sq)
     except (

@@ -48,10 +48,12 @@ def test_non_integer_blind_count_is_a_numerical_failure() -> None:
         bernoulli_factor([F(1, 3)], [F(1, 2)], 2)
 
 
+# Eigenvalues +-sqrt(2): the class's field Q(sqrt(2)) is built by SymPy (a rational modulus
+# with roots of unity, such as a rotation, takes the FLINT route over Q(zeta_L) instead).
 ROTATION = load_request(
     json.dumps(
         {
-            "system": {"A": [[0, -2], [2, 0]], "C": [[1, 0]]},
+            "system": {"A": [[0, 2], [1, 0]], "C": [[1, 0]]},
             "channel": {"model": "bernoulli", "arrival_probability": 0.9},
         }
     )
