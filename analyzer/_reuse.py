@@ -76,9 +76,20 @@ def reused_fmo_blocks(system: Any, budget: Budget | None = None) -> Sequence[Fmo
     (:func:`kfio.stability.analyze` takes them as ``fmo=``).  This module
     imports the exact structure code (SymPy, FLINT) only when first asked.
     """
+    return reused_plant(system, budget)[0]
+
+
+def reused_plant(system: Any, budget: Budget | None = None) -> tuple[Sequence[FmoBlock], dict]:
+    """The FMO blocks of ``system`` (as :func:`reused_fmo_blocks`) and the memo kept with them.
+
+    The memo is a dict that belongs to these blocks alone (same key: exact
+    ``A``, exact ``C``, the sensor rows), for :func:`kfio.stability.analyze`'s
+    ``memo=``: what a point's analysis derives from the plant alone is kept
+    there for the next point on the same plant.
+    """
     from .structure import fmo_blocks
 
-    return _BLOCKS.get(structure_key(system), lambda: fmo_blocks(system, budget))  # type: ignore[no-any-return]
+    return _BLOCKS.get(structure_key(system), lambda: (fmo_blocks(system, budget), {}))  # type: ignore[no-any-return]
 
 
 def structure_cache() -> LRU:
