@@ -89,9 +89,25 @@ def reused_plant(system: Any, budget: Budget | None = None) -> tuple[Sequence[Fm
     """
     from .structure import fmo_blocks
 
-    return _BLOCKS.get(structure_key(system), lambda: (fmo_blocks(system, budget), {}))  # type: ignore[no-any-return]
+    last = _LAST_PLANT
+    if last and last[0] is system:  # the very object of the last call (a sweep's validated plant): no hashing
+        _BLOCKS.hits += 1
+        return last[1]  # type: ignore[no-any-return]
+    plant = _BLOCKS.get(structure_key(system), lambda: (fmo_blocks(system, budget), {}))
+    _LAST_PLANT[:] = [system, plant]  # holds the object, so its identity is never another's
+    return plant  # type: ignore[no-any-return]
+
+
+#: ``[system, (blocks, memo)]`` of the last call to :func:`reused_plant`.
+_LAST_PLANT: list[Any] = []
 
 
 def structure_cache() -> LRU:
     """This process's cache of FMO blocks (for statistics and tests)."""
     return _BLOCKS
+
+
+def clear_plants() -> None:
+    """Forget every kept plant (blocks and memos)."""
+    _BLOCKS.clear()
+    _LAST_PLANT.clear()

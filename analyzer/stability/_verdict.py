@@ -327,7 +327,13 @@ def _analyze_block(
         basis=basis,
         modulus_sq_algebraic=block.modulus_sq,
     )
-    below_one, below_certified = (-1, True) if block.phase is None else block.compare_power(1, Fraction(1))
+    if memo is None or "below_one" not in memo:  # |alpha| < 1: the block alone
+        below = (-1, True) if block.phase is None else block.compare_power(1, Fraction(1))
+        if memo is not None:
+            memo["below_one"] = below
+    else:
+        below = memo["below_one"]
+    below_one, below_certified = below
     if below_one < 0:
         degenerate = None
         if block.phase is not None:

@@ -18,7 +18,7 @@ import time
 from typing import Any, Sequence
 
 from .._budget import Budget
-from .._reuse import LRU, reused_plant, structure_cache
+from .._reuse import LRU, clear_plants, reused_plant, structure_cache
 from ..errors import AnalyzerError, AssumptionViolation, BudgetExceeded, InvalidInput, NumericalFailure
 from ..model import DEFAULT_LIMITS, load_json
 from ._parse import parse_point
@@ -44,6 +44,7 @@ def clear_caches() -> None:
     """Forget every cached structure and verdict (tests, benchmarks)."""
     for c in (_STRUCTURE, _VERDICT_ROWS):
         c.clear()
+    clear_plants()
 
 
 def _without_noise(tree: Any) -> Any:

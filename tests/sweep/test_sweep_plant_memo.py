@@ -19,7 +19,7 @@ from fractions import Fraction
 import pytest
 
 from kfio import load_request
-from kfio._reuse import reused_plant, structure_cache, structure_key
+from kfio._reuse import clear_plants, reused_plant, structure_cache, structure_key
 from kfio.stability import analyze
 from kfio.structure import fmo_blocks
 from kfio.sweep import clear_caches
@@ -129,7 +129,6 @@ def test_plants_equal_as_floats_never_share_a_memo():
     double = Fraction(1.1)
     assert double != Fraction(11, 10) and float(double) == 1.1
     clear_caches()
-    structure_cache().clear()
     rows = []
     for a in ("11/10", _text(double)):
         tree = {
@@ -150,10 +149,13 @@ def test_plants_equal_as_floats_never_share_a_memo():
 
 
 def test_reused_plant_keeps_one_memo_per_plant():
-    structure_cache().clear()
+    clear_plants()
     channel = '"channel": {"model": "bernoulli", "arrival_probability": 0.5}'
     a = load_request('{"system": {"A": [[2]], "C": [[1]]}, ' + channel + "}").system
     b = load_request('{"system": {"A": [[3]], "C": [[1]]}, ' + channel + "}").system
     (fa, ma), (fa2, ma2), (fb, mb) = reused_plant(a), reused_plant(a), reused_plant(b)
     assert fa is fa2 and ma is ma2
     assert ma is not mb and fa is not fb
+    same = load_request('{"system": {"A": [[2]], "C": [[1]]}, ' + channel + "}").system
+    assert same is not a and reused_plant(same)[1] is ma  # an equal plant, another object: the same memo
+    assert reused_plant(b)[1] is mb
