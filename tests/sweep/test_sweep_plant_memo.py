@@ -159,3 +159,21 @@ def test_reused_plant_keeps_one_memo_per_plant():
     same = load_request('{"system": {"A": [[2]], "C": [[1]]}, ' + channel + "}").system
     assert same is not a and reused_plant(same)[1] is ma  # an equal plant, another object: the same memo
     assert reused_plant(b)[1] is mb
+
+
+@pytest.mark.parametrize(
+    "value",
+    ["stable", 3, True, None, 0.25, float("nan"), float("inf"), (1, 2), [0.5, None], {"a": 1}],
+)
+def test_a_record_skips_the_encoder_only_when_it_would_change_nothing(value):
+    import numpy as np
+
+    from kfio.sweep import record
+    from kfio.sweep._engine import SweepRow
+
+    for v in (value, np.float64(0.75), np.int64(2)):
+        row = SweepRow(4, {"p": "1/2", "k": 3}, {"verdict": v, "error": None})
+        columns = ["index", "axis:p", "axis:k", "verdict", "error"]
+        d = row.to_dict()
+        assert record(row, columns) == {c: d.get(c) for c in columns}
+        assert [type(x) for x in record(row, columns).values()] == [type(d.get(c)) for c in columns]
