@@ -89,17 +89,18 @@ def reused_plant(system: Any, budget: Budget | None = None) -> tuple[Sequence[Fm
     """
     from .structure import fmo_blocks
 
-    last = _LAST_PLANT
-    if last and last[0] is system:  # the very object of the last call (a sweep's validated plant): no hashing
+    global _LAST_PLANT
+    last = _LAST_PLANT  # one read of an immutable pair: threads never see half of another call's
+    if last is not None and last[0] is system:  # the very object of the last call (a sweep's plant): no hashing
         _BLOCKS.hits += 1
         return last[1]  # type: ignore[no-any-return]
     plant = _BLOCKS.get(structure_key(system), lambda: (fmo_blocks(system, budget), {}))
-    _LAST_PLANT[:] = [system, plant]  # holds the object, so its identity is never another's
+    _LAST_PLANT = (system, plant)  # holds the object, so its identity is never another's
     return plant  # type: ignore[no-any-return]
 
 
-#: ``[system, (blocks, memo)]`` of the last call to :func:`reused_plant`.
-_LAST_PLANT: list[Any] = []
+#: ``(system, (blocks, memo))`` of the last call to :func:`reused_plant`.
+_LAST_PLANT: tuple[Any, Any] | None = None
 
 
 def structure_cache() -> LRU:
@@ -109,5 +110,6 @@ def structure_cache() -> LRU:
 
 def clear_plants() -> None:
     """Forget every kept plant (blocks and memos)."""
+    global _LAST_PLANT
     _BLOCKS.clear()
-    _LAST_PLANT.clear()
+    _LAST_PLANT = None
