@@ -177,3 +177,20 @@ def test_a_record_skips_the_encoder_only_when_it_would_change_nothing(value):
         d = row.to_dict()
         assert record(row, columns) == {c: d.get(c) for c in columns}
         assert [type(x) for x in record(row, columns).values()] == [type(d.get(c)) for c in columns]
+
+
+def test_the_streamed_csv_is_the_dict_writer_csv(tmp_path):
+    """Rows go through the plain CSV writer: the same bytes as ``csv.DictWriter`` (quotes, booleans, empty None)."""
+    from kfio.sweep._table import TableWriter, csv_text
+
+    columns = ["index", "axis:p", "verdict", "worst_rate", "certified", "error"]
+    records = [
+        {"index": i, "axis:p": "1/3", "verdict": 'a "b", c', "worst_rate": 0.1 * i, "certified": i % 2 == 0}
+        | {"error": None if i else "internal: x\ny"}
+        for i in range(5)
+    ]
+    path = tmp_path / "t.csv"
+    with TableWriter(path, columns) as w:
+        for r in records:
+            w.write(r)
+    assert path.read_text(encoding="utf-8") == csv_text(columns, records)
