@@ -76,11 +76,40 @@ def reused_fmo_blocks(system: Any, budget: Budget | None = None) -> Sequence[Fmo
     (:func:`kfio.stability.analyze` takes them as ``fmo=``).  This module
     imports the exact structure code (SymPy, FLINT) only when first asked.
     """
+    return reused_plant(system, budget)[0]
+
+
+def reused_plant(system: Any, budget: Budget | None = None) -> tuple[Sequence[FmoBlock], dict]:
+    """The FMO blocks of ``system`` (as :func:`reused_fmo_blocks`) and the memo kept with them.
+
+    The memo is a dict that belongs to these blocks alone (same key: exact
+    ``A``, exact ``C``, the sensor rows), for :func:`kfio.stability.analyze`'s
+    ``memo=``: what a point's analysis derives from the plant alone is kept
+    there for the next point on the same plant.
+    """
     from .structure import fmo_blocks
 
-    return _BLOCKS.get(structure_key(system), lambda: fmo_blocks(system, budget))  # type: ignore[no-any-return]
+    global _LAST_PLANT
+    last = _LAST_PLANT  # one read of an immutable pair: threads never see half of another call's
+    if last is not None and last[0] is system:  # the very object of the last call (a sweep's plant): no hashing
+        _BLOCKS.hits += 1
+        return last[1]  # type: ignore[no-any-return]
+    plant = _BLOCKS.get(structure_key(system), lambda: (fmo_blocks(system, budget), {}))
+    _LAST_PLANT = (system, plant)  # holds the object, so its identity is never another's
+    return plant  # type: ignore[no-any-return]
+
+
+#: ``(system, (blocks, memo))`` of the last call to :func:`reused_plant`.
+_LAST_PLANT: tuple[Any, Any] | None = None
 
 
 def structure_cache() -> LRU:
     """This process's cache of FMO blocks (for statistics and tests)."""
     return _BLOCKS
+
+
+def clear_plants() -> None:
+    """Forget every kept plant (blocks and memos)."""
+    global _LAST_PLANT
+    _BLOCKS.clear()
+    _LAST_PLANT = None

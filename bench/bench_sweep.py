@@ -15,7 +15,8 @@ probability, for this code and, in the same run, for the code of ``--against`` (
 from ``git archive`` by ``bench/_reference.py``): wall seconds, points/s, CPU seconds of the
 client and of its workers, and the peak RSS of the client and of the largest worker.  The two
 tables must be equal byte for byte.  ``--scheduler tcp://HOST:PORT`` adds a run of this code on
-a cluster started by hand (``dask scheduler``, ``dask worker``).
+a cluster started by hand (``dask scheduler``, ``dask worker``); ``--serial`` adds a run of this code in one
+process (``kfio sweep --serial``).
 Usage: ``python bench/bench_sweep.py [--points 1000] [--cli 10000,100000 [--against 4d603a0]]``
 """
 
@@ -89,7 +90,7 @@ def run_cli(args: list[str], pythonpath: str | None = None, timeout: float = 360
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
-def cli_section(sizes: list[int], against: str | None, scheduler: str | None) -> None:
+def cli_section(sizes: list[int], against: str | None, scheduler: str | None, serial: bool = False) -> None:
     from _reference import reference_tree
 
     ref = str(reference_tree(against)) if against else None
@@ -105,6 +106,8 @@ def cli_section(sizes: list[int], against: str | None, scheduler: str | None) ->
                 runs.append((against, ["--workers", "2"], ref))
             if scheduler:
                 runs.append(("this, ext", ["--scheduler", scheduler], None))
+            if serial:
+                runs.append(("this, ser", ["--serial"], None))
             tables, walls = {}, {}
             load = os.getloadavg()[0]
             for label, extra, pypath in runs:
@@ -130,9 +133,12 @@ def main() -> None:
     ap.add_argument("--cli", help="comma-separated sweep sizes for the end-to-end kfio sweep section")
     ap.add_argument("--against", default=START_COMMIT, help="commit to compare the CLI section with ('' for none)")
     ap.add_argument("--scheduler", help="also run the CLI section on this Dask scheduler")
+    ap.add_argument(
+        "--serial", action="store_true", help="also run the CLI section in one process (kfio sweep --serial)"
+    )
     args = ap.parse_args()
     if args.cli:
-        cli_section([int(x) for x in args.cli.split(",")], args.against or None, args.scheduler)
+        cli_section([int(x) for x in args.cli.split(",")], args.against or None, args.scheduler, args.serial)
         return
     spec = load_sweep(
         json.dumps(

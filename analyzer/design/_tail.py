@@ -187,7 +187,11 @@ def _label(block_degenerate: bool, channels: Sequence[MarkovChannel]) -> tuple[s
 
 
 def block_tail(
-    block: FmoBlock, res: SigmaResult, channels: Sequence[MarkovChannel], lambdas: Sequence[Fraction] | None
+    block: FmoBlock,
+    res: SigmaResult,
+    channels: Sequence[MarkovChannel],
+    lambdas: Sequence[Fraction] | None,
+    memo: dict | None = None,
 ) -> BlockTail:
     """The tail exponent of one block with ``|alpha| > 1`` (Mo and Sinopoli, 2012; kfio's extension).
 
@@ -206,6 +210,9 @@ def block_tail(
         One channel per row group.
     lambdas:
         The arrival probabilities when every channel is Bernoulli, else ``None``.
+    memo:
+        A dict kept for this ``block`` alone across channels: ``log beta_k``
+        (40 digits), which depends on the block only, is kept in it.
 
     Examples
     --------
@@ -257,8 +264,13 @@ def block_tail(
             c_mp = mpmath.mpf(c_rational.numerator) / c_rational.denominator
         else:
             c_mp = mpmath.mpf(str(sympy.N(c_expr, 40)))
-        b_mp = beta.approx(40) if beta is not None else mpmath.mpf(block.modulus_sq_float)
-        kappa = float(-mpmath.log(c_mp) / (N * mpmath.log(b_mp)))
+        if memo is None or "log_beta" not in memo:  # the block alone
+            log_b = mpmath.log(beta.approx(40) if beta is not None else mpmath.mpf(block.modulus_sq_float))
+            if memo is not None:
+                memo["log_beta"] = log_b
+        else:
+            log_b = memo["log_beta"]
+        kappa = float(-mpmath.log(c_mp) / (N * log_b))
     kappa_exact: str | None = None
     if c_rational is not None and beta is not None and beta.rational is not None:
         ratio = _rational_ratio(1 / c_rational, beta.rational**N) if c_rational != 1 else Fraction(0)
@@ -338,6 +350,7 @@ def _statement(moments: dict[str, str]) -> str:
 def tail_report(
     items: Sequence[tuple[FmoBlock, SigmaResult | None]],
     channels: Sequence[MarkovChannel],
+    memo: Sequence[dict] | None = None,
 ) -> TailReport:
     """Tail exponents of every block with ``|alpha| > 1`` and the overall ``kappa = min_k kappa_k``.
 
@@ -348,6 +361,9 @@ def tail_report(
         computed them (``None`` for blocks inside the unit circle).
     channels:
         One channel per row group.
+    memo:
+        One dict per item, kept for its block alone across channels (see
+        :func:`block_tail`); whether ``|alpha_k| = 1`` is kept there too.
 
     Returns
     -------
@@ -363,18 +379,24 @@ def tail_report(
     )
     tails: list[BlockTail] = []
     notes: list[str] = []
-    for block, res in items:
+    for i, (block, res) in enumerate(items):
         if res is None:
             continue
-        beta = block.modulus_sq
-        on_circle = beta.compare_power(1, Fraction(1)) == 0 if beta is not None else block.modulus_sq_float == 1.0
+        kept = None if memo is None else memo[i]
+        if kept is None or "on_circle" not in kept:  # |alpha| = 1 is a property of the block alone
+            beta = block.modulus_sq
+            on_circle = beta.compare_power(1, Fraction(1)) == 0 if beta is not None else block.modulus_sq_float == 1.0
+            if kept is not None:
+                kept["on_circle"] = on_circle
+        else:
+            on_circle = kept["on_circle"]
         if on_circle:
             notes.append(
                 f"block {', '.join(block.eigenvalue_texts)} has |alpha| = 1: blind stretches grow the error "
                 "polynomially, not geometrically; it contributes no power-law tail"
             )
             continue
-        tails.append(block_tail(block, res, channels, bern))
+        tails.append(block_tail(block, res, channels, bern, kept))
     if not tails:
         return TailReport(
             kappa=None,

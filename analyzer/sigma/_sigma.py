@@ -126,11 +126,14 @@ def sigma_period(base_period: int, channels: Sequence[MarkovChannel]) -> int:
     return base_period * -(-nu // base_period)
 
 
-def _check_inputs(block: PhaseBlock, channels: Sequence[MarkovChannel]) -> None:
-    if block.n_columns == 0:
-        raise InvalidInput("/system", "a phase block needs at least one column")
-    if not np.isfinite(block.c_hat).all():
-        raise InvalidInput("/system", "the reduced observation matrix C_hat has entries that are not finite")
+def _check_inputs(block: PhaseBlock, channels: Sequence[MarkovChannel], memo: dict | None = None) -> None:
+    if memo is None or "block checked" not in memo:  # the block alone: once per memo
+        if block.n_columns == 0:
+            raise InvalidInput("/system", "a phase block needs at least one column")
+        if not np.isfinite(block.c_hat).all():
+            raise InvalidInput("/system", "the reduced observation matrix C_hat has entries that are not finite")
+        if memo is not None:
+            memo["block checked"] = True
     if len(channels) != len(block.row_groups):
         raise InvalidInput(
             "/channel", f"expected one channel per packet ({len(block.row_groups)}), got {len(channels)}"
@@ -581,8 +584,45 @@ def _find_worst(
     else:
         res = enumerate_orbits(space, budget, margins)
         method = f"enumerated {len(res.maximal)} shift orbits of maximal blind sets over {res.nodes} flats"
-    worst = res.maximal[int(np.argmax(objective.score(np.array(res.maximal))))]
-    return _Found(worst, res.maximal, True, method)
+    return _Found(_pick_worst(res.maximal, channels, space.n_phases, period), res.maximal, True, method)
+
+
+def _pick_worst(
+    maximal: Sequence[np.ndarray], channels: Sequence[MarkovChannel], base_period: int, period: int
+) -> np.ndarray:
+    """The set of ``maximal`` with the largest ``rho(P_F)`` under ``channels`` (the first of ties)."""
+    objective = _objective(channels, base_period, period)
+    return maximal[int(np.argmax(objective.score(np.array(maximal))))]
+
+
+def _route(space: SlotSpace, channels: Sequence[MarkovChannel], degenerate: bool, fully_blind: bool) -> str | None:
+    """The route of :func:`_find_worst` when the sets it searches do not depend on the probabilities, else ``None``.
+
+    Channel-independence, route by route (what a per-plant memo may keep):
+
+    * ``fully-blind`` and ``empty`` (one group, non-degenerate): the set is
+      fixed by the ranks of the block's rows alone;
+    * ``bernoulli`` (one Bernoulli group): the score is ``|F|`` and the bound
+      is :func:`largest_blind_bound` of the block's exponents, so the search
+      visits the same flats for every ``lambda`` (Corollary 2: the largest
+      blind set is the worst whatever ``lambda``);
+    * ``pareto`` (several groups, all Bernoulli): :func:`pareto_search` takes
+      no channel; its front of undominated miss vectors is the same for every
+      ``lambda_g`` (``rho(P_F) = prod_g (1 - lambda_g)^{z_g}`` is decreasing
+      in each ``z_g``); only the argmax over the front depends on them;
+    * ``orbits`` (several groups, a Markov one among them): every shift orbit
+      is enumerated, with no channel; again only the argmax depends on them.
+
+    One group with a Markov channel (order >= 1) searches with a score and a
+    window bound built from its probabilities: ``None``, never kept.
+    """
+    if fully_blind:
+        return "fully-blind"
+    if space.n_groups == 1:
+        if not degenerate:
+            return "empty"
+        return "bernoulli" if channels[0].order == 0 else None
+    return "pareto" if all(ch.order == 0 for ch in channels) else "orbits"
 
 
 def _lift(space: SlotSpace, mask: np.ndarray, period: int) -> frozenset:
@@ -781,7 +821,13 @@ def sigma_bracket(
     )
 
 
-def compute_sigma(block: PhaseBlock, channels: Sequence[MarkovChannel], budget: Budget | None = None) -> SigmaResult:
+def compute_sigma(
+    block: PhaseBlock,
+    channels: Sequence[MarkovChannel],
+    budget: Budget | None = None,
+    *,
+    memo: dict | None = None,
+) -> SigmaResult:
     """``sigma_k`` of a reduced FMO block (Rohr, Marelli and Fu (2014), Lemmas 2-3, Corollary 2).
 
     .. math::
@@ -808,6 +854,16 @@ def compute_sigma(block: PhaseBlock, channels: Sequence[MarkovChannel], budget: 
         independent.
     budget:
         Work budget; ``None`` allows :data:`DEFAULT_MAX_STEPS` steps.
+    memo:
+        A dict the caller keeps for this ``block`` (and no other) across
+        calls with different channels: the rank tests, the blind sets of every
+        route whose search does not depend on the probabilities (see
+        :func:`_route`; for Bernoulli packets the exponents ``z_g / N`` and the
+        Pareto front, Corollary 2) and the exact rank checks of each worst set
+        are kept in it, so a later call evaluates only the closed form
+        ``sigma = prod_g (1 - lambda_g)^(z_g / N)`` (and, on a front, its
+        argmax).  The result equals the one without ``memo``; only finished
+        work is kept (a search cut short by its budget leaves nothing).
 
     Returns
     -------
@@ -839,33 +895,62 @@ def compute_sigma(block: PhaseBlock, channels: Sequence[MarkovChannel], budget: 
     >>> abs(res.sigma**2 - 0.25) < 1e-15  # substitute back: sigma^2 = 1 - lambda
     True
     """
-    _check_inputs(block, channels)
+    memo = memo if memo is not None else {}
+    _check_inputs(block, channels, memo)
     budget = budget if budget is not None else Budget(max_steps=DEFAULT_MAX_STEPS)
     period = sigma_period(block.base_period, channels)
-    space = SlotSpace.from_block(block)
-    margins = Margins(space.tol)
-    L = space.n_columns
-    fully_blind = space.rank(np.ones(space.size, dtype=bool), margins) < L
-    phase0 = space.mask([(0, g) for g in range(space.n_groups)])
-    degenerate = space.rank(phase0, margins) < L
-    try:
-        found = _find_worst(space, block.exponents, channels, period, degenerate, fully_blind, budget, margins)
-    except FrontBudgetExceeded as exc:
-        raise SigmaBudgetExceeded(str(exc), sigma_bracket(block, space, channels, exc.found)) from exc
-    exponents = _unblind_shares(space, found.worst, channels)
+    if "ranks" not in memo:  # the block alone: its slots and the two rank tests
+        space = SlotSpace.from_block(block)
+        margins = Margins(space.tol)
+        L = space.n_columns
+        fully_blind = space.rank(np.ones(space.size, dtype=bool), margins) < L
+        phase0 = space.mask([(0, g) for g in range(space.n_groups)])
+        degenerate = space.rank(phase0, margins) < L
+        memo["ranks"] = (space, dataclasses.replace(margins), fully_blind, phase0, degenerate)
+    space, kept, fully_blind, phase0, degenerate = memo["ranks"]
+    margins = dataclasses.replace(kept)
+    route = _route(space, channels, degenerate, fully_blind)
+    if route is not None and route in memo:
+        found, kept = memo[route]
+        margins = dataclasses.replace(kept)
+        if route in ("pareto", "orbits"):  # the front is kept; the worst set on it depends on the channels
+            found = dataclasses.replace(found, worst=_pick_worst(found.maximal, channels, space.n_phases, period))
+    else:
+        try:
+            found = _find_worst(space, block.exponents, channels, period, degenerate, fully_blind, budget, margins)
+        except FrontBudgetExceeded as exc:
+            raise SigmaBudgetExceeded(str(exc), sigma_bracket(block, space, channels, exc.found)) from exc
+        if route is not None:
+            memo[route] = (found, dataclasses.replace(margins))
+    bernoulli = all(ch.order == 0 for ch in channels)
+    checked = (route, bernoulli, period, found.worst.tobytes()) if route is not None else None
+    if checked is None or checked not in memo:
+        # The exact checks, the shares z_g / N and the lifted sets depend on the sets, the period and
+        # whether every channel is Bernoulli: never on a probability.
+        exponents = _unblind_shares(space, found.worst, channels)
+        certified, cert_note = _certify(
+            block, _exact_checks(space, found, margins, phase0, degenerate, bernoulli), budget
+        )
+        lifted = (
+            _lift(space, found.worst, period),
+            tuple(_lift(space, m, period) for m in found.maximal) if found.enumerated else (),
+        )
+        kept_checks = (exponents, certified, cert_note, _margin_note(margins), lifted)
+        if checked is not None:
+            memo[checked] = kept_checks
+    else:
+        kept_checks = memo[checked]
+    exponents, certified, cert_note, margin_note, (worst_lifted, maximal_lifted) = kept_checks
     sigma, rho = _sigma_values(space, found, channels, period, exponents)
-    certified, cert_note = _certify(
-        block, _exact_checks(space, found, margins, phase0, degenerate, all(ch.order == 0 for ch in channels)), budget
-    )
-    notes = [found.method, cert_note, _margin_note(margins)]
+    notes = [found.method, cert_note, margin_note]
     return SigmaResult(
         period=period,
         sigma=sigma,
         rho_period=rho,
         degenerate=degenerate,
         fully_blind=fully_blind,
-        worst_blind_set=_lift(space, found.worst, period),
-        maximal_blind_sets=tuple(_lift(space, m, period) for m in found.maximal) if found.enumerated else (),
+        worst_blind_set=worst_lifted,
+        maximal_blind_sets=maximal_lifted,
         bernoulli_exponents=exponents,
         certified=certified,
         notes=tuple(notes),

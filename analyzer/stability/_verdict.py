@@ -310,18 +310,30 @@ def sigma_bracket_json(block: FmoBlock, bracket: SigmaBracket) -> dict[str, Any]
 
 
 def _analyze_block(
-    block: FmoBlock, channels: list[MarkovChannel], basis: str, budget: Budget
+    block: FmoBlock, channels: list[MarkovChannel], basis: str, budget: Budget, memo: dict | None = None
 ) -> tuple[BlockReport, Optional[SigmaResult]]:
+    if memo is None or "modulus" not in memo:  # |alpha| depends on the block alone
+        modulus = (_modulus_float(block), _modulus_text(block))
+        if memo is not None:
+            memo["modulus"] = modulus
+    else:
+        modulus = memo["modulus"]
     base: dict[str, Any] = dict(
         eigenvalues=block.eigenvalue_texts,
         eigenvalues_numeric=block.eigenvalue_values,
-        modulus=_modulus_float(block),
-        modulus_exact=_modulus_text(block),
+        modulus=modulus[0],
+        modulus_exact=modulus[1],
         jordan_sizes=block.jordan_sizes,
         basis=basis,
         modulus_sq_algebraic=block.modulus_sq,
     )
-    below_one, below_certified = (-1, True) if block.phase is None else block.compare_power(1, Fraction(1))
+    if memo is None or "below_one" not in memo:  # |alpha| < 1: the block alone
+        below = (-1, True) if block.phase is None else block.compare_power(1, Fraction(1))
+        if memo is not None:
+            memo["below_one"] = below
+    else:
+        below = memo["below_one"]
+    below_one, below_certified = below
     if below_one < 0:
         degenerate = None
         if block.phase is not None:
@@ -342,7 +354,7 @@ def _analyze_block(
         ), None
     assert block.phase is not None  # the zero class has |alpha| = 0 < 1
     try:
-        res = compute_sigma(block.phase, channels, budget)
+        res = compute_sigma(block.phase, channels, budget, memo=None if memo is None else memo.setdefault("sigma", {}))
     except SigmaBudgetExceeded as exc:
         exc.partial = {"sigma_bracket": sigma_bracket_json(block, exc.bracket)}
         raise
@@ -357,7 +369,13 @@ def _analyze_block(
     elif all_bernoulli and res.bernoulli_exponents is not None:
         lam_f = [lam for lam in lambdas if lam is not None]
         sets = res.maximal_blind_sets or (res.worst_blind_set,)
-        c = max(bernoulli_factor(_bernoulli_exponents(F, N, len(channels)), lam_f, N) for F in sets)
+        key = ("exponents", N, len(channels), sets)  # the sets' shares z_g / N: no probability in them
+        shares = memo.get(key) if memo is not None else None
+        if shares is None:
+            shares = [_bernoulli_exponents(F, N, len(channels)) for F in sets]
+            if memo is not None:
+                memo[key] = shares
+        c = max(bernoulli_factor(z, lam_f, N) for z in shares)
         s, exact = compare_rate_bernoulli(block.modulus_sq, block.modulus_sq_float, N, c, block.compare_power)
     else:
         sets = res.maximal_blind_sets or (res.worst_blind_set,)
@@ -473,6 +491,28 @@ def _critical_probability(
     return float(val), text, warnings
 
 
+def _reused_critical_probability(
+    blocks: Sequence[BlockReport], display: dict[str, str], memo: dict | None
+) -> tuple[float | None, str | None, list[str]]:
+    """:func:`_critical_probability`, kept in the plant's ``memo`` by what it reads besides the plant.
+
+    It reads each block's eigenvalues and ``beta_k`` (the plant), whether the
+    block has a rate (``|alpha_k| >= 1``: the plant) and its share ``z_k / N_k``
+    of observed phases (the worst blind set: for one Bernoulli packet the
+    largest one, whatever ``lambda``), so those shares are the key.
+    """
+    if memo is None:
+        return _critical_probability(blocks, display)
+    key = ("critical", tuple((b.rate is None, b.bernoulli_blind_fraction) for b in blocks))
+    if key not in memo:
+        shown: dict[str, str] = {}
+        crit, crit_exact, warnings = _critical_probability(blocks, shown)
+        memo[key] = (crit, crit_exact, tuple(warnings), shown)
+    crit, crit_exact, warnings, shown = memo[key]
+    display.update(shown)
+    return crit, crit_exact, list(warnings)
+
+
 def _one_minus_power_text(beta: AlgebraicReal, exponent: Fraction) -> str:
     """SymPy's text of ``1 - beta**exponent`` (``exponent < 0``): ``1 - 1/CRootOf(...)**(3/2)``.
 
@@ -516,7 +556,11 @@ def _with_ge_region(
 
 
 def analyze(
-    request: Request, budget: Budget | None = None, *, fmo: Sequence[FmoBlock] | None = None
+    request: Request,
+    budget: Budget | None = None,
+    *,
+    fmo: Sequence[FmoBlock] | None = None,
+    memo: dict | None = None,
 ) -> StabilityReport:
     """Decide stability of the expected error covariance (Rohr, Marelli and Fu (2014), Theorem 1).
 
@@ -531,6 +575,15 @@ def analyze(
         The FMO blocks of ``request.system`` (:func:`kfio.structure.fmo_blocks`),
         when the caller already has them (a sweep that varies only the
         channel); they depend on ``A`` and ``C`` alone.  Computed when omitted.
+    memo:
+        With ``fmo``: a dict the caller keeps for these blocks (and no other
+        plant) across requests that differ in the channel.  What depends on
+        the blocks alone is kept in it: ``|alpha_k|``, the blind-set searches
+        whose sets do not depend on the probabilities
+        (:func:`kfio.sigma.compute_sigma`'s ``memo``) and, for one Bernoulli
+        packet, the critical probability (Rohr, Marelli and Fu (2014),
+        Corollary 2: ``1 - beta_k^(-N_k / z_k)`` involves the plant and the
+        blind set only).  The report equals the one without ``memo``.
 
     Returns
     -------
@@ -561,8 +614,12 @@ def analyze(
     channels = _channels_of(request)
     basis = "extension" if len(channels) > 1 else "theorem"
     if fmo is None:
-        fmo = fmo_blocks(system, budget)
-    analyzed = [_analyze_block(b, channels, basis, budget) for b in fmo]
+        fmo, memo = fmo_blocks(system, budget), None
+    blocks_memo = None if memo is None else memo.setdefault("blocks", [{} for _ in fmo])
+    analyzed = [
+        _analyze_block(b, channels, basis, budget, None if blocks_memo is None else blocks_memo[i])
+        for i, b in enumerate(fmo)
+    ]
     blocks = [rep for rep, _ in analyzed]
     verdict = max((b.verdict for b in blocks), key=VERDICTS.index, default=Verdict.STABLE)
     warnings: list[str] = []
@@ -575,9 +632,14 @@ def analyze(
     crit = crit_exact = None
     display: dict[str, str] = {}
     if len(channels) == 1 and channels[0].model == "bernoulli":
-        crit, crit_exact, w = _critical_probability(blocks, display)
+        crit, crit_exact, w = _reused_critical_probability(blocks, display, memo)
         warnings.extend(w)
-    controllable = _controllable(system)
+    if memo is None:
+        controllable = _controllable(system)
+    else:  # the memo is the plant's (exact A): with exact Q the key is complete
+        controllable = memo.get(("controllable", system.Q), None)
+        if controllable is None:
+            controllable = memo[("controllable", system.Q)] = _controllable(system)
     if controllable is False:
         warnings.append("(A, Q^1/2) is not controllable: some modes receive no process noise")
     ch = request.channel
@@ -596,7 +658,7 @@ def analyze(
         assumptions=tuple(assumptions),
         warnings=tuple(warnings),
         display=display,
-        tail=tail_report([(b, res) for b, (_, res) in zip(fmo, analyzed)], channels),
+        tail=tail_report([(b, res) for b, (_, res) in zip(fmo, analyzed)], channels, blocks_memo),
     )
     if len(channels) == 1 and channels[0].model == "gilbert_elliott":
         report = _with_ge_region(report, [(b, res) for b, (_, res) in zip(fmo, analyzed)], channels[0], budget, opts)

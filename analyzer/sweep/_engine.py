@@ -91,9 +91,25 @@ class SweepResult(Report):
 
 
 def record(row: SweepRow, columns: Sequence[str]) -> dict[str, Any]:
-    """The table record of ``row``: its JSON (:meth:`SweepRow.to_dict`, encoded once) keyed by ``columns``."""
-    d = row.to_dict()
+    """The table record of ``row``: its JSON (:meth:`SweepRow.to_dict`, encoded once) keyed by ``columns``.
+
+    A row's fields come from the workers already encoded, so its view is
+    usually JSON as it stands: when every value is one the encoder returns
+    unchanged (text, an integer, a boolean, ``None``, a finite float), the
+    view is the JSON and the encoder is not run; anything else goes through it.
+    """
+    from .._json._registry import view_of
+
+    view = view_of(SweepRow)
+    assert view is not None
+    d = view(row)
+    if not all(type(v) in _AS_IS or (type(v) is float and math.isfinite(v)) for v in d.values()):
+        d = row.to_dict()
     return {c: d.get(c) for c in columns}
+
+
+#: Types :func:`kfio._json._encode.encode` returns unchanged (and ``float`` when finite).
+_AS_IS = frozenset({str, int, bool, type(None)})
 
 
 def in_index_order(rows: Iterable[SweepRow], start: int = 0) -> Iterator[SweepRow]:

@@ -13,16 +13,17 @@ Both caches are bounded (least recently used), keyed by exact values.
 
 from __future__ import annotations
 
+import pickle
 import time
 from typing import Any, Sequence
 
 from .._budget import Budget
-from .._reuse import LRU, reused_fmo_blocks, structure_cache
+from .._reuse import LRU, clear_plants, reused_plant, structure_cache
 from ..errors import AnalyzerError, AssumptionViolation, BudgetExceeded, InvalidInput, NumericalFailure
 from ..model import DEFAULT_LIMITS, load_json
 from ._parse import parse_point
-from ._rows import error_row, row_from_report
-from ._spec import SweepSpec, parse_sweep, point_at, request_text
+from ._rows import analyze_row, error_row, row_from_report
+from ._spec import SweepSpec, parse_sweep, point_at
 
 _STRUCTURE = structure_cache()
 _VERDICT_ROWS = LRU(4096)
@@ -43,6 +44,7 @@ def clear_caches() -> None:
     """Forget every cached structure and verdict (tests, benchmarks)."""
     for c in (_STRUCTURE, _VERDICT_ROWS):
         c.clear()
+    clear_plants()
 
 
 def _without_noise(tree: Any) -> Any:
@@ -68,10 +70,11 @@ def evaluate_point(command: str, tree: Any, budget_s: float, *, reuse: bool = Tr
                 return row_from_report(command, analyze(request, budget).to_dict())
 
             def run() -> dict[str, Any]:
-                fmo = reused_fmo_blocks(request.system, budget)
-                return row_from_report(command, analyze(request, budget, fmo=fmo).to_dict())
+                fmo, memo = reused_plant(request.system, budget)
+                return analyze_row(analyze(request, budget, fmo=fmo, memo=memo))
 
-            return dict(_VERDICT_ROWS.get(request_text(_without_noise(tree)), run))
+            key = pickle.dumps(_without_noise(tree), protocol=pickle.HIGHEST_PROTOCOL)  # equal pickles: equal trees
+            return dict(_VERDICT_ROWS.get(key, run))
         if command == "bounds":
             from ..riccati_bounds import compute_bounds
 

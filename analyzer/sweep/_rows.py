@@ -105,6 +105,43 @@ def _fields(command: str, report: Mapping[str, Any]) -> dict[str, Any]:
     raise ValueError(f"unknown command {command!r}")  # pragma: no cover - validated by parse_sweep
 
 
+def _view(obj: Any) -> dict[str, Any]:
+    """The JSON view of a report object (its fields, not yet encoded)."""
+    from .._json._registry import view_of
+
+    view = view_of(type(obj))
+    if view is None:  # pragma: no cover - every report part has a view (tests/test_json_views.py)
+        raise TypeError(f"no JSON view for {type(obj).__qualname__}")
+    return view(obj)
+
+
+def analyze_row(report: Any) -> dict[str, Any]:
+    """``row_from_report("analyze", report.to_dict())`` with only the row's fields encoded.
+
+    A sweep row reads six fields of a report of a hundred values.  Each is
+    taken from the same view and through the same encoder
+    (:func:`kfio._json._encode.encode`) as the whole report's JSON, so the
+    row equals the one read off ``to_dict()`` (tested on every kind of
+    channel in ``tests/sweep/test_sweep_plant_memo.py``).
+    """
+    from .._json._encode import encode
+
+    top = _view(report)
+    blocks = []
+    for block in top["blocks"]:
+        fields = _view(block)
+        blocks.append({"rate": encode(fields["rate"]), "certified": encode(fields["certified"])})
+    tail = top["tail"]
+    partial = {
+        "verdict": encode(top["verdict"]),
+        "blocks": blocks,
+        "critical_arrival_probability": encode(top["critical_arrival_probability"]),
+        "critical_arrival_probability_exact": encode(top["critical_arrival_probability_exact"]),
+        "tail": None if tail is None else {"kappa": encode(_view(tail)["kappa"])},
+    }
+    return row_from_report("analyze", partial)
+
+
 def error_row(command: str, kind: str, message: str) -> dict[str, Any]:
     """A row for a point that failed: every field empty, the error named."""
     row: dict[str, Any] = dict.fromkeys(FIELDS[command])

@@ -82,12 +82,14 @@ class TableWriter:
             self._fh: IO[str] = os.fdopen(fd, "w", encoding="utf-8")
         else:
             self._fh = self.path.open("w", encoding="utf-8", newline="")
-        self._csv = _csv_writer(self._fh, self.columns) if self.fmt == "csv" else None
+        # The header as csv.DictWriter writes it, then rows through the plain writer (the same bytes:
+        # DictWriter only maps a record to its list of columns first).
+        self._csv = _csv_writer(self._fh, self.columns).writer if self.fmt == "csv" else None
 
     def write(self, record: dict[str, Any]) -> None:
         """Append one record (the next index)."""
         if self._csv is not None:
-            self._csv.writerow(_csv_record(self.columns, record))
+            self._csv.writerow(["" if (v := record.get(c)) is None else v for c in self.columns])
         else:
             self._fh.write(jsonl_line({c: record.get(c) for c in self.columns}) + "\n")
         self.rows += 1
