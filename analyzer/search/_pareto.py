@@ -54,6 +54,10 @@ from ._blind import Margins, Objective, SearchResult, SlotSpace, group_space, se
 PROBE_FLATS: int | None = 0
 
 
+#: Largest grid of miss vectors for which :meth:`Front.dead` looks its answer up in a table.
+_TABLE_ENTRIES = 1 << 22
+
+
 class Front:
     """Undominated miss vectors found so far, one representative mask each.
 
@@ -70,6 +74,8 @@ class Front:
         self.lower = lower
         self.vectors = np.zeros((0, space.n_groups), dtype=int)
         self.masks: list[np.ndarray] = []
+        self._table_of: np.ndarray | None = None
+        self._dead_table: np.ndarray | None = None
 
     def misses(self, masks: np.ndarray) -> np.ndarray:
         """``z`` per row of ``masks``: per group, the phases not held."""
@@ -81,7 +87,30 @@ class Front:
         if self.vectors.shape[0] == 0:
             return np.zeros(bounds.shape[0], dtype=bool)
         b = np.maximum(bounds, self.lower[None, :])
-        return (b[:, None, :] >= self.vectors[None, :, :]).all(axis=2).any(axis=1)
+        table = self._table()
+        if table is not None:
+            return np.asarray(table[tuple(np.minimum(b, self.space.n_phases).T)])
+        return np.asarray((b[:, None, :] >= self.vectors[None, :, :]).all(axis=2).any(axis=1))
+
+    def _table(self) -> np.ndarray | None:
+        """The dominated-or-equal region of the front on the grid ``[0, N0]^G`` (``None``: grid too large).
+
+        ``z`` is dominated by or equal to a front vector ``v`` iff ``z >= v``
+        componentwise: the union of the upper orthants of the vectors, one
+        running ``or`` along each axis from the vectors' own points.  Rebuilt
+        when the front changes (:meth:`offer` replaces :attr:`vectors`).
+        """
+        if self._table_of is self.vectors:
+            return self._dead_table
+        side = self.space.n_phases + 1
+        table = None
+        if side**self.space.n_groups <= _TABLE_ENTRIES:
+            table = np.zeros((side,) * self.space.n_groups, dtype=bool)
+            table[tuple(np.clip(self.vectors, 0, self.space.n_phases).T)] = True
+            for axis in range(self.space.n_groups):
+                table = np.logical_or.accumulate(table, axis=axis)
+        self._table_of, self._dead_table = self.vectors, table
+        return table
 
     def alive(self, masks: np.ndarray, cores: np.ndarray, kernels: np.ndarray | None = None) -> np.ndarray:
         """Whether the subtree of each flat may still hold a vector the front does not dominate or equal.
@@ -91,7 +120,47 @@ class Front:
         them: a lower bound on their ``z``.
         """
         decided = np.arange(self.space.size)[None, :] <= cores[:, None]
-        return ~self.dead(self.misses(masks | ~decided))
+        ok = ~self.dead(self.misses(masks | ~decided))
+        if (
+            kernels is not None
+            and kernels.shape[2] == 2
+            and self.space.rows.shape[1] == 1
+            and not np.iscomplexobj(self.space.rows)
+            and self.vectors.shape[0] > 0
+        ):
+            rows = np.flatnonzero(ok)
+            if rows.size:
+                ok[rows] = self._alive_planes(masks[rows], ~decided[rows] & ~masks[rows], kernels[rows])
+        return ok
+
+    def _alive_planes(self, masks: np.ndarray, later: np.ndarray, kernels: np.ndarray) -> np.ndarray:
+        """Flats with a two-dimensional kernel ``K``: whether some parallel class of later slots may beat the front.
+
+        Every flat below such a flat ``Q`` is ``Q`` plus the later slots that
+        vanish at one ``u`` in ``K``, i.e. whose projections ``r K`` are
+        parallel; each such class lies in one chain of
+        :func:`kfio.search._pareto_proof.parallel_chains` (with the short
+        projections, counted in every class).  The subtree is cut when, for
+        every chain, ``Q`` plus the chain and the short slots misses a vector
+        the front dominates or equals.
+        """
+        from ._pareto_proof import parallel_chains  # local: _pareto_proof imports this module's Front protocol
+
+        C, S = masks.shape
+        G = self.space.n_groups
+        W = np.matmul(self.space.rows[None, :, 0, :], kernels)
+        chain, short = parallel_chains(W, later, self.space.tol)
+        base = self.misses(masks | short)
+        # Slots per (flat, chain, group), one bincount: the chain's slots hold phases of their groups.
+        labelled = chain >= 0
+        c, t = np.nonzero(labelled)
+        ids = (c * S + chain[c, t]) * G + t % G
+        per_chain = np.bincount(ids, minlength=C * S * G).reshape(C, S, G)
+        used = np.asarray(per_chain.any(axis=2))
+        used[:, 0] = True  # a flat whose later slots are all short still has its one class
+        z = base[:, None, :] - per_chain
+        live = ~self.dead(z.reshape(-1, G)).reshape(C, S)
+        return np.asarray((live & used).any(axis=1))
 
     def alive_hulls(self, hulls: np.ndarray) -> np.ndarray:
         """Whether a subtree whose flats all lie inside a row of ``hulls`` may beat the front.
@@ -248,6 +317,7 @@ def _pareto_search(
     if seeds:
         front.offer(np.array(seeds))
     real = real_space(space)
+    front.space = real  # the walk's kernels are in the real rows' coordinates (Front.alive projects onto them)
     cap = PROBE_FLATS if space.n_groups == 2 else None
     checked = None
     try:
