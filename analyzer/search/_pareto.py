@@ -89,7 +89,10 @@ class Front:
         b = np.maximum(bounds, self.lower[None, :])
         table = self._table()
         if table is not None:
-            return np.asarray(table[tuple(np.minimum(b, self.space.n_phases).T)])
+            # Row-major position of each vector in the grid: one lookup per row.
+            side = self.space.n_phases + 1
+            strides = side ** np.arange(self.space.n_groups - 1, -1, -1)
+            return np.asarray(table.ravel()[np.minimum(b, self.space.n_phases) @ strides])
         return np.asarray((b[:, None, :] >= self.vectors[None, :, :]).all(axis=2).any(axis=1))
 
     def _table(self) -> np.ndarray | None:
@@ -123,7 +126,7 @@ class Front:
         ok = ~self.dead(self.misses(masks | ~decided))
         if (
             kernels is not None
-            and kernels.shape[2] == 2
+            and kernels.shape[2] in (2, 3)
             and self.space.rows.shape[1] == 1
             and not np.iscomplexobj(self.space.rows)
             and self.vectors.shape[0] > 0
@@ -134,33 +137,46 @@ class Front:
         return ok
 
     def _alive_planes(self, masks: np.ndarray, later: np.ndarray, kernels: np.ndarray) -> np.ndarray:
-        """Flats with a two-dimensional kernel ``K``: whether some parallel class of later slots may beat the front.
+        """Flats with a two- or three-dimensional kernel ``K``: whether some set of later slots below may beat the front.
 
-        Every flat below such a flat ``Q`` is ``Q`` plus the later slots that
-        vanish at one ``u`` in ``K``, i.e. whose projections ``r K`` are
-        parallel; each such class lies in one chain of
+        Every flat below such a flat ``Q`` is ``Q`` plus later slots that
+        vanish at one ``u`` in ``K``.  With ``dim K = 2`` their projections
+        ``r K`` are parallel, so they lie in one chain of
         :func:`kfio.search._pareto_proof.parallel_chains` (with the short
-        projections, counted in every class).  The subtree is cut when, for
-        every chain, ``Q`` plus the chain and the short slots misses a vector
-        the front dominates or equals.
+        projections, counted in every class).  With ``dim K = 3`` they lie
+        near one plane: projected orthogonally to their longest row (the
+        pivot, :func:`kfio.search._pareto_proof.pivot_projections`) they are
+        parallel within ``3 tol``, the argument of
+        :func:`kfio.search._pareto_proof._most_coplanar`.  The subtree is cut
+        when ``Q`` plus any chain and the short slots misses a vector the
+        front dominates or equals.
         """
-        from ._pareto_proof import parallel_chains  # local: _pareto_proof imports this module's Front protocol
+        from ._pareto_proof import parallel_chains, pivot_projections  # local: _pareto_proof imports Front's protocol
 
+        C = masks.shape[0]
+        W = np.matmul(self.space.rows[None, :, 0, :], kernels)
+        if kernels.shape[2] == 2:
+            return self._alive_chains(masks, *parallel_chains(W, later, self.space.tol))
+        alive = np.zeros(C, dtype=bool)
+        for c, V, members in pivot_projections(W, later):
+            live = self._alive_chains(masks[c], *parallel_chains(V, members, 3 * self.space.tol))
+            alive[c[live]] = True
+        return alive
+
+    def _alive_chains(self, masks: np.ndarray, chain: np.ndarray, short: np.ndarray) -> np.ndarray:
+        """Per flat: whether ``Q`` plus the short slots plus one chain's slots (some chain) escapes the front."""
         C, S = masks.shape
         G = self.space.n_groups
-        W = np.matmul(self.space.rows[None, :, 0, :], kernels)
-        chain, short = parallel_chains(W, later, self.space.tol)
         base = self.misses(masks | short)
         # Slots per (flat, chain, group), one bincount: the chain's slots hold phases of their groups.
-        labelled = chain >= 0
-        c, t = np.nonzero(labelled)
+        c, t = np.nonzero(chain >= 0)
         ids = (c * S + chain[c, t]) * G + t % G
         per_chain = np.bincount(ids, minlength=C * S * G).reshape(C, S, G)
         used = np.asarray(per_chain.any(axis=2))
         used[:, 0] = True  # a flat whose later slots are all short still has its one class
-        z = base[:, None, :] - per_chain
-        live = ~self.dead(z.reshape(-1, G)).reshape(C, S)
-        return np.asarray((live & used).any(axis=1))
+        fc, k = np.nonzero(used)
+        live = ~self.dead(base[fc] - per_chain[fc, k])
+        return np.asarray(np.bincount(fc[live], minlength=C) > 0)
 
     def alive_hulls(self, hulls: np.ndarray) -> np.ndarray:
         """Whether a subtree whose flats all lie inside a row of ``hulls`` may beat the front.

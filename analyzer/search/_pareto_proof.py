@@ -31,7 +31,7 @@ a whole pass leaves the front unchanged.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from typing import Protocol
 
@@ -263,15 +263,35 @@ def _most_coplanar(W: np.ndarray, rows: np.ndarray, tol: float, need: np.ndarray
     (a row that reaches ``need`` may be reported as any count ``>= need``;
     one that cannot gets a count below it).
     """
+    C = W.shape[0]
+    best = np.zeros(C, dtype=int)
+    for c, V, members in pivot_projections(W, rows, need):
+        np.maximum.at(best, c, _most_parallel(V, members, 3 * tol))
+    return best
+
+
+def pivot_projections(
+    W: np.ndarray, rows: np.ndarray, need: np.ndarray | None = None
+) -> Iterator[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    """Per ``(batch row c, pivot p)``: ``c``, the rows ``V`` of ``W[c]`` orthogonal to ``W[c, p]`` in plane coordinates, and the members.
+
+    The members are the ``rows`` no longer than the pivot (ties by
+    position), the pivot included: a set of rows near one plane is counted
+    from its longest row (:func:`_most_coplanar` gives the argument).  With
+    ``need``, only the pivots among the ``k - need + 1`` longest of the
+    ``k`` rows (the longest row of a set of ``need`` rows is one of them).
+    Yields pieces of at most :data:`_PIVOT_PAIRS` pairs.
+    """
     C, n, _ = W.shape
     size = np.where(rows, np.linalg.norm(W, axis=2), -1.0)
-    best = np.zeros(C, dtype=int)
-    # Rank of each row by length, longest first (ties by position): pivots are the first k - need + 1.
+    # Rank of each row by length, longest first (ties by position).
     order = np.argsort(-size, axis=1, kind="stable")
     place = np.empty_like(order)
     np.put_along_axis(place, order, np.arange(n)[None, :].repeat(C, axis=0), axis=1)
-    k = rows.sum(axis=1)
-    pivot = rows & (size > 0) & (place < (k - np.maximum(need, 1) + 1)[:, None])
+    pivot = rows & (size > 0)
+    if need is not None:
+        k = rows.sum(axis=1)
+        pivot &= place < (k - np.maximum(need, 1) + 1)[:, None]
     cs, ps = np.nonzero(pivot)
     for part in _pieces(cs.size, _PIVOT_PAIRS):
         c, p = cs[part], ps[part]
@@ -281,11 +301,8 @@ def _most_coplanar(W: np.ndarray, rows: np.ndarray, tol: float, need: np.ndarray
         e1 = a - (a * u).sum(axis=1)[:, None] * u
         e1 /= np.linalg.norm(e1, axis=1)[:, None]
         e2 = np.cross(u, e1)
-        Wc = W[c]
-        V = np.stack([Wc @ e1[:, :, None], Wc @ e2[:, :, None]], axis=2)[..., 0]
-        counts = _most_parallel(V, rows[c] & (place[c] >= place[c, p][:, None]), 3 * tol)
-        np.maximum.at(best, c, counts)
-    return best
+        V = W[c] @ np.stack([e1, e2], axis=2)
+        yield c, V, rows[c] & (place[c] >= place[c, p][:, None])
 
 
 def _pieces(n: int, step: int) -> list[slice]:
