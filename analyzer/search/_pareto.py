@@ -76,6 +76,8 @@ class Front:
         self.masks: list[np.ndarray] = []
         self._table_of: np.ndarray | None = None
         self._dead_table: np.ndarray | None = None
+        self._escape_of: np.ndarray | None = None
+        self._escape: np.ndarray = np.zeros(0, dtype=int)
 
     def misses(self, masks: np.ndarray) -> np.ndarray:
         """``z`` per row of ``masks``: per group, the phases not held."""
@@ -145,23 +147,62 @@ class Front:
         :func:`kfio.search._pareto_proof.parallel_chains` (with the short
         projections, counted in every class).  With ``dim K = 3`` they lie
         near one plane: projected orthogonally to their longest row (the
-        pivot, :func:`kfio.search._pareto_proof.pivot_projections`) they are
-        parallel within ``3 tol``, the argument of
-        :func:`kfio.search._pareto_proof._most_coplanar`.  The subtree is cut
+        pivot, :func:`kfio.search._pareto_proof.pivot_projections`, whose
+        docstring gives the argument) they are parallel within ``3 tol``.  The
+        subtree is cut
         when ``Q`` plus any chain and the short slots misses a vector the
         front dominates or equals.
         """
         from ._pareto_proof import parallel_chains, pivot_projections  # local: _pareto_proof imports Front's protocol
 
         C = masks.shape[0]
+        alive = np.zeros(C, dtype=bool)
+        need = self.slots_to_escape(self.misses(masks))
+        # A set below Q escapes the front only with at least ``need`` later slots.
+        rows = np.flatnonzero(later.sum(axis=1) >= need)
+        if rows.size == 0:
+            return alive
+        masks, later, kernels, need = masks[rows], later[rows], kernels[rows], need[rows]
         W = np.matmul(self.space.rows[None, :, 0, :], kernels)
         if kernels.shape[2] == 2:
-            return self._alive_chains(masks, *parallel_chains(W, later, self.space.tol))
-        alive = np.zeros(C, dtype=bool)
-        for c, V, members in pivot_projections(W, later):
+            alive[rows] = self._alive_chains(masks, *parallel_chains(W, later, self.space.tol))
+            return alive
+        for c, _, V, members in pivot_projections(W, later, need):
             live = self._alive_chains(masks[c], *parallel_chains(V, members, 3 * self.space.tol))
-            alive[c[live]] = True
+            alive[rows[c[live]]] = True
         return alive
+
+    def slots_to_escape(self, z: np.ndarray) -> np.ndarray:
+        """Per miss vector ``z``: the fewest slots a superset must add to miss a vector the front does not dominate or equal.
+
+        Adding a slot of group ``g`` lowers ``z_g`` by one, so this is the
+        distance in steps down the grid from ``z`` to the nearest point
+        outside the dominated region (0 when ``z`` itself is outside), by
+        relaxing ``D(z) = 1 + min_g D(z - e_g)`` over the table of
+        :meth:`_table`; ``N0 G + 1`` (more than any set holds) when no point
+        below ``z`` escapes.  Without a table, 0 (no bound).
+        """
+        table = self._table()
+        if table is None:
+            return np.zeros(z.shape[0], dtype=int)
+        if self._escape_of is not self.vectors:
+            G, big = self.space.n_groups, self.space.n_phases * self.space.n_groups + 1
+            D = np.where(table, big, 0)
+            while True:
+                step = D.copy()
+                for g in range(G):
+                    lower = [slice(None)] * G
+                    upper = [slice(None)] * G
+                    lower[g], upper[g] = slice(None, -1), slice(1, None)
+                    step[tuple(upper)] = np.minimum(step[tuple(upper)], D[tuple(lower)] + 1)
+                step = np.minimum(step, big)
+                if np.array_equal(step, D):
+                    break
+                D = step
+            self._escape_of, self._escape = self.vectors, D
+        side = self.space.n_phases + 1
+        strides = side ** np.arange(self.space.n_groups - 1, -1, -1)
+        return np.asarray(self._escape.ravel()[np.clip(z, 0, self.space.n_phases) @ strides])
 
     def _alive_chains(self, masks: np.ndarray, chain: np.ndarray, short: np.ndarray) -> np.ndarray:
         """Per flat: whether ``Q`` plus the short slots plus one chain's slots (some chain) escapes the front."""

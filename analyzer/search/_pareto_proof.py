@@ -126,11 +126,6 @@ class _BigFlats:
             # such a slot is the closure of no child that keeps Q's prefix.
             before = ~later & ~masks
             ok &= held + _most_parallel(W, later, self.space.tol, poison=before) >= self.T
-        elif kernels.shape[2] == 3 and self.space.rows.shape[1] == 1 and not np.iscomplexobj(self.space.rows):
-            rows = np.flatnonzero(ok)
-            if rows.size:
-                W = np.einsum("sl,cld->csd", self.space.rows[:, 0, :], kernels[rows])
-                ok[rows] &= held[rows] + _most_coplanar(W, later[rows], self.space.tol, self.T - held[rows]) >= self.T
         return ok
 
     def alive_hulls(self, hulls: np.ndarray) -> np.ndarray:
@@ -241,43 +236,24 @@ def parallel_chains(W: np.ndarray, rows: np.ndarray, tol: float) -> tuple[np.nda
     return labels, short
 
 
-#: Most ``(flat, pivot)`` pairs of :func:`_most_coplanar` in one array operation.
+#: Most ``(flat, pivot)`` pairs of :func:`pivot_projections` in one piece.
 _PIVOT_PAIRS = 1 << 12
-
-
-def _most_coplanar(W: np.ndarray, rows: np.ndarray, tol: float, need: np.ndarray) -> np.ndarray:
-    """Per batch row, an upper bound on the most ``rows`` whose real 3-vectors ``W`` lie in one plane.
-
-    The bound :func:`_most_parallel` one dimension up.  Rows ``s`` of a set
-    ``P`` with ``|W_s . x| <= tol`` for a unit ``x`` (the slots a kernel
-    vector ``x`` of the flat zeroes), and ``p`` the longest of them: with
-    ``u = W_p / |W_p|`` and ``V_s = W_s - (W_s . u) u``, the unit ``x``
-    has ``|x . u| <= tol / |W_p|`` and ``V_s . x = W_s . x - (W_s . u)(u . x)``,
-    so ``|V_s . x| <= 2 tol``: in the plane orthogonal to ``u`` every ``V_s``
-    lies within ``2 tol / |x - (x . u) u|`` of one line, which
-    :func:`_most_parallel` counts (with ``3 tol``) as one class.  Every row
-    is tried as the pivot ``p``, counting the rows no longer than it; the
-    largest count over pivots bounds ``|P|``.  Only whether a batch row
-    reaches ``need`` matters: a set of ``need`` rows has its longest among
-    the ``k - need + 1`` longest of the ``k`` rows, so only those pivot
-    (a row that reaches ``need`` may be reported as any count ``>= need``;
-    one that cannot gets a count below it).
-    """
-    C = W.shape[0]
-    best = np.zeros(C, dtype=int)
-    for c, V, members in pivot_projections(W, rows, need):
-        np.maximum.at(best, c, _most_parallel(V, members, 3 * tol))
-    return best
 
 
 def pivot_projections(
     W: np.ndarray, rows: np.ndarray, need: np.ndarray | None = None
-) -> Iterator[tuple[np.ndarray, np.ndarray, np.ndarray]]:
-    """Per ``(batch row c, pivot p)``: ``c``, the rows ``V`` of ``W[c]`` orthogonal to ``W[c, p]`` in plane coordinates, and the members.
+) -> Iterator[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
+    """Per ``(batch row c, pivot p)``: ``c``, ``p``, the rows ``V`` of ``W[c]`` orthogonal to ``W[c, p]`` in plane coordinates, and the members.
 
     The members are the ``rows`` no longer than the pivot (ties by
-    position), the pivot included: a set of rows near one plane is counted
-    from its longest row (:func:`_most_coplanar` gives the argument).  With
+    position), the pivot included.  Rows ``s`` of a set ``P`` with
+    ``|W_s . x| <= tol`` for a unit ``x`` (the slots a kernel vector ``x``
+    zeroes), and ``p`` the longest of them: with ``u = W_p / |W_p|`` and
+    ``V_s = W_s - (W_s . u) u``, ``|x . u| <= tol / |W_p|`` and
+    ``V_s . x = W_s . x - (W_s . u)(u . x)``, so ``|V_s . x| <= 2 tol``: in
+    the plane orthogonal to ``u`` every ``V_s`` lies within
+    ``2 tol / |x - (x . u) u|`` of one line, one class of
+    :func:`parallel_chains` with ``3 tol``.  With
     ``need``, only the pivots among the ``k - need + 1`` longest of the
     ``k`` rows (the longest row of a set of ``need`` rows is one of them).
     Yields pieces of at most :data:`_PIVOT_PAIRS` pairs.
@@ -302,7 +278,7 @@ def pivot_projections(
         e1 /= np.linalg.norm(e1, axis=1)[:, None]
         e2 = np.cross(u, e1)
         V = W[c] @ np.stack([e1, e2], axis=2)
-        yield c, V, rows[c] & (place[c] >= place[c, p][:, None])
+        yield c, p, V, rows[c] & (place[c] >= place[c, p][:, None])
 
 
 def _pieces(n: int, step: int) -> list[slice]:

@@ -5,10 +5,11 @@ Three bounds cut subtrees (issue 25, several sensors):
 * :meth:`Front.dead` looks dominance up in a table of the grid of miss vectors;
 * :meth:`Front.alive` cuts a flat with a two-dimensional kernel when no chain
   of parallel projections (:func:`parallel_chains`) can beat the front;
-* the big-flat walk cuts a flat with a three-dimensional kernel when no plane
-  holds enough later rows (:func:`_most_coplanar`).
+* the same with a three-dimensional kernel, from the chains of the rows
+  projected orthogonally to each pivot (:func:`pivot_projections`).
 
-Each must leave the answer unchanged: the same fronts and representative
+The cuts ask first how many slots a set must add to escape the front
+(:meth:`Front.slots_to_escape`).  Each must leave the answer unchanged: the same fronts and representative
 sets as the walk without the bound, and as the enumeration of every orbit;
 the pieces are checked against brute force on planted configurations.
 """
@@ -23,11 +24,10 @@ import pytest
 import kfio.search._pareto as pareto
 import kfio.search._pareto_proof as proof
 from kfio._budget import Budget
-from kfio.search._blind import Margins, SlotSpace, group_space
-from kfio.search._blind_batch import real_space
+from kfio.search._blind import Margins, SlotSpace
 from kfio.search._pareto import Front, pareto_search
 
-from support.blind_blocks import assert_front_matches_enumeration, bench_block, random_block
+from support.blind_blocks import assert_front_matches_enumeration, random_block
 
 SEED = 20261204
 
@@ -51,6 +51,23 @@ def test_dead_table_equals_pairwise_dominance(groups: int, monkeypatch: pytest.M
         monkeypatch.undo()
 
 
+@pytest.mark.parametrize("groups", [2, 3])
+def test_slots_to_escape_is_the_grid_distance_to_the_undominated_region(groups: int) -> None:
+    rng = np.random.default_rng([SEED, 10 + groups])
+    N0 = 5
+    space = SlotSpace(n_phases=N0, n_groups=groups, rows=np.zeros((N0 * groups, 1, 1)), tol=1e-9)
+    grid = np.array(list(itertools.product(range(N0 + 1), repeat=groups)))
+    for _ in range(10):
+        front = Front(space, np.zeros(groups, dtype=int))
+        front.vectors = rng.integers(0, N0 + 1, size=(int(rng.integers(1, 5)), groups))
+        free = grid[~front.dead(grid)]
+        got = front.slots_to_escape(grid)
+        for z, d in zip(grid, got):
+            below = free[(free <= z).all(axis=1)]
+            want = int((z - below).sum(axis=1).min()) if below.size else N0 * groups + 1
+            assert d == want
+
+
 def test_parallel_chains_keep_every_planted_class_together() -> None:
     rng = np.random.default_rng([SEED, 1])
     tol = 1e-9
@@ -70,19 +87,7 @@ def test_parallel_chains_keep_every_planted_class_together() -> None:
         assert (chain[0] >= 0).all()
 
 
-def _coplanar_brute(W: np.ndarray, tol: float) -> int:
-    """Most rows of ``W`` (``n x 3``) within ``tol`` of one plane through 0, over the planes of row pairs."""
-    best = 1
-    for a, b in itertools.combinations(range(W.shape[0]), 2):
-        x = np.cross(W[a], W[b])
-        if np.linalg.norm(x) < 1e-6:
-            continue
-        x /= np.linalg.norm(x)
-        best = max(best, int((np.abs(W @ x) <= tol).sum()))
-    return best
-
-
-def test_most_coplanar_bounds_the_largest_planted_plane() -> None:
+def test_a_planted_plane_is_one_chain_seen_from_its_longest_row() -> None:
     rng = np.random.default_rng([SEED, 2])
     tol = 1e-9
     for _ in range(30):
@@ -91,16 +96,23 @@ def test_most_coplanar_bounds_the_largest_planted_plane() -> None:
         normal /= np.linalg.norm(normal)
         W = rng.normal(size=(n, 3))
         k = int(rng.integers(2, n + 1))
-        W[:k] -= (W[:k] @ normal)[:, None] * normal[None, :]  # k rows on a plane
-        W[:k] += rng.uniform(-0.3, 0.3, size=(k, 1)) * tol * normal[None, :]
-        W = W[rng.permutation(n)]
-        true = _coplanar_brute(W, 2 * tol)
-        assert true >= k
+        W[:k] -= (W[:k] @ normal)[:, None] * normal[None, :]  # k rows on a plane, within tol
+        W[:k] += rng.uniform(-0.9, 0.9, size=(k, 1)) * tol * normal[None, :]
+        planted = np.zeros(n, dtype=bool)
+        planted[:k] = True
+        perm = rng.permutation(n)
+        W, planted = W[perm], planted[perm]
+        longest = int(np.flatnonzero(planted)[np.argmax(np.linalg.norm(W[planted], axis=1))])
         rows = np.ones((1, n), dtype=bool)
-        for need in (1, k - 1, k, k + 1):
-            got = int(proof._most_coplanar(W[None], rows, tol, np.array([need]))[0])
-            if true >= need:
-                assert got >= need, "a plane holding need rows is never cut"
+        seen = False
+        for need in (None, np.array([k])):
+            for _, pivots, V, members in proof.pivot_projections(W[None], rows, need):
+                i = int(np.flatnonzero(pivots == longest)[0])
+                chain, short = proof.parallel_chains(V[i : i + 1], members[i : i + 1], 3 * tol)
+                assert members[i, planted].all(), "the planted rows are no longer than their longest"
+                assert len(set(chain[0, planted & ~short[0]].tolist())) <= 1, "one chain holds the planted plane"
+                seen = True
+        assert seen, "the longest planted row is a pivot"
 
 
 def _cases() -> list[SlotSpace]:
@@ -131,26 +143,3 @@ def test_three_group_plane_cut_keeps_the_front_and_its_sets(monkeypatch: pytest.
         assert fast.nodes <= slow.nodes
         assert_front_matches_enumeration(space, fast.maximal)
     assert cut > 0, "the cases exercise the cut"
-
-
-@pytest.mark.parametrize(("factors", "T"), [((15,), 3), ((15,), 6), ((21,), 14), ((4, 9), 20)])
-def test_coplanar_cut_keeps_every_big_flat(factors: tuple[int, ...], T: int, monkeypatch: pytest.MonkeyPatch) -> None:
-    space = real_space(SlotSpace.from_block(bench_block(factors, dense=True)))
-    group = group_space(space, 0)
-    cut = 0
-    original = proof._most_coplanar
-
-    def counting(W: np.ndarray, rows: np.ndarray, tol: float, need: np.ndarray) -> np.ndarray:
-        nonlocal cut
-        out = original(W, rows, tol, need)
-        cut += int((out < need).sum())
-        return out
-
-    monkeypatch.setattr(proof, "_most_coplanar", counting)
-    found, _ = proof.big_flats(group, T, Budget(max_steps=2_000_000), Margins(group.tol))
-    monkeypatch.setattr(proof, "_most_coplanar", lambda W, rows, tol, need: np.full(W.shape[0], 10**6))
-    every, _ = proof.big_flats(group, T, Budget(max_steps=2_000_000), Margins(group.tol))
-    monkeypatch.undo()
-    assert sorted(m.tobytes() for m, _ in found) == sorted(m.tobytes() for m, _ in every)
-    assert all(int(m.sum()) >= T for m, _ in found)
-    assert cut > 0 or factors == (15,), "the larger blocks exercise the cut"
