@@ -54,6 +54,10 @@ from ._blind import Margins, Objective, SearchResult, SlotSpace, group_space, se
 PROBE_FLATS: int | None = 0
 
 
+#: Largest grid of miss vectors for which :meth:`Front.dead` looks its answer up in a table.
+_TABLE_ENTRIES = 1 << 22
+
+
 class Front:
     """Undominated miss vectors found so far, one representative mask each.
 
@@ -70,6 +74,10 @@ class Front:
         self.lower = lower
         self.vectors = np.zeros((0, space.n_groups), dtype=int)
         self.masks: list[np.ndarray] = []
+        self._table_of: np.ndarray | None = None
+        self._dead_table: np.ndarray | None = None
+        self._escape_of: np.ndarray | None = None
+        self._escape: np.ndarray = np.zeros(0, dtype=int)
 
     def misses(self, masks: np.ndarray) -> np.ndarray:
         """``z`` per row of ``masks``: per group, the phases not held."""
@@ -81,7 +89,33 @@ class Front:
         if self.vectors.shape[0] == 0:
             return np.zeros(bounds.shape[0], dtype=bool)
         b = np.maximum(bounds, self.lower[None, :])
-        return (b[:, None, :] >= self.vectors[None, :, :]).all(axis=2).any(axis=1)
+        table = self._table()
+        if table is not None:
+            # Row-major position of each vector in the grid: one lookup per row.
+            side = self.space.n_phases + 1
+            strides = side ** np.arange(self.space.n_groups - 1, -1, -1)
+            return np.asarray(table.ravel()[np.minimum(b, self.space.n_phases) @ strides])
+        return np.asarray((b[:, None, :] >= self.vectors[None, :, :]).all(axis=2).any(axis=1))
+
+    def _table(self) -> np.ndarray | None:
+        """The dominated-or-equal region of the front on the grid ``[0, N0]^G`` (``None``: grid too large).
+
+        ``z`` is dominated by or equal to a front vector ``v`` iff ``z >= v``
+        componentwise: the union of the upper orthants of the vectors, one
+        running ``or`` along each axis from the vectors' own points.  Rebuilt
+        when the front changes (:meth:`offer` replaces :attr:`vectors`).
+        """
+        if self._table_of is self.vectors:
+            return self._dead_table
+        side = self.space.n_phases + 1
+        table = None
+        if side**self.space.n_groups <= _TABLE_ENTRIES:
+            table = np.zeros((side,) * self.space.n_groups, dtype=bool)
+            table[tuple(np.clip(self.vectors, 0, self.space.n_phases).T)] = True
+            for axis in range(self.space.n_groups):
+                table = np.logical_or.accumulate(table, axis=axis)
+        self._table_of, self._dead_table = self.vectors, table
+        return table
 
     def alive(self, masks: np.ndarray, cores: np.ndarray, kernels: np.ndarray | None = None) -> np.ndarray:
         """Whether the subtree of each flat may still hold a vector the front does not dominate or equal.
@@ -91,7 +125,99 @@ class Front:
         them: a lower bound on their ``z``.
         """
         decided = np.arange(self.space.size)[None, :] <= cores[:, None]
-        return ~self.dead(self.misses(masks | ~decided))
+        ok = ~self.dead(self.misses(masks | ~decided))
+        if (
+            kernels is not None
+            and kernels.shape[2] in (2, 3)
+            and self.space.rows.shape[1] == 1
+            and not np.iscomplexobj(self.space.rows)
+            and self.vectors.shape[0] > 0
+        ):
+            rows = np.flatnonzero(ok)
+            if rows.size:
+                ok[rows] = self._alive_planes(masks[rows], ~decided[rows] & ~masks[rows], kernels[rows])
+        return ok
+
+    def _alive_planes(self, masks: np.ndarray, later: np.ndarray, kernels: np.ndarray) -> np.ndarray:
+        """Flats with a two- or three-dimensional kernel ``K``: whether some set of later slots below may beat the front.
+
+        Every flat below such a flat ``Q`` is ``Q`` plus later slots that
+        vanish at one ``u`` in ``K``.  With ``dim K = 2`` their projections
+        ``r K`` are parallel, so they lie in one chain of
+        :func:`kfio.search._pareto_proof.parallel_chains` (with the short
+        projections, counted in every class).  With ``dim K = 3`` they lie
+        near one plane: projected orthogonally to their longest row (the
+        pivot, :func:`kfio.search._pareto_proof.pivot_projections`, whose
+        docstring gives the argument) they are parallel within ``3 tol``.  The
+        subtree is cut
+        when ``Q`` plus any chain and the short slots misses a vector the
+        front dominates or equals.
+        """
+        from ._pareto_proof import parallel_chains, pivot_projections  # local: _pareto_proof imports Front's protocol
+
+        C = masks.shape[0]
+        alive = np.zeros(C, dtype=bool)
+        need = self.slots_to_escape(self.misses(masks))
+        # A set below Q escapes the front only with at least ``need`` later slots.
+        rows = np.flatnonzero(later.sum(axis=1) >= need)
+        if rows.size == 0:
+            return alive
+        masks, later, kernels, need = masks[rows], later[rows], kernels[rows], need[rows]
+        W = np.matmul(self.space.rows[None, :, 0, :], kernels)
+        if kernels.shape[2] == 2:
+            alive[rows] = self._alive_chains(masks, *parallel_chains(W, later, self.space.tol))
+            return alive
+        for c, _, V, members in pivot_projections(W, later, need):
+            live = self._alive_chains(masks[c], *parallel_chains(V, members, 3 * self.space.tol))
+            alive[rows[c[live]]] = True
+        return alive
+
+    def slots_to_escape(self, z: np.ndarray) -> np.ndarray:
+        """Per miss vector ``z``: the fewest slots a superset must add to miss a vector the front does not dominate or equal.
+
+        Adding a slot of group ``g`` lowers ``z_g`` by one, so this is the
+        distance in steps down the grid from ``z`` to the nearest point
+        outside the dominated region (0 when ``z`` itself is outside), by
+        relaxing ``D(z) = 1 + min_g D(z - e_g)`` over the table of
+        :meth:`_table`; ``N0 G + 1`` (more than any set holds) when no point
+        below ``z`` escapes.  Without a table, 0 (no bound).
+        """
+        table = self._table()
+        if table is None:
+            return np.zeros(z.shape[0], dtype=int)
+        if self._escape_of is not self.vectors:
+            G, big = self.space.n_groups, self.space.n_phases * self.space.n_groups + 1
+            D = np.where(table, big, 0)
+            while True:
+                step = D.copy()
+                for g in range(G):
+                    lower = [slice(None)] * G
+                    upper = [slice(None)] * G
+                    lower[g], upper[g] = slice(None, -1), slice(1, None)
+                    step[tuple(upper)] = np.minimum(step[tuple(upper)], D[tuple(lower)] + 1)
+                step = np.minimum(step, big)
+                if np.array_equal(step, D):
+                    break
+                D = step
+            self._escape_of, self._escape = self.vectors, D
+        side = self.space.n_phases + 1
+        strides = side ** np.arange(self.space.n_groups - 1, -1, -1)
+        return np.asarray(self._escape.ravel()[np.clip(z, 0, self.space.n_phases) @ strides])
+
+    def _alive_chains(self, masks: np.ndarray, chain: np.ndarray, short: np.ndarray) -> np.ndarray:
+        """Per flat: whether ``Q`` plus the short slots plus one chain's slots (some chain) escapes the front."""
+        C, S = masks.shape
+        G = self.space.n_groups
+        base = self.misses(masks | short)
+        # Slots per (flat, chain, group), one bincount: the chain's slots hold phases of their groups.
+        c, t = np.nonzero(chain >= 0)
+        ids = (c * S + chain[c, t]) * G + t % G
+        per_chain = np.bincount(ids, minlength=C * S * G).reshape(C, S, G)
+        used = np.asarray(per_chain.any(axis=2))
+        used[:, 0] = True  # a flat whose later slots are all short still has its one class
+        fc, k = np.nonzero(used)
+        live = ~self.dead(base[fc] - per_chain[fc, k])
+        return np.asarray(np.bincount(fc[live], minlength=C) > 0)
 
     def alive_hulls(self, hulls: np.ndarray) -> np.ndarray:
         """Whether a subtree whose flats all lie inside a row of ``hulls`` may beat the front.
@@ -248,6 +374,7 @@ def _pareto_search(
     if seeds:
         front.offer(np.array(seeds))
     real = real_space(space)
+    front.space = real  # the walk's kernels are in the real rows' coordinates (Front.alive projects onto them)
     cap = PROBE_FLATS if space.n_groups == 2 else None
     checked = None
     try:

@@ -31,7 +31,7 @@ a whole pass leaves the front unchanged.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from typing import Protocol
 
@@ -203,6 +203,86 @@ def _most_parallel(W: np.ndarray, rows: np.ndarray, tol: float, poison: np.ndarr
         counts[poisoned & tight] = 0
     best = counts.reshape(C, n).max(axis=1)
     return np.asarray(best.astype(int) + np.count_nonzero(short, axis=1))
+
+
+def parallel_chains(W: np.ndarray, rows: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]:
+    """The chains of :func:`_most_parallel` per batch row: a label per row of ``rows`` (``-1``: none) and the short rows.
+
+    Rows of ``rows`` with ``|W_t| >= _SHORT tol`` get the label of their
+    chain of angles (modulo pi, consecutive gaps at most ``2 / _SHORT``,
+    the last chain joined to the first across the wrap), ``0, 1, ...`` per
+    batch row; every set of rows parallel for the closure lies in one
+    chain plus the short rows (the argument of :func:`_most_parallel`).
+    """
+    C, n, _ = W.shape
+    size = np.hypot(W[..., 0], W[..., 1])
+    short = rows & (size < _SHORT * tol)
+    member = rows & ~short
+    angle = np.where(member, np.arctan2(W[..., 1], W[..., 0]) % np.pi, 8.0)
+    k = np.count_nonzero(member, axis=1)
+    order = np.argsort(angle, axis=1)
+    angle = np.take_along_axis(angle, order, axis=1)
+    inside = np.arange(n)[None, :] < k[:, None]
+    starts = np.ones((C, n), dtype=bool)
+    starts[:, 1:] = angle[:, 1:] - angle[:, :-1] > 2.0 / _SHORT
+    chain = np.cumsum(starts, axis=1) - 1
+    lastpos = np.maximum(k - 1, 0)
+    wraps = (k > 0) & (angle[:, 0] + np.pi - angle[np.arange(C), lastpos] <= 2.0 / _SHORT)
+    last_chain = chain[np.arange(C), lastpos]
+    chain = np.where(wraps[:, None] & (chain == last_chain[:, None]) & inside, 0, chain)
+    chain = np.where(inside, chain, -1)
+    labels = np.full((C, n), -1)
+    np.put_along_axis(labels, order, chain, axis=1)
+    return labels, short
+
+
+#: Most ``(flat, pivot)`` pairs of :func:`pivot_projections` in one piece.
+_PIVOT_PAIRS = 1 << 12
+
+
+def pivot_projections(
+    W: np.ndarray, rows: np.ndarray, need: np.ndarray | None = None
+) -> Iterator[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
+    """Per ``(batch row c, pivot p)``: ``c``, ``p``, the rows ``V`` of ``W[c]`` orthogonal to ``W[c, p]`` in plane coordinates, and the members.
+
+    The members are the ``rows`` no longer than the pivot (ties by
+    position), the pivot included.  Rows ``s`` of a set ``P`` with
+    ``|W_s . x| <= tol`` for a unit ``x`` (the slots a kernel vector ``x``
+    zeroes), and ``p`` the longest of them: with ``u = W_p / |W_p|`` and
+    ``V_s = W_s - (W_s . u) u``, ``|x . u| <= tol / |W_p|`` and
+    ``V_s . x = W_s . x - (W_s . u)(u . x)``, so ``|V_s . x| <= 2 tol``: in
+    the plane orthogonal to ``u`` every ``V_s`` lies within
+    ``2 tol / |x - (x . u) u|`` of one line, one class of
+    :func:`parallel_chains` with ``3 tol``.  With
+    ``need``, only the pivots among the ``k - need + 1`` longest of the
+    ``k`` rows (the longest row of a set of ``need`` rows is one of them).
+    Yields pieces of at most :data:`_PIVOT_PAIRS` pairs.
+    """
+    C, n, _ = W.shape
+    size = np.where(rows, np.linalg.norm(W, axis=2), -1.0)
+    # Rank of each row by length, longest first (ties by position).
+    order = np.argsort(-size, axis=1, kind="stable")
+    place = np.empty_like(order)
+    np.put_along_axis(place, order, np.arange(n)[None, :].repeat(C, axis=0), axis=1)
+    pivot = rows & (size > 0)
+    if need is not None:
+        k = rows.sum(axis=1)
+        pivot &= place < (k - np.maximum(need, 1) + 1)[:, None]
+    cs, ps = np.nonzero(pivot)
+    for part in _pieces(cs.size, _PIVOT_PAIRS):
+        c, p = cs[part], ps[part]
+        u = W[c, p] / size[c, p][:, None]
+        # Two unit vectors orthogonal to u (and to each other): the plane's coordinates.
+        a = np.where(np.abs(u[:, :1]) < 0.9, np.array([[1.0, 0.0, 0.0]]), np.array([[0.0, 1.0, 0.0]]))
+        e1 = a - (a * u).sum(axis=1)[:, None] * u
+        e1 /= np.linalg.norm(e1, axis=1)[:, None]
+        e2 = np.cross(u, e1)
+        V = W[c] @ np.stack([e1, e2], axis=2)
+        yield c, p, V, rows[c] & (place[c] >= place[c, p][:, None])
+
+
+def _pieces(n: int, step: int) -> list[slice]:
+    return [slice(i, i + step) for i in range(0, n, step)]
 
 
 #: Flats the walk of :func:`big_flats` asks about between two hand-overs to ``on_found``.
