@@ -92,15 +92,21 @@ def _gmres(op, pre, b: np.ndarray, x: np.ndarray, tol: float, cycles: int = 0) -
 
     The Arnoldi basis is orthogonalized twice by classical Gram-Schmidt (as matrix products);
     Givens rotations keep the least-squares residual, which with right preconditioning is the
-    residual of ``x`` up to rounding.  Stops when that is at most ``tol`` or after ``cycles``
-    (default :data:`MAX_RESTARTS`) cycles of :data:`RESTART` steps.
+    residual of ``x`` up to rounding.  Stops when that is at most ``tol``, after ``cycles``
+    (default :data:`MAX_RESTARTS`) cycles of :data:`RESTART` steps, or when a whole cycle did
+    not halve the true residual ``b - op(x)``: stagnation at the accuracy that rounding allows.
+    Near the mean-square threshold ``||x||`` is about ``||b|| / (1 - rho)``, and so is the
+    rounding error of ``op(x)``, so a target relative to ``||b||`` cannot be met there; the
+    further cycles only added rounding noise before the caller's substitute-back check.
     """
     N = b.size
+    last = np.inf
     for _ in range(cycles or MAX_RESTARTS):
         r = b - op(x)
         beta = float(np.linalg.norm(r))
-        if not beta > tol:  # also NaN
+        if not beta > tol or not beta < 0.5 * last:  # also NaN
             return x
+        last = beta
         V = np.empty((RESTART + 1, N))
         Z = np.empty((RESTART, N))
         R = np.zeros((RESTART, RESTART))  # the rotated Hessenberg matrix, upper triangular
