@@ -58,11 +58,28 @@ def apply(terms: Sequence[Term], X: np.ndarray) -> np.ndarray:
     return out
 
 
+#: The latest eigendecompositions (``M``'s bytes -> ``eig(M)``): the open-loop ``A`` is a term of every equation.
+_EIG_CACHE: dict[tuple[tuple[int, ...], bytes], tuple[np.ndarray, np.ndarray]] = {}
+_EIG_CACHE_SIZE = 8
+
+
+def _eig(M: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``numpy.linalg.eig(M)``, remembered for the last few ``M`` (the same call, so the same floats)."""
+    key = (M.shape, np.ascontiguousarray(M).tobytes())
+    hit = _EIG_CACHE.get(key)
+    if hit is None:
+        hit = np.linalg.eig(M)
+        if len(_EIG_CACHE) >= _EIG_CACHE_SIZE:
+            del _EIG_CACHE[next(iter(_EIG_CACHE))]
+        _EIG_CACHE[key] = hit
+    return hit
+
+
 class _SteinInverse:
     """The exact inverse of ``X -> X - w M X M'`` through the eigenvectors of ``M`` (or ``None`` if unusable)."""
 
     def __init__(self, w: float, M: np.ndarray) -> None:
-        d, V = np.linalg.eig(M)
+        d, V = _eig(M)
         self.usable = bool(np.all(np.isfinite(V))) and np.linalg.cond(V) < MAX_EIGENVECTOR_CONDITION
         if self.usable:
             self.V, self.Vh = V, V.conj().T
@@ -77,7 +94,7 @@ class _SteinInverse:
 
 
 def _preconditioner(terms: Sequence[Term]) -> _SteinInverse | None:
-    radii = [w * max(abs(np.linalg.eigvals(M))) ** 2 for w, M in terms]
+    radii = [w * max(abs(_eig(M)[0])) ** 2 for w, M in terms]
     order = sorted(range(len(terms)), key=lambda i: -radii[i])
     for i in order:
         if radii[i] < PRECONDITIONER_MAX_RADIUS:
