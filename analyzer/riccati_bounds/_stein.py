@@ -64,13 +64,13 @@ _EIG_CACHE_SIZE = 8
 
 
 def _eig(M: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``numpy.linalg.eig(M)``, remembered for the last few ``M`` (the same call, so the same floats)."""
+    """``numpy.linalg.eig(M)``, remembered for the last few ``M`` (the same call, so the same floats; read-only)."""
     key = (M.shape, np.ascontiguousarray(M).tobytes())
     hit = _EIG_CACHE.get(key)
     if hit is None:
         hit = np.linalg.eig(M)
         if len(_EIG_CACHE) >= _EIG_CACHE_SIZE:
-            del _EIG_CACHE[next(iter(_EIG_CACHE))]
+            _EIG_CACHE.clear()  # one atomic call: safe with the service's threads (no iteration over the dict)
         _EIG_CACHE[key] = hit
     return hit
 
