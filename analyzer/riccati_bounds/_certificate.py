@@ -19,8 +19,9 @@ checks, reported as the certificate's ``method``:
 * ``"exact_rational"``: ``K_S`` and ``X`` are rationalized (every float is a
   dyadic rational), ``M = X - L_K(X)`` is formed over ``Q`` with the user's
   exact ``A``, ``C`` and arrival probabilities, and ``X > 0``, ``M > 0`` are
-  decided exactly (Sylvester's criterion by a fraction-free LU over the
-  integers, :func:`positive_definite_exact`).
+  decided exactly (diagonal dominance, directly or after an integer congruence
+  chosen from a float Cholesky, else Sylvester's criterion by a fraction-free LU
+  over the integers: :func:`positive_definite_exact`).
 * ``"eigenvalue_margin"`` (prefilter, and fallback): NumPy eigenvalues of
   ``X`` and ``M`` exceed an explicit rounding allowance.
 """
@@ -143,22 +144,100 @@ def _fmpq_mat(rows) -> Any:
 
 
 def positive_definite_exact(M: Any) -> bool:
-    """Decide ``M > 0`` exactly for a symmetric ``fmpq_mat`` (Sylvester's criterion).
+    """Decide ``M > 0`` exactly for a symmetric ``fmpq_mat``.
 
-    ``M`` times the common denominator of its entries is an integer matrix
-    with the same leading principal minors' signs; its fraction-free
-    (Bareiss) LU, ``fmpz_mat.fflu``, has those minors on the diagonal of
-    ``U`` as long as no row exchange was needed, and a row exchange happens
-    only when a leading minor vanishes, which a positive definite matrix
-    never has.  So ``M > 0`` iff the permutation is the identity and every
-    ``U[k, k] > 0``.  Integer arithmetic throughout (no gcds).
+    ``M`` times the common denominator of its entries is a symmetric integer matrix ``N``
+    (``M = N / den``, ``den > 0``), positive definite iff ``M`` is.  Two exact sufficient
+    tests run first (:func:`positive_definite_by_congruence`), and only when neither proves
+    ``N > 0`` does Sylvester's criterion decide (:func:`positive_definite_sylvester`).  Each of
+    the three is a theorem applied in integer arithmetic, so the answer is the same whichever
+    decides; only the time differs.
     """
     n = M.nrows()
     if n == 0:
         return True
     num, _ = M.numer_denom()  # M = num / den with den > 0
-    P, _, _, U = num.fflu()
+    return positive_definite_by_congruence(num) or positive_definite_sylvester(num)
+
+
+def positive_definite_sylvester(N: Any) -> bool:
+    """Decide ``N > 0`` exactly for a symmetric ``fmpz_mat`` (Sylvester's criterion).
+
+    The fraction-free (Bareiss) LU of ``N``, ``fmpz_mat.fflu``, has the leading principal
+    minors on the diagonal of ``U`` as long as no row exchange was needed, and a row exchange
+    happens only when a leading minor vanishes, which a positive definite matrix never has.
+    So ``N > 0`` iff the permutation is the identity and every ``U[k, k] > 0``.  Integer
+    arithmetic throughout (no gcds); the entries grow to ``n`` times their length.
+    """
+    n = N.nrows()
+    if n == 0:
+        return True
+    P, _, _, U = N.fflu()
     return bool(P.is_one()) and all(U[k, k] > 0 for k in range(n))
+
+
+def _dominant(rows: list[list[int]], shifts: Sequence[int] | None = None) -> bool:
+    """Whether ``S N S`` is strictly diagonally dominant with a positive diagonal, ``S = diag(2^-shifts)``.
+
+    Row ``i`` of ``S N S`` times ``2^(shifts_i + E)`` (``E = max shifts``) is
+    ``N_ij 2^(E - shifts_j)``: integers, so the comparison is exact.
+    """
+    n = len(rows)
+    e = list(shifts) if shifts is not None else [0] * n
+    top = max(e)
+    for i, row in enumerate(rows):
+        d = row[i] << (top - e[i])
+        if d <= 0:
+            return False
+        off = sum(abs(x) << (top - e[j]) for j, x in enumerate(row) if j != i)
+        if off >= d:
+            return False
+    return True
+
+
+def positive_definite_by_congruence(N: Any) -> bool:
+    """``True`` if ``N > 0`` (a symmetric ``fmpz_mat``) is proved by diagonal dominance after a congruence.
+
+    Two exact sufficient tests; ``False`` means "not proved", never "not positive definite".
+
+    1. ``N`` itself is strictly diagonally dominant with a positive diagonal: then every
+       Gershgorin disc lies in the right half-line, so every eigenvalue of the symmetric ``N``
+       is positive (the Levy-Desplanques theorem; Horn and Johnson (2013), Theorem 6.1.10).
+       The certificates' ``X - L_K(X)`` are close to ``I`` and pass here.
+    2. Else a float Cholesky ``N ~ L L'`` gives ``G ~ L^-1``, rounded to an integer lower
+       triangular ``Z`` (row ``i`` scaled by ``2^e_i``).  When ``Z`` has a non-zero diagonal it is
+       non-singular, so by Sylvester's law of inertia (Horn and Johnson (2013), Theorem 4.5.8) ``N > 0`` iff ``Z N Z' > 0``, formed
+       exactly in ``fmpz_mat``; and ``Z N Z' = D (G N G' + E) D`` with ``D = diag(2^e_i)`` and
+       ``G N G' ~ I``, so ``D^-1 Z N Z' D^-1`` is tested for diagonal dominance as in 1.  The
+       floats only choose ``Z``; whatever their rounding, the conclusion is about the exact
+       ``Z N Z'``.  A badly conditioned ``N`` (the certificates' ``X`` near the threshold) passes
+       here too as long as ``cond(N)`` is well below ``1 / eps``.
+    """
+    import flint
+    import scipy.linalg
+
+    n = N.nrows()
+    rows = [[int(x) for x in r] for r in N.tolist()]
+    if _dominant(rows):
+        return True
+    bits = max(abs(x).bit_length() for r in rows for x in r)
+    shift = max(0, bits - 900)  # floats stay finite; they only guide the choice of Z
+    F = np.array([[float(x >> shift) for x in r] for r in rows])
+    try:
+        L = np.linalg.cholesky(F)
+    except np.linalg.LinAlgError:
+        return False
+    G = scipy.linalg.solve_triangular(L, np.eye(n), lower=True, check_finite=False)
+    if not np.all(np.isfinite(G)):
+        return False
+    _, ex = np.frexp(np.max(np.abs(G), axis=1))
+    e = (52 - ex).astype(int)  # row i of G times 2^e_i has entries below 2^52 in size
+    Z = np.tril(np.rint(np.ldexp(G, e[:, None])))
+    if np.any(np.diag(Z) == 0):
+        return False
+    Zq = flint.fmpz_mat([[int(x) for x in r] for r in Z])
+    P = Zq * N * Zq.transpose()
+    return _dominant([[int(x) for x in r] for r in P.tolist()], [int(x) for x in e])
 
 
 def exact_check(plant: ExactPlant, weights: Sequence[Fraction], K: Sequence[np.ndarray], X: np.ndarray) -> bool:

@@ -289,14 +289,16 @@ class CertifiedSearch:
         terms = [congruence_matrix(F) for F in closed]
         eye = np.eye(len(terms[0]))
         rhs = vech(np.eye(n))
-        near: list = []  # above DENSE_MAX_N states: the LU factors of the last operator factored
+        near: list = []  # above DENSE_MAX_N states: the LU factors of the last operator factored, the latest solution
 
         def stable(x: float) -> bool:
             self._tick("slide")
             weights = self._float_weights(at(Fraction(x)))
             y = None
-            if near:
+            if near:  # start from the latest solution: the bisection's points close in, so it is the nearest
                 y = solve_near([(w, F) for w, F in zip(weights, closed) if w > 0], near[0], rhs, near[1])
+                if y is not None:
+                    near[1] = y
             if y is None:
                 L = eye.copy()
                 for w, T in zip(weights, terms):

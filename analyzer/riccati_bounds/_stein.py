@@ -58,11 +58,28 @@ def apply(terms: Sequence[Term], X: np.ndarray) -> np.ndarray:
     return out
 
 
+#: The latest eigendecompositions (``M``'s bytes -> ``eig(M)``): the open-loop ``A`` is a term of every equation.
+_EIG_CACHE: dict[tuple[tuple[int, ...], bytes], tuple[np.ndarray, np.ndarray]] = {}
+_EIG_CACHE_SIZE = 8
+
+
+def _eig(M: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``numpy.linalg.eig(M)``, remembered for the last few ``M`` (the same call, so the same floats; read-only)."""
+    key = (M.shape, np.ascontiguousarray(M).tobytes())
+    hit = _EIG_CACHE.get(key)
+    if hit is None:
+        hit = np.linalg.eig(M)
+        if len(_EIG_CACHE) >= _EIG_CACHE_SIZE:
+            _EIG_CACHE.clear()  # one atomic call: safe with the service's threads (no iteration over the dict)
+        _EIG_CACHE[key] = hit
+    return hit
+
+
 class _SteinInverse:
     """The exact inverse of ``X -> X - w M X M'`` through the eigenvectors of ``M`` (or ``None`` if unusable)."""
 
     def __init__(self, w: float, M: np.ndarray) -> None:
-        d, V = np.linalg.eig(M)
+        d, V = _eig(M)
         self.usable = bool(np.all(np.isfinite(V))) and np.linalg.cond(V) < MAX_EIGENVECTOR_CONDITION
         if self.usable:
             self.V, self.Vh = V, V.conj().T
@@ -77,7 +94,7 @@ class _SteinInverse:
 
 
 def _preconditioner(terms: Sequence[Term]) -> _SteinInverse | None:
-    radii = [w * max(abs(np.linalg.eigvals(M))) ** 2 for w, M in terms]
+    radii = [w * max(abs(_eig(M)[0])) ** 2 for w, M in terms]
     order = sorted(range(len(terms)), key=lambda i: -radii[i])
     for i in order:
         if radii[i] < PRECONDITIONER_MAX_RADIUS:
@@ -92,15 +109,21 @@ def _gmres(op, pre, b: np.ndarray, x: np.ndarray, tol: float, cycles: int = 0) -
 
     The Arnoldi basis is orthogonalized twice by classical Gram-Schmidt (as matrix products);
     Givens rotations keep the least-squares residual, which with right preconditioning is the
-    residual of ``x`` up to rounding.  Stops when that is at most ``tol`` or after ``cycles``
-    (default :data:`MAX_RESTARTS`) cycles of :data:`RESTART` steps.
+    residual of ``x`` up to rounding.  Stops when that is at most ``tol``, after ``cycles``
+    (default :data:`MAX_RESTARTS`) cycles of :data:`RESTART` steps, or when a whole cycle did
+    not halve the true residual ``b - op(x)``: stagnation at the accuracy that rounding allows.
+    Near the mean-square threshold ``||x||`` is about ``||b|| / (1 - rho)``, and so is the
+    rounding error of ``op(x)``, so a target relative to ``||b||`` cannot be met there; the
+    further cycles only added rounding noise before the caller's substitute-back check.
     """
     N = b.size
+    last = np.inf
     for _ in range(cycles or MAX_RESTARTS):
         r = b - op(x)
         beta = float(np.linalg.norm(r))
-        if not beta > tol:  # also NaN
+        if not beta > tol or not beta < 0.5 * last:  # also NaN
             return x
+        last = beta
         V = np.empty((RESTART + 1, N))
         Z = np.empty((RESTART, N))
         R = np.zeros((RESTART, RESTART))  # the rotated Hessenberg matrix, upper triangular

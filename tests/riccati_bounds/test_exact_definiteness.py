@@ -9,7 +9,12 @@ import numpy as np
 import pytest
 
 from kfio.model._request import is_psd
-from kfio.riccati_bounds._certificate import _fmpq_mat, positive_definite_exact
+from kfio.riccati_bounds._certificate import (
+    _fmpq_mat,
+    positive_definite_by_congruence,
+    positive_definite_exact,
+    positive_definite_sylvester,
+)
 
 
 def det(M: list[list[Fraction]]) -> Fraction:
@@ -61,3 +66,49 @@ def test_positive_definite_exact_sees_a_margin_below_rounding() -> None:
     assert not positive_definite_exact(_fmpq_mat(M))
     M[1][1] = Fraction(1)  # singular: semidefinite, not definite
     assert not positive_definite_exact(_fmpq_mat(M))
+
+
+def ill_conditioned(seed: int):
+    """Float ``Q diag(s) Q'`` (exactly rational) with condition up to 1e12, shifted by +-2^-k ``I`` across the edge."""
+    rng = np.random.default_rng(seed)
+    for _ in range(12):
+        n = int(rng.integers(2, 10))
+        Q, _ = np.linalg.qr(rng.standard_normal((n, n)))
+        s = np.logspace(0, -float(rng.uniform(2, 12)), n)
+        M = Q @ np.diag(s) @ Q.T
+        M = 0.5 * (M + M.T)
+        lam = min(np.linalg.eigvalsh(M)[0], 1e-3)
+        for shift in (0.0, -0.5 * lam, -2.0 * lam, Fraction(-1, 2**100)):
+            Mq = [[Fraction(float(x)) for x in r] for r in M]
+            for i in range(n):
+                Mq[i][i] += Fraction(shift)
+            yield Mq
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_congruence_test_never_claims_more_than_sylvester(seed) -> None:
+    """The congruence test is sufficient only: whenever it says ``True``, two exact routes agree; and it does decide
+    most of the definite ones, well-conditioned or not (else the fast route would be dead code)."""
+    decided = definite = 0
+    for M in list(cases(seed)) + list(ill_conditioned(seed)):
+        num, _ = _fmpq_mat(M).numer_denom()
+        truth = sylvester(M)
+        assert positive_definite_sylvester(num) == truth
+        assert positive_definite_exact(_fmpq_mat(M)) == truth
+        fast = positive_definite_by_congruence(num)
+        assert not fast or truth
+        definite += truth
+        decided += fast
+    assert definite > 20 and decided >= 0.8 * definite
+
+
+def test_congruence_test_proves_a_condition_number_of_1e10() -> None:
+    """A float ``X`` like the certificates' near the threshold: one direction 1e10 times the others."""
+    rng = np.random.default_rng(5)
+    n = 30
+    Q, _ = np.linalg.qr(rng.standard_normal((n, n)))
+    X = Q @ np.diag(np.r_[1e10, rng.uniform(1, 2, n - 1)]) @ Q.T
+    X = 0.5 * (X + X.T)
+    num, _ = _fmpq_mat(X).numer_denom()
+    assert positive_definite_by_congruence(num)
+    assert positive_definite_sylvester(num)

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 import scipy.linalg
 
-from kfio.riccati_bounds import _riccati
+from kfio.riccati_bounds import _riccati, _stein
 from kfio.riccati_bounds._certificate import lyapunov_certificate
 from kfio.riccati_bounds._gains import normalized_model
 from kfio.riccati_bounds._riccati import closed_loop_operator, gains, solve_v_bar
@@ -73,6 +73,35 @@ def test_near_threshold_within_the_bound() -> None:
     assert fast is not None
     Y = dense(near, rhs[0])
     assert np.linalg.norm(fast[0] - Y) <= 1e-7 * np.linalg.norm(Y)
+
+
+def test_gmres_stops_when_rounding_stalls_it_near_the_threshold(monkeypatch) -> None:
+    """Closer to the threshold (``1 - rho = 1e-9``) the residual cannot reach ``1e-12 ||W||``: GMRES stops after
+    the first cycle that fails to halve it (not after all ``MAX_RESTARTS``), and the answer still matches the dense
+    solve, or the dense solve answers."""
+    terms, rhs = case(3, 14, [2])
+    rho = spectral_radius(terms)
+    near = [(w * (1 - 1e-9) / rho, M) for w, M in terms]  # L is linear in the weights: rho(L) = 1 - 1e-9
+    cycles = []
+    gmres = _stein._gmres
+
+    def counted(op, pre, b, x, tol, cycles_=0):
+        calls = [0]
+
+        def op_counted(v):
+            calls[0] += 1
+            return op(v)
+
+        out = gmres(op_counted, pre, b, x, tol, cycles_)
+        cycles.append(calls[0])
+        return out
+
+    monkeypatch.setattr(_stein, "_gmres", counted)
+    fast = solve_stein(near, rhs[:1])
+    assert cycles and cycles[0] < 3 * (_stein.RESTART + 1)  # at most two cycles and the final residual
+    Y = dense(near, rhs[0])
+    if fast is not None:
+        assert np.linalg.norm(fast[0] - Y) <= 1e-5 * np.linalg.norm(Y)
 
 
 def test_solve_near_with_a_nearby_factorization() -> None:
