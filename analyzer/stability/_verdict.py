@@ -31,6 +31,7 @@ from ..design import (
     critical_parameter,
     ge_region,
     region_report,
+    tail_kappa,
     tail_report,
 )
 from ..errors import BudgetExceeded
@@ -561,6 +562,7 @@ def analyze(
     *,
     fmo: Sequence[FmoBlock] | None = None,
     memo: dict | None = None,
+    tail: str = "report",
 ) -> StabilityReport:
     """Decide stability of the expected error covariance (Rohr, Marelli and Fu (2014), Theorem 1).
 
@@ -584,6 +586,12 @@ def analyze(
         packet, the critical probability (Rohr, Marelli and Fu (2014),
         Corollary 2: ``1 - beta_k^(-N_k / z_k)`` involves the plant and the
         blind set only).  The report equals the one without ``memo``.
+    tail:
+        ``"report"`` (the default): the whole :class:`kfio.design.TailReport`
+        (Mo and Sinopoli, 2012).  ``"kappa"``: only its exponent ``kappa``
+        (:meth:`TailReport.kappa_only`, the same float), for a sweep row that
+        prints nothing else of the tail; the exact moment comparisons and
+        texts are skipped.
 
     Returns
     -------
@@ -621,6 +629,10 @@ def analyze(
         for i, b in enumerate(fmo)
     ]
     blocks = [rep for rep, _ in analyzed]
+
+    def items_of() -> list[tuple[FmoBlock, Any]]:
+        return [(b, res) for b, (_, res) in zip(fmo, analyzed)]
+
     verdict = max((b.verdict for b in blocks), key=VERDICTS.index, default=Verdict.STABLE)
     warnings: list[str] = []
     assumptions: list[str] = []
@@ -658,7 +670,11 @@ def analyze(
         assumptions=tuple(assumptions),
         warnings=tuple(warnings),
         display=display,
-        tail=tail_report([(b, res) for b, (_, res) in zip(fmo, analyzed)], channels, blocks_memo),
+        tail=(
+            TailReport.kappa_only(tail_kappa(items_of(), channels, blocks_memo))
+            if tail == "kappa"
+            else tail_report(items_of(), channels, blocks_memo)
+        ),
     )
     if len(channels) == 1 and channels[0].model == "gilbert_elliott":
         report = _with_ge_region(report, [(b, res) for b, (_, res) in zip(fmo, analyzed)], channels[0], budget, opts)

@@ -80,6 +80,11 @@ def _same_as_uncached(requests: list[dict]) -> list:
         fresh = analyze(req)
         assert cached.to_dict() == fresh.to_dict(), tree
         assert analyze_row(cached) == row_from_report("analyze", fresh.to_dict())
+        light = analyze(req, fmo=fmo, memo=memo, tail="kappa")  # what a sweep row runs
+        assert analyze_row(light) == row_from_report("analyze", fresh.to_dict()), tree
+        assert {k: v for k, v in light.to_dict().items() if k != "tail"} == {
+            k: v for k, v in fresh.to_dict().items() if k != "tail"
+        }
         reports.append(cached)
     assert memo, "the memo kept nothing: the test would not test it"
     return reports
