@@ -11,6 +11,7 @@ exact eigenstructure (:mod:`kfio.structure._eigen`), FMO blocks in phase form
 from __future__ import annotations
 
 import dataclasses
+import functools
 from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import Any, Mapping, Optional, Sequence
@@ -249,6 +250,17 @@ def _modulus_float(block: FmoBlock) -> float:
         return float(mpmath.sqrt(block.modulus_sq.approx(20)))
 
 
+@functools.lru_cache(maxsize=4096)
+def _radical_float(r: RealRadical) -> float:
+    """``sigma`` as a float: the exact radical's 20-digit value, rounded.
+
+    A function of the exact value alone (the key is ``r``'s base and index), so
+    the points of a sweep that share ``sigma = (1 - lambda)^(z/N)`` (the same
+    probabilities on many plants) compute it once; the float is the same.
+    """
+    return float(r.approx(20))
+
+
 def _sigma_exact(res: SigmaResult, c: Fraction | None) -> RealRadical | None:
     """``sigma = c^(1/N)`` with ``c = sigma^N`` the exact rational of Corollary 2 (Bernoulli channels)."""
     if res.fully_blind:
@@ -396,7 +408,7 @@ def _analyze_block(
         s = max(signs)
     certified = exact and res.certified and block.certified
     sigma_exact = _sigma_exact(res, c) if all_bernoulli else None
-    sigma = float(sigma_exact.approx(20)) if sigma_exact is not None else res.sigma
+    sigma = _radical_float(sigma_exact) if sigma_exact is not None else res.sigma
     verdict = Verdict.of_sign(s)
     if not exact:
         notes.append("rate compared with 1 numerically (50 digits), not exactly")
