@@ -30,6 +30,7 @@ exact comparisons of :mod:`kfio.sigma._decide` with ``N`` replaced by
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from fractions import Fraction
@@ -225,16 +226,23 @@ def _kappa_float(block: FmoBlock, N: int, c_rational: Fraction | None, c_expr: A
     beta = block.modulus_sq
     with mpmath.workdps(40):
         if c_rational is not None:
-            c_mp = mpmath.mpf(c_rational.numerator) / c_rational.denominator
+            log_c = _log_rational(c_rational)  # the same mpf as log(mpf(p) / q) at 40 digits
         else:
-            c_mp = mpmath.mpf(str(sympy.N(c_expr, 40)))
+            log_c = mpmath.log(mpmath.mpf(str(sympy.N(c_expr, 40))))
         if memo is None or "log_beta" not in memo:  # the block alone
             log_b = mpmath.log(beta.approx(40) if beta is not None else mpmath.mpf(block.modulus_sq_float))
             if memo is not None:
                 memo["log_beta"] = log_b
         else:
             log_b = memo["log_beta"]
-        return float(-mpmath.log(c_mp) / (N * log_b))
+        return float(-log_c / (N * log_b))
+
+
+@functools.lru_cache(maxsize=4096)
+def _log_rational(c: Fraction) -> mpmath.mpf:
+    """``log c`` at 40 digits for a rational ``c``, kept per exact ``c`` (a sweep repeats its probabilities on many plants)."""
+    with mpmath.workdps(40):
+        return mpmath.log(mpmath.mpf(c.numerator) / c.denominator)
 
 
 def _label(block_degenerate: bool, channels: Sequence[MarkovChannel]) -> tuple[str, str]:
