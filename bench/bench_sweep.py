@@ -16,7 +16,7 @@ from ``git archive`` by ``bench/_reference.py``): wall seconds, points/s, CPU se
 client and of its workers, and the peak RSS of the client and of the largest worker.  The two
 tables must be equal byte for byte.  ``--scheduler tcp://HOST:PORT`` adds a run of this code on
 a cluster started by hand (``dask scheduler``, ``dask worker``); ``--serial`` adds a run of this code in one
-process (``kfio sweep --serial``).
+process (``kfio sweep --serial``), and of the ``--against`` code too when both are given.
 Usage: ``python bench/bench_sweep.py [--points 1000] [--cli 10000,100000 [--against 4d603a0]]``
 """
 
@@ -108,6 +108,8 @@ def cli_section(sizes: list[int], against: str | None, scheduler: str | None, se
                 runs.append(("this, ext", ["--scheduler", scheduler], None))
             if serial:
                 runs.append(("this, ser", ["--serial"], None))
+                if ref is not None:
+                    runs.append((f"{against}, ser", ["--serial"], ref))
             tables, walls = {}, {}
             load = os.getloadavg()[0]
             for label, extra, pypath in runs:

@@ -13,7 +13,7 @@ from ._regions import RegionGrid, SensorThreshold, SensorThresholds, exact_regio
 from ._regions_constraints import BlindPattern, BlockConstraints
 from ._regions_curve import BoundaryCurve, BoundaryPiece, Envelope, Segment
 from ._sensor_gain import SensorGains
-from ._tail import BlockTail, TailReport, tail_report
+from ._tail import BlockTail, TailReport, tail_kappa, tail_report
 
 __all__ = [
     "BlindPattern",
@@ -41,5 +41,6 @@ __all__ = [
     "exact_region_grid",
     "ge_region",
     "region_report",
+    "tail_kappa",
     "tail_report",
 ]

@@ -30,6 +30,7 @@ exact comparisons of :mod:`kfio.sigma._decide` with ``N`` replaced by
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from fractions import Fraction
@@ -122,6 +123,22 @@ class TailReport(ReportPart):
     basis: str
     notes: tuple[str, ...] = ()
 
+    @classmethod
+    def kappa_only(cls, kappa: float | None) -> TailReport:
+        """A tail report carrying ``kappa`` (:func:`tail_kappa`) and nothing else: the moments were not computed.
+
+        For a sweep row, which prints ``kappa`` alone
+        (:func:`kfio.stability.analyze` with ``tail="kappa"``); its statement says so.
+        """
+        return cls(
+            kappa=kappa,
+            kappa_exact=None,
+            moments={},
+            statement="tail exponent only: the moments were not computed",
+            blocks=(),
+            basis="not computed",
+        )
+
     def summary_lines(self) -> list[str]:
         """Lines for the terminal summary."""
         if self.kappa is None:
@@ -180,6 +197,54 @@ def _worst_set(res: SigmaResult, channels: Sequence[MarkovChannel]) -> frozenset
     return max(sets, key=lambda F: spectral_radius(period_transfer_matrix(res.period, F, channels), 20))
 
 
+def _worst_factor(
+    res: SigmaResult, channels: Sequence[MarkovChannel], lambdas: Sequence[Fraction] | None
+) -> tuple[Fraction | None, Any, list[list[Fraction]] | None]:
+    """``sigma^N`` of the worst blind set: ``(rational or None, SymPy expression or None, P_F or None)``.
+
+    The expression is ``None`` when the rational is known (the caller builds
+    it only if it prints it); ``P_F`` is returned when the moment comparisons
+    need the matrix (its Perron root is not rational).
+    """
+    N = res.period
+    if res.fully_blind:
+        return Fraction(1), None, None
+    if lambdas is not None and res.bernoulli_exponents is not None:
+        return bernoulli_factor(res.bernoulli_exponents, lambdas, N), None, None
+    worst = _worst_set(res, channels)
+    P = period_transfer_matrix(N, worst, channels)
+    if len(channels) == 1 and channels[0].order <= 1 and len(worst) < N:
+        # a loss resets an order-1 history: P_F has rank one and rho(P_F) = trace(P_F), a rational
+        return sum((P[i][i] for i in range(len(P))), Fraction(0)), None, None
+    c_expr = _largest_real_root(P)
+    c_rational = Fraction(int(c_expr.p), int(c_expr.q)) if c_expr.is_Rational else None
+    return c_rational, c_expr, P
+
+
+def _kappa_float(block: FmoBlock, N: int, c_rational: Fraction | None, c_expr: Any, memo: dict | None) -> float:
+    """``log(1 / sigma^N) / (N log beta)`` at 40 digits, rounded to a float (``log beta`` kept in ``memo``)."""
+    beta = block.modulus_sq
+    with mpmath.workdps(40):
+        if c_rational is not None:
+            log_c = _log_rational(c_rational)  # the same mpf as log(mpf(p) / q) at 40 digits
+        else:
+            log_c = mpmath.log(mpmath.mpf(str(sympy.N(c_expr, 40))))
+        if memo is None or "log_beta" not in memo:  # the block alone
+            log_b = mpmath.log(beta.approx(40) if beta is not None else mpmath.mpf(block.modulus_sq_float))
+            if memo is not None:
+                memo["log_beta"] = log_b
+        else:
+            log_b = memo["log_beta"]
+        return float(-log_c / (N * log_b))
+
+
+@functools.lru_cache(maxsize=4096)
+def _log_rational(c: Fraction) -> mpmath.mpf:
+    """``log c`` at 40 digits for a rational ``c``, kept per exact ``c`` (a sweep repeats its probabilities on many plants)."""
+    with mpmath.workdps(40):
+        return mpmath.log(mpmath.mpf(c.numerator) / c.denominator)
+
+
 def _label(block_degenerate: bool, channels: Sequence[MarkovChannel]) -> tuple[str, str]:
     if not block_degenerate and len(channels) == 1 and channels[0].order <= 1:
         return "theorem", THEOREM
@@ -233,23 +298,10 @@ def block_tail(
     N = res.period
     beta = block.modulus_sq
     basis, reference = _label(res.degenerate, channels)
-    P: list[list[Fraction]] | None = None
-    if res.fully_blind:
-        c_expr: Any = sympy.Integer(1)
-        c_rational: Fraction | None = Fraction(1)
-    elif lambdas is not None and res.bernoulli_exponents is not None:
-        c_rational = bernoulli_factor(res.bernoulli_exponents, lambdas, N)
+    c_rational, c_expr, P = _worst_factor(res, channels, lambdas)
+    if c_expr is None:
+        assert c_rational is not None
         c_expr = sympy.Rational(c_rational.numerator, c_rational.denominator)
-    else:
-        worst = _worst_set(res, channels)
-        P = period_transfer_matrix(N, worst, channels)
-        if len(channels) == 1 and channels[0].order <= 1 and len(worst) < N:
-            # a loss resets an order-1 history: P_F has rank one and rho(P_F) = trace(P_F), a rational
-            c_rational, P = sum((P[i][i] for i in range(len(P))), Fraction(0)), None
-            c_expr = sympy.Rational(c_rational.numerator, c_rational.denominator)
-        else:
-            c_expr = _largest_real_root(P)
-            c_rational = Fraction(int(c_expr.p), int(c_expr.q)) if c_expr.is_Rational else None
     moments, exact = {}, True
     for name, r in MOMENTS:
         if P is None:
@@ -259,18 +311,7 @@ def block_tail(
             sign, ex = compare_rate_markov(beta, block.modulus_sq_float, r * N, P)
         moments[name] = _STATE[sign]
         exact = exact and ex
-    with mpmath.workdps(40):
-        if c_rational is not None:
-            c_mp = mpmath.mpf(c_rational.numerator) / c_rational.denominator
-        else:
-            c_mp = mpmath.mpf(str(sympy.N(c_expr, 40)))
-        if memo is None or "log_beta" not in memo:  # the block alone
-            log_b = mpmath.log(beta.approx(40) if beta is not None else mpmath.mpf(block.modulus_sq_float))
-            if memo is not None:
-                memo["log_beta"] = log_b
-        else:
-            log_b = memo["log_beta"]
-        kappa = float(-mpmath.log(c_mp) / (N * log_b))
+    kappa = _kappa_float(block, N, c_rational, c_expr, memo)
     kappa_exact: str | None = None
     if c_rational is not None and beta is not None and beta.rational is not None:
         ratio = _rational_ratio(1 / c_rational, beta.rational**N) if c_rational != 1 else Fraction(0)
@@ -347,6 +388,55 @@ def _statement(moments: dict[str, str]) -> str:
     return ", ".join(f"{name} {words[state]}" for name, state in moments.items())
 
 
+def _bernoulli_lambdas(channels: Sequence[MarkovChannel]) -> list[Fraction] | None:
+    """The arrival probabilities when every channel is Bernoulli (order 0), else ``None``."""
+    lambdas = [ch.bernoulli_lambda for ch in channels]
+    if all(lam is not None and ch.order == 0 for lam, ch in zip(lambdas, channels)):
+        return [lam for lam in lambdas if lam is not None]
+    return None
+
+
+def _on_circle(block: FmoBlock, kept: dict | None) -> bool:
+    """``|alpha_k| = 1``, exactly when ``beta_k`` is known exactly (a property of the block alone, kept in ``kept``)."""
+    if kept is not None and "on_circle" in kept:
+        return bool(kept["on_circle"])
+    beta = block.modulus_sq
+    on_circle = beta.compare_power(1, Fraction(1)) == 0 if beta is not None else block.modulus_sq_float == 1.0
+    if kept is not None:
+        kept["on_circle"] = on_circle
+    return on_circle
+
+
+def tail_kappa(
+    items: Sequence[tuple[FmoBlock, SigmaResult | None]],
+    channels: Sequence[MarkovChannel],
+    memo: Sequence[dict] | None = None,
+) -> float | None:
+    """``kappa = min_k kappa_k`` alone: the float :func:`tail_report` gives as ``TailReport.kappa``.
+
+    A sweep row prints this one number of the tail report (Mo and Sinopoli
+    (2012); ``kappa_k = log(1 / sigma_k^N) / (N log beta_k)`` over the blocks
+    with ``|alpha_k| > 1``).  It is computed by the same code as
+    :func:`block_tail`'s ``kappa`` (:func:`_worst_factor`, then
+    :func:`_kappa_float` at 40 digits), so it is the same float; what the row
+    does not print (the exact comparisons of the two moments, ``kappa`` as
+    exact text, ``sigma`` as text) is skipped.  ``None`` when no block has
+    ``|alpha_k| > 1``.  ``tests/stability/test_tail_kappa.py`` checks it equal
+    to ``tail_report(...).kappa`` on every kind of channel.
+    """
+    bern = _bernoulli_lambdas(channels)
+    kappas: list[float] = []
+    for i, (block, res) in enumerate(items):
+        if res is None:
+            continue
+        kept = None if memo is None else memo[i]
+        if _on_circle(block, kept):
+            continue
+        c_rational, c_expr, _ = _worst_factor(res, channels, bern)
+        kappas.append(_kappa_float(block, res.period, c_rational, c_expr, kept))
+    return min(kappas) if kappas else None
+
+
 def tail_report(
     items: Sequence[tuple[FmoBlock, SigmaResult | None]],
     channels: Sequence[MarkovChannel],
@@ -371,25 +461,14 @@ def tail_report(
         The overall moments are the worst over blocks (a moment is finite iff
         it is finite for every block).
     """
-    lambdas = [ch.bernoulli_lambda for ch in channels]
-    bern = (
-        [lam for lam in lambdas if lam is not None]
-        if all(lam is not None and ch.order == 0 for lam, ch in zip(lambdas, channels))
-        else None
-    )
+    bern = _bernoulli_lambdas(channels)
     tails: list[BlockTail] = []
     notes: list[str] = []
     for i, (block, res) in enumerate(items):
         if res is None:
             continue
         kept = None if memo is None else memo[i]
-        if kept is None or "on_circle" not in kept:  # |alpha| = 1 is a property of the block alone
-            beta = block.modulus_sq
-            on_circle = beta.compare_power(1, Fraction(1)) == 0 if beta is not None else block.modulus_sq_float == 1.0
-            if kept is not None:
-                kept["on_circle"] = on_circle
-        else:
-            on_circle = kept["on_circle"]
+        on_circle = _on_circle(block, kept)
         if on_circle:
             notes.append(
                 f"block {', '.join(block.eigenvalue_texts)} has |alpha| = 1: blind stretches grow the error "
@@ -421,4 +500,4 @@ def tail_report(
     )
 
 
-__all__ = ["BlockTail", "TailReport", "block_tail", "tail_report"]
+__all__ = ["BlockTail", "TailReport", "block_tail", "tail_kappa", "tail_report"]

@@ -16,6 +16,7 @@ Three situations, all decided in exact arithmetic where the inputs allow:
 
 from __future__ import annotations
 
+import functools
 from fractions import Fraction
 from typing import Any, Callable, Sequence
 
@@ -32,7 +33,17 @@ VERDICTS = (Verdict.STABLE, Verdict.BOUNDARY, Verdict.UNSTABLE)
 
 
 def bernoulli_factor(exponents: Sequence[Fraction], lambdas: Sequence[Fraction], N: int) -> Fraction:
-    """``sigma^N = prod_g (1 - lambda_g)^{z_g}`` with ``z_g = N * exponents[g]``."""
+    """``sigma^N = prod_g (1 - lambda_g)^{z_g}`` with ``z_g = N * exponents[g]`` (Rohr, Marelli and Fu (2014), Corollary 2).
+
+    Kept per exact ``(exponents, lambdas, N)`` (least recently used): a sweep
+    asks for the same probabilities on many plants, and the block report and
+    its tail ask twice per point.
+    """
+    return _bernoulli_factor(tuple(exponents), tuple(lambdas), N)
+
+
+@functools.lru_cache(maxsize=4096)
+def _bernoulli_factor(exponents: tuple[Fraction, ...], lambdas: tuple[Fraction, ...], N: int) -> Fraction:
     c = Fraction(1)
     for e, lam in zip(exponents, lambdas):
         z = e * N

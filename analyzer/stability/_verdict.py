@@ -11,6 +11,7 @@ exact eigenstructure (:mod:`kfio.structure._eigen`), FMO blocks in phase form
 from __future__ import annotations
 
 import dataclasses
+import functools
 from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import Any, Mapping, Optional, Sequence
@@ -31,6 +32,7 @@ from ..design import (
     critical_parameter,
     ge_region,
     region_report,
+    tail_kappa,
     tail_report,
 )
 from ..errors import BudgetExceeded
@@ -248,6 +250,17 @@ def _modulus_float(block: FmoBlock) -> float:
         return float(mpmath.sqrt(block.modulus_sq.approx(20)))
 
 
+@functools.lru_cache(maxsize=4096)
+def _radical_float(r: RealRadical) -> float:
+    """``sigma`` as a float: the exact radical's 20-digit value, rounded.
+
+    A function of the exact value alone (the key is ``r``'s base and index), so
+    the points of a sweep that share ``sigma = (1 - lambda)^(z/N)`` (the same
+    probabilities on many plants) compute it once; the float is the same.
+    """
+    return float(r.approx(20))
+
+
 def _sigma_exact(res: SigmaResult, c: Fraction | None) -> RealRadical | None:
     """``sigma = c^(1/N)`` with ``c = sigma^N`` the exact rational of Corollary 2 (Bernoulli channels)."""
     if res.fully_blind:
@@ -395,7 +408,7 @@ def _analyze_block(
         s = max(signs)
     certified = exact and res.certified and block.certified
     sigma_exact = _sigma_exact(res, c) if all_bernoulli else None
-    sigma = float(sigma_exact.approx(20)) if sigma_exact is not None else res.sigma
+    sigma = _radical_float(sigma_exact) if sigma_exact is not None else res.sigma
     verdict = Verdict.of_sign(s)
     if not exact:
         notes.append("rate compared with 1 numerically (50 digits), not exactly")
@@ -561,6 +574,7 @@ def analyze(
     *,
     fmo: Sequence[FmoBlock] | None = None,
     memo: dict | None = None,
+    tail: str = "report",
 ) -> StabilityReport:
     """Decide stability of the expected error covariance (Rohr, Marelli and Fu (2014), Theorem 1).
 
@@ -584,6 +598,12 @@ def analyze(
         packet, the critical probability (Rohr, Marelli and Fu (2014),
         Corollary 2: ``1 - beta_k^(-N_k / z_k)`` involves the plant and the
         blind set only).  The report equals the one without ``memo``.
+    tail:
+        ``"report"`` (the default): the whole :class:`kfio.design.TailReport`
+        (Mo and Sinopoli, 2012).  ``"kappa"``: only its exponent ``kappa``
+        (:meth:`TailReport.kappa_only`, the same float), for a sweep row that
+        prints nothing else of the tail; the exact moment comparisons and
+        texts are skipped.
 
     Returns
     -------
@@ -621,6 +641,10 @@ def analyze(
         for i, b in enumerate(fmo)
     ]
     blocks = [rep for rep, _ in analyzed]
+
+    def items_of() -> list[tuple[FmoBlock, Any]]:
+        return [(b, res) for b, (_, res) in zip(fmo, analyzed)]
+
     verdict = max((b.verdict for b in blocks), key=VERDICTS.index, default=Verdict.STABLE)
     warnings: list[str] = []
     assumptions: list[str] = []
@@ -658,7 +682,11 @@ def analyze(
         assumptions=tuple(assumptions),
         warnings=tuple(warnings),
         display=display,
-        tail=tail_report([(b, res) for b, (_, res) in zip(fmo, analyzed)], channels, blocks_memo),
+        tail=(
+            TailReport.kappa_only(tail_kappa(items_of(), channels, blocks_memo))
+            if tail == "kappa"
+            else tail_report(items_of(), channels, blocks_memo)
+        ),
     )
     if len(channels) == 1 and channels[0].model == "gilbert_elliott":
         report = _with_ge_region(report, [(b, res) for b, (_, res) in zip(fmo, analyzed)], channels[0], budget, opts)

@@ -71,7 +71,9 @@ def evaluate_point(command: str, tree: Any, budget_s: float, *, reuse: bool = Tr
 
             def run() -> dict[str, Any]:
                 fmo, memo = reused_plant(request.system, budget)
-                return analyze_row(analyze(request, budget, fmo=fmo, memo=memo))
+                return analyze_row(
+                    analyze(request, budget, fmo=fmo, memo=memo, tail="kappa")
+                )  # the row prints kappa alone
 
             key = pickle.dumps(_without_noise(tree), protocol=pickle.HIGHEST_PROTOCOL)  # equal pickles: equal trees
             return dict(_VERDICT_ROWS.get(key, run))

@@ -80,6 +80,11 @@ def _same_as_uncached(requests: list[dict]) -> list:
         fresh = analyze(req)
         assert cached.to_dict() == fresh.to_dict(), tree
         assert analyze_row(cached) == row_from_report("analyze", fresh.to_dict())
+        light = analyze(req, fmo=fmo, memo=memo, tail="kappa")  # what a sweep row runs
+        assert analyze_row(light) == row_from_report("analyze", fresh.to_dict()), tree
+        assert {k: v for k, v in light.to_dict().items() if k != "tail"} == {
+            k: v for k, v in fresh.to_dict().items() if k != "tail"
+        }
         reports.append(cached)
     assert memo, "the memo kept nothing: the test would not test it"
     return reports
@@ -194,3 +199,38 @@ def test_the_streamed_csv_is_the_dict_writer_csv(tmp_path):
         for r in records:
             w.write(r)
     assert path.read_text(encoding="utf-8") == csv_text(columns, records)
+
+
+def _clear_value_caches() -> None:
+    from kfio.design._tail import _log_rational
+    from kfio.sigma._decide import _bernoulli_factor
+    from kfio.stability._verdict import _radical_float
+
+    for cached in (_log_rational, _bernoulli_factor, _radical_float):
+        cached.cache_clear()
+
+
+def test_value_caches_shared_across_plants_leave_every_row_unchanged():
+    """``sigma^N``, its float and ``log sigma^N`` are kept per exact value; on a second plant they are hit.
+
+    Every row (plant memo and value caches warm) equals the row of an uncached
+    analysis run with those caches emptied first.
+    """
+    from kfio.design._tail import _log_rational
+    from kfio.stability._verdict import _radical_float
+
+    clear_caches()
+    _clear_value_caches()
+    trees = [
+        {
+            "system": {"A": [[a, "0"], ["1", "1.1"]], "C": [["1", "1"]]},
+            "channel": {"model": "bernoulli", "arrival_probability": p},
+        }
+        for a in ("1.25", "1.3", "-1.4")
+        for p in ("1/100", "37/100", "1/2", "0.93")
+    ]
+    cached = [evaluate_point("analyze", tree, 60.0) for tree in trees]
+    assert _log_rational.cache_info().hits > 0 and _radical_float.cache_info().hits > 0  # else nothing is tested
+    for tree, row in zip(trees, cached):
+        _clear_value_caches()
+        assert row == evaluate_point("analyze", tree, 60.0, reuse=False), tree
