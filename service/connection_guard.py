@@ -251,6 +251,7 @@ def guarded_protocol(base: type[asyncio.Protocol], guard: Guard) -> type[asyncio
             self.transport.close()
 
     GuardedProtocol.__name__ = GuardedProtocol.__qualname__ = f"Guarded{base.__name__}"
+    GuardedProtocol.guard = guard  # the state it enforces, for inspection (tests wait on it)
     return GuardedProtocol
 
 
