@@ -63,6 +63,18 @@ class LRU:
 _BLOCKS = LRU(STRUCTURE_ENTRIES)
 
 
+def kept(memo: dict | None, key: Hashable, compute: Callable[[], Any]) -> Any:
+    """``compute()``, kept in ``memo`` under ``key`` when a memo is given (a plant's memo, see :func:`reused_plant`).
+
+    Without a memo it is computed every time; with one, only the first time.
+    """
+    if memo is None:
+        return compute()
+    if key not in memo:
+        memo[key] = compute()
+    return memo[key]
+
+
 def structure_key(system: Any) -> Hashable:
     """What the FMO blocks depend on: exact ``A``, exact ``C`` and the sensor rows."""
     sensors = None if system.sensors is None else tuple((s.name, s.rows) for s in system.sensors)

@@ -41,6 +41,7 @@ import sympy
 from sympy import CRootOf, Poly
 
 from .._reporting import ReportPart
+from .._reuse import kept
 from ..model import MarkovChannel
 from ..sigma import (
     SigmaResult,
@@ -229,12 +230,11 @@ def _kappa_float(block: FmoBlock, N: int, c_rational: Fraction | None, c_expr: A
             log_c = _log_rational(c_rational)  # the same mpf as log(mpf(p) / q) at 40 digits
         else:
             log_c = mpmath.log(mpmath.mpf(str(sympy.N(c_expr, 40))))
-        if memo is None or "log_beta" not in memo:  # the block alone
-            log_b = mpmath.log(beta.approx(40) if beta is not None else mpmath.mpf(block.modulus_sq_float))
-            if memo is not None:
-                memo["log_beta"] = log_b
-        else:
-            log_b = memo["log_beta"]
+        log_b = kept(  # the block alone
+            memo,
+            "log_beta",
+            lambda: mpmath.log(beta.approx(40) if beta is not None else mpmath.mpf(block.modulus_sq_float)),
+        )
         return float(-log_c / (N * log_b))
 
 
@@ -396,15 +396,16 @@ def _bernoulli_lambdas(channels: Sequence[MarkovChannel]) -> list[Fraction] | No
     return None
 
 
-def _on_circle(block: FmoBlock, kept: dict | None) -> bool:
-    """``|alpha_k| = 1``, exactly when ``beta_k`` is known exactly (a property of the block alone, kept in ``kept``)."""
-    if kept is not None and "on_circle" in kept:
-        return bool(kept["on_circle"])
+def _on_circle(block: FmoBlock, memo: dict | None) -> bool:
+    """``|alpha_k| = 1``, exactly when ``beta_k`` is known exactly (a property of the block alone, kept in ``memo``)."""
     beta = block.modulus_sq
-    on_circle = beta.compare_power(1, Fraction(1)) == 0 if beta is not None else block.modulus_sq_float == 1.0
-    if kept is not None:
-        kept["on_circle"] = on_circle
-    return on_circle
+    return bool(
+        kept(
+            memo,
+            "on_circle",
+            lambda: beta.compare_power(1, Fraction(1)) == 0 if beta is not None else block.modulus_sq_float == 1.0,
+        )
+    )
 
 
 def tail_kappa(
@@ -429,11 +430,11 @@ def tail_kappa(
     for i, (block, res) in enumerate(items):
         if res is None:
             continue
-        kept = None if memo is None else memo[i]
-        if _on_circle(block, kept):
+        block_memo = None if memo is None else memo[i]
+        if _on_circle(block, block_memo):
             continue
         c_rational, c_expr, _ = _worst_factor(res, channels, bern)
-        kappas.append(_kappa_float(block, res.period, c_rational, c_expr, kept))
+        kappas.append(_kappa_float(block, res.period, c_rational, c_expr, block_memo))
     return min(kappas) if kappas else None
 
 
@@ -467,15 +468,15 @@ def tail_report(
     for i, (block, res) in enumerate(items):
         if res is None:
             continue
-        kept = None if memo is None else memo[i]
-        on_circle = _on_circle(block, kept)
+        block_memo = None if memo is None else memo[i]
+        on_circle = _on_circle(block, block_memo)
         if on_circle:
             notes.append(
                 f"block {', '.join(block.eigenvalue_texts)} has |alpha| = 1: blind stretches grow the error "
                 "polynomially, not geometrically; it contributes no power-law tail"
             )
             continue
-        tails.append(block_tail(block, res, channels, bern, kept))
+        tails.append(block_tail(block, res, channels, bern, block_memo))
     if not tails:
         return TailReport(
             kappa=None,

@@ -23,6 +23,7 @@ from flint import fmpq_mat
 from .._budget import Budget
 from .._json import json_float
 from .._reporting import Report, ShortRepr
+from .._reuse import kept
 from .._verdicts import Verdict
 from ..design import (
     CriticalParameter,
@@ -325,12 +326,7 @@ def sigma_bracket_json(block: FmoBlock, bracket: SigmaBracket) -> dict[str, Any]
 def _analyze_block(
     block: FmoBlock, channels: list[MarkovChannel], basis: str, budget: Budget, memo: dict | None = None
 ) -> tuple[BlockReport, Optional[SigmaResult]]:
-    if memo is None or "modulus" not in memo:  # |alpha| depends on the block alone
-        modulus = (_modulus_float(block), _modulus_text(block))
-        if memo is not None:
-            memo["modulus"] = modulus
-    else:
-        modulus = memo["modulus"]
+    modulus = kept(memo, "modulus", lambda: (_modulus_float(block), _modulus_text(block)))  # the block alone
     base: dict[str, Any] = dict(
         eigenvalues=block.eigenvalue_texts,
         eigenvalues_numeric=block.eigenvalue_values,
@@ -340,13 +336,9 @@ def _analyze_block(
         basis=basis,
         modulus_sq_algebraic=block.modulus_sq,
     )
-    if memo is None or "below_one" not in memo:  # |alpha| < 1: the block alone
-        below = (-1, True) if block.phase is None else block.compare_power(1, Fraction(1))
-        if memo is not None:
-            memo["below_one"] = below
-    else:
-        below = memo["below_one"]
-    below_one, below_certified = below
+    below_one, below_certified = kept(  # |alpha| < 1: the block alone
+        memo, "below_one", lambda: (-1, True) if block.phase is None else block.compare_power(1, Fraction(1))
+    )
     if below_one < 0:
         degenerate = None
         if block.phase is not None:
@@ -382,12 +374,11 @@ def _analyze_block(
     elif all_bernoulli and res.bernoulli_exponents is not None:
         lam_f = [lam for lam in lambdas if lam is not None]
         sets = res.maximal_blind_sets or (res.worst_blind_set,)
-        key = ("exponents", N, len(channels), sets)  # the sets' shares z_g / N: no probability in them
-        shares = memo.get(key) if memo is not None else None
-        if shares is None:
-            shares = [_bernoulli_exponents(F, N, len(channels)) for F in sets]
-            if memo is not None:
-                memo[key] = shares
+        shares = kept(  # the sets' shares z_g / N: no probability in them
+            memo,
+            ("exponents", N, len(channels), sets),
+            lambda: [_bernoulli_exponents(F, N, len(channels)) for F in sets],
+        )
         c = max(bernoulli_factor(z, lam_f, N) for z in shares)
         s, exact = compare_rate_bernoulli(block.modulus_sq, block.modulus_sq_float, N, c, block.compare_power)
     else:
@@ -658,12 +649,8 @@ def analyze(
     if len(channels) == 1 and channels[0].model == "bernoulli":
         crit, crit_exact, w = _reused_critical_probability(blocks, display, memo)
         warnings.extend(w)
-    if memo is None:
-        controllable = _controllable(system)
-    else:  # the memo is the plant's (exact A): with exact Q the key is complete
-        controllable = memo.get(("controllable", system.Q), None)
-        if controllable is None:
-            controllable = memo[("controllable", system.Q)] = _controllable(system)
+    # the memo is the plant's (exact A): with exact Q the key is complete
+    controllable = kept(memo, ("controllable", system.Q), lambda: _controllable(system))
     if controllable is False:
         warnings.append("(A, Q^1/2) is not controllable: some modes receive no process noise")
     ch = request.channel
@@ -689,7 +676,7 @@ def analyze(
         ),
     )
     if len(channels) == 1 and channels[0].model == "gilbert_elliott":
-        report = _with_ge_region(report, [(b, res) for b, (_, res) in zip(fmo, analyzed)], channels[0], budget, opts)
+        report = _with_ge_region(report, items_of(), channels[0], budget, opts)
     if opts.critical_parameter is not None:
         items = [(b, res) for b, (_, res) in zip(fmo, analyzed)]
         found = critical_parameter(request, opts.critical_parameter, items, channels, budget)
