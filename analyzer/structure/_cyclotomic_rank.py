@@ -51,14 +51,8 @@ def cyclotomic(L: int) -> fmpq_poly:
 
 
 def _prime_factors(n: int) -> list[int]:
-    out, q = [], 2
-    while q * q <= n:
-        if n % q == 0:
-            out.append(q)
-            while n % q == 0:
-                n //= q
-        q += 1
-    return out + ([n] if n > 1 else [])
+    """The distinct primes dividing ``n >= 1``, increasing (FLINT's factorisation)."""
+    return [int(q) for q, _ in flint.fmpz(n).factor()]
 
 
 class _Prime:
