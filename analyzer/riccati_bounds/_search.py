@@ -35,6 +35,7 @@ from .._budget import Budget
 from ._certificate import ExactPlant, StabilityCertificate, certify
 from ._gains import annihilating_gains, normalized_model, policy_gains
 from ._lmi import StabilityLMI, balancing_scaling
+from ._perron import crossing
 from ._riccati import ArrivalModel, gains, pattern_weights, solve_v_bar, subset_rows
 from ._stein import DENSE_MAX_N, solve_near
 from ._vech import congruence_matrix, unvech, vech
@@ -48,6 +49,9 @@ MARE_MAX_ITER = 4096
 LMI_PROBE_MAX_N = 12
 #: Slide / re-optimize rounds of the continuation in :meth:`CertifiedSearch.bisect`.
 MAX_ROUNDS = 64
+#: Above this many states the slide's bisection first locates where ``rho(L_K)`` crosses 1
+#: (:func:`kfio.riccati_bounds._perron.crossing`) and solves only at the points near it.
+PERRON_MIN_N = 24
 
 
 @dataclass(frozen=True)
@@ -137,6 +141,8 @@ class CertifiedSearch:
         self._annihilating: tuple[np.ndarray, ...] | None | bool = False  # False: not computed yet
         self.solves = 0
         self.routes: dict[str, int] = {}  # certificates found, by route
+        self.perron = True  # the slide's bisection guided by the Perron root (False: a solve at every point)
+        self.guided = 0  # slides whose bisection the Perron root guided
 
     @property
     def lmi(self) -> StabilityLMI:
@@ -286,8 +292,7 @@ class CertifiedSearch:
         """
         n = self.A.shape[0]
         closed = [self.A] + [self.A + k @ c for k, c in zip(K, self.C_S)]
-        terms = [congruence_matrix(F) for F in closed]
-        eye = np.eye(len(terms[0]))
+        terms: list[np.ndarray] = []  # the congruence matrices, formed at the first dense solve
         rhs = vech(np.eye(n))
         near: list = []  # above DENSE_MAX_N states: the LU factors of the last operator factored, the latest solution
 
@@ -300,7 +305,9 @@ class CertifiedSearch:
                 if y is not None:
                     near[1] = y
             if y is None:
-                L = eye.copy()
+                if not terms:
+                    terms.extend(congruence_matrix(F) for F in closed)
+                L = np.eye(len(rhs))
                 for w, T in zip(weights, terms):
                     if w > 0:
                         L -= w * T
@@ -320,9 +327,14 @@ class CertifiedSearch:
             return bool(np.all(np.isfinite(y)))
 
         a, b = float(lo), float(hi)
+        guide = None
+        if n > PERRON_MIN_N and self.perron:
+            guide = crossing(lambda x: self._float_weights(at(Fraction(x))), closed, a, b)
+            self.guided += guide is not None
         while b - a > float(tol) / 4:
             c = 0.5 * (a + b)
-            a, b = (a, c) if stable(c) else (c, b)
+            known = None if guide is None else guide.decide(c)
+            a, b = (a, c) if (stable(c) if known is None else known) else (c, b)
         x = Fraction(math.ceil(Fraction(b) / GRID)) * GRID
         if not lo < x < hi - tol / 2:
             return None
