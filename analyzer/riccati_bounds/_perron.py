@@ -134,7 +134,9 @@ class PerronRadius:
         return float(r.real)
 
 
-def crossing(weights_at: Callable[[float], Sequence[float]], matrices: Sequence[np.ndarray], lo: float, hi: float) -> Crossing | None:
+def crossing(
+    weights_at: Callable[[float], Sequence[float]], matrices: Sequence[np.ndarray], lo: float, hi: float
+) -> Crossing | None:
     r"""Where ``rho(sum_i w_i(x) M_i . M_i')`` crosses 1 on ``[lo, hi]``, confirmed on both sides; ``None`` if not found.
 
     ``rho`` must be below ``1 - CLEAR`` at ``hi``.  If it is at most ``1 + CLEAR`` at ``lo``,

@@ -15,8 +15,8 @@ import pytest
 
 from kfio.riccati_bounds import _search
 from kfio.riccati_bounds._certificate import ExactPlant
-from kfio.riccati_bounds._perron import CLEAR, PerronRadius, crossing
 from kfio.riccati_bounds._compute import critical_lower_bound
+from kfio.riccati_bounds._perron import CLEAR, PerronRadius, crossing
 from kfio.riccati_bounds._riccati import spectral_radius
 from kfio.riccati_bounds._search import CertifiedSearch
 from kfio.riccati_bounds._vech import congruence_matrix
