@@ -1,4 +1,4 @@
-r"""Where a one-parameter family of positive operators crosses ``rho = 1``: the continuation's threshold.
+r"""Where a one-parameter family of positive operators crosses ``rho = 1``: a guide for the continuation's bisection.
 
 The continuation of :meth:`kfio.riccati_bounds._search.CertifiedSearch._slide` keeps gains
 ``K`` fixed and asks, along one arrival probability ``x``, where
@@ -8,9 +8,10 @@ The continuation of :meth:`kfio.riccati_bounds._search.CertifiedSearch._slide` k
     \mathcal L_x(X) = \sum_i w_i(x)\, M_i X M_i', \qquad \rho(\mathcal L_x) < 1,
 
 starts to hold (``M_0 = A``, ``M_S = A + K_S C_S``; the pattern weights ``w_i`` are affine in
-``x``; Sinopoli et al. (2004), Lemma 3; Liu and Goldsmith (2004), eq. 16).  Its bisection asks
-a linear solve at some twenty points.  Every decision far from the threshold is already fixed
-by where ``rho(L_x)`` crosses 1, so that crossing is found first, from the spectral radius alone:
+``x``; Sinopoli et al. (2004), Lemma 3; Liu and Goldsmith (2004), eq. 16).  Its bisection
+solves ``Y - L_x(Y) = I`` at some twenty points.  When stability is monotone in ``x`` (the
+assumption the bisection makes), every one of its decisions follows from where ``rho(L_x)``
+crosses 1, so that crossing is estimated first, from the spectral radius alone:
 
 * ``L_x`` is completely positive, so its spectral radius is an eigenvalue with a positive
   semidefinite eigenvector (the Perron root; Evans and Hoegh-Krohn 1978), and it is the
@@ -18,68 +19,35 @@ by where ``rho(L_x)`` crosses 1, so that crossing is found first, from the spect
   Sorensen and Yang 1998, through ``scipy.sparse.linalg.eigs``) finds it from operator
   applications alone, two ``n x n`` products per term (``O(n^3)``), never forming the
   ``n^2 x n^2`` matrix;
-* Brent's method (Brent 1973, ``scipy.optimize.brentq``) finds the ``x`` where
-  ``rho(L_x) - 1`` changes sign;
-* the crossing ``t`` is then confirmed at ``t - m`` and ``t + m``, where ``rho - 1`` must be
-  at least :data:`CLEAR` away from 0 on the right side.
+* the secant method on ``rho(L_x) - 1``, kept inside the bracket that its own evaluations
+  establish, finds the crossing.
 
-The result is only a guide: the bisection asks its own stability test at every point within
-``m`` of ``t`` and uses the crossing for the points farther away, where ``|rho - 1|`` is far
-above that test's rounding.  When the spectral radius is not monotone across the confirmed
-points, or anything fails to converge, :func:`crossing` returns ``None`` and the bisection asks
-its own test everywhere, as before.  Either way the point the bisection returns is then
-re-checked exactly by the certificate.
+The estimate is only a guide: the bisection replays its steps with it and then asks its own
+stability test at the two ends it arrived at.  When the test agrees there, monotonicity gives
+the same answer at every earlier step, so the bisection ends where it would have ended with a
+solve at every point; when not, the bisection runs again with a solve at every point.  Either
+way the point it returns is then re-checked exactly by the certificate.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Callable, Sequence
 
 import numpy as np
-import scipy.optimize
 import scipy.sparse.linalg
 
-#: ``|rho - 1|`` that the confirmation at ``t -/+ m`` asks for: far above the bisection's own rounding.
-CLEAR = 1e-8
-#: The half-widths ``m`` tried around the crossing, smallest first.
-MARGINS = (4e-8, 4e-7, 4e-6)
 #: ARPACK's relative accuracy for the Ritz value, and its Krylov dimension.
-EIGS_TOL, EIGS_NCV = 1e-14, 20
-#: Brent's tolerance on ``x``: far below the smallest margin.
-XTOL = 1e-11
+EIGS_TOL, EIGS_NCV = 1e-10, 20
+#: The secant method stops when its step or its bracket is below this.
+XTOL = 1e-10
+#: Secant steps allowed.
+MAX_STEPS = 40
 #: Relative size of an imaginary part, or of a negative eigenvalue of the eigenvector, still taken as rounding.
-PSD_TOL = 1e-8
+PSD_TOL = 1e-6
 #: Up to this dimension of ``vec`` the spectrum is computed densely (ARPACK needs room for its basis).
 DENSE_DIM = 64
 
 Term = tuple[float, np.ndarray]
-
-
-@dataclass(frozen=True)
-class Crossing:
-    """Below ``unstable_at_most`` the operator is unstable, above ``stable_from`` stable; in between: ask.
-
-    Attributes
-    ----------
-    unstable_at_most, stable_from:
-        The confirmed points ``t - m`` and ``t + m`` (or ``lo`` and ``lo + m`` when
-        ``rho(L_lo) <= 1`` already).
-    evaluations:
-        Spectral radii computed.
-    """
-
-    unstable_at_most: float
-    stable_from: float
-    evaluations: int
-
-    def decide(self, x: float) -> bool | None:
-        """``True`` (stable), ``False`` (unstable), or ``None``: too close, ask the solver."""
-        if x >= self.stable_from:
-            return True
-        if x <= self.unstable_at_most:
-            return False
-        return None
 
 
 class PerronRadius:
@@ -134,15 +102,16 @@ class PerronRadius:
         return float(r.real)
 
 
-def crossing(
+def estimate_crossing(
     weights_at: Callable[[float], Sequence[float]], matrices: Sequence[np.ndarray], lo: float, hi: float
-) -> Crossing | None:
-    r"""Where ``rho(sum_i w_i(x) M_i . M_i')`` crosses 1 on ``[lo, hi]``, confirmed on both sides; ``None`` if not found.
+) -> float | None:
+    r"""An estimate of the ``x`` in ``(lo, hi)`` where ``rho(sum_i w_i(x) M_i . M_i')`` crosses 1, or ``None``.
 
-    ``rho`` must be below ``1 - CLEAR`` at ``hi``.  If it is at most ``1 + CLEAR`` at ``lo``,
-    the operator is taken as stable from ``lo + m`` on (confirmed there); else Brent's method
-    finds the crossing ``t`` to :data:`XTOL` and ``rho - 1`` is confirmed beyond
-    ``CLEAR`` at ``t -/+ m``, for the smallest ``m`` of :data:`MARGINS` where it is.
+    The secant method on ``f(x) = rho - 1`` from ``hi`` and the midpoint; a step that leaves
+    the bracket ``a < x < b`` known so far (``f(a) > 0 > f(b)``) is replaced by regula falsi
+    or by the bracket's midpoint.  ``lo`` itself when ``f(lo) <= 0``.  ``None`` when
+    ``f(hi) >= 0``, when a spectral radius cannot be trusted (:class:`PerronRadius`), or after
+    :data:`MAX_STEPS` steps.
     """
     rho = PerronRadius(matrices)
 
@@ -151,20 +120,37 @@ def crossing(
 
     try:
         with np.errstate(all="ignore"):
-            if not f(hi) < -CLEAR:
+            a, fa = lo, float("nan")  # f(a) > 0 once evaluated
+            b, fb = hi, f(hi)
+            if not fb < 0:
                 return None
-            f_lo = f(lo)
-            if not np.isfinite(f_lo):
-                return None
-            if f_lo <= CLEAR:
-                for m in MARGINS:
-                    if lo + m < hi and f(lo + m) < -CLEAR:
-                        return Crossing(lo, lo + m, rho.evaluations)
-                return None
-            t = float(scipy.optimize.brentq(f, lo, hi, xtol=XTOL))
-            for m in MARGINS:
-                if lo < t - m and t + m < hi and f(t - m) > CLEAR and f(t + m) < -CLEAR:
-                    return Crossing(t - m, t + m, rho.evaluations)
-    except (ArithmeticError, ValueError, RuntimeError):
+            x0, f0 = b, fb
+            x1 = 0.5 * (lo + hi)
+            f1 = f(x1)
+            for _ in range(MAX_STEPS):
+                if f1 > 0:
+                    a, fa = x1, f1
+                else:
+                    b, fb = x1, f1
+                if b - a <= XTOL:
+                    return x1
+                x2 = x1 - f1 * (x1 - x0) / (f1 - f0) if f1 != f0 else np.nan
+                if not a < x2 < b and not np.isfinite(fa):  # the step leaves the bracket: is lo itself stable?
+                    fa = f(a)
+                    if not fa > 0:
+                        return lo if fa <= 0 else None  # stable down to lo, or NaN
+                if not a < x2 < b:
+                    x2 = a - fa * (b - a) / (fb - fa)  # regula falsi
+                    if not a < x2 < b:
+                        x2 = 0.5 * (a + b)
+                step = abs(x2 - x1)
+                x0, f0 = x1, f1
+                x1 = x2
+                f1 = f(x1)
+                if not np.isfinite(f1):
+                    return None
+                if step <= XTOL:
+                    return x1
+    except (ArithmeticError, ValueError):
         return None
     return None

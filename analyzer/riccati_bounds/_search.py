@@ -35,7 +35,7 @@ from .._budget import Budget
 from ._certificate import ExactPlant, StabilityCertificate, certify
 from ._gains import annihilating_gains, normalized_model, policy_gains
 from ._lmi import StabilityLMI, balancing_scaling
-from ._perron import crossing
+from ._perron import estimate_crossing
 from ._riccati import ArrivalModel, gains, pattern_weights, solve_v_bar, subset_rows
 from ._stein import DENSE_MAX_N, solve_near
 from ._vech import congruence_matrix, unvech, vech
@@ -49,8 +49,8 @@ MARE_MAX_ITER = 4096
 LMI_PROBE_MAX_N = 12
 #: Slide / re-optimize rounds of the continuation in :meth:`CertifiedSearch.bisect`.
 MAX_ROUNDS = 64
-#: Above this many states the slide's bisection first locates where ``rho(L_K)`` crosses 1
-#: (:func:`kfio.riccati_bounds._perron.crossing`) and solves only at the points near it.
+#: Above this many states the slide's bisection is first replayed with an estimate of where ``rho(L_K)``
+#: crosses 1 (:func:`kfio.riccati_bounds._perron.estimate_crossing`); the solver is asked at its two ends only.
 PERRON_MIN_N = 24
 
 
@@ -289,6 +289,14 @@ class CertifiedSearch:
         single unstable mode the gains that zero it work all the way down to
         the lower bound (Sinopoli et al. (2004) Sec. IV), so one solve near the threshold
         finishes the search.
+
+        Above :data:`PERRON_MIN_N` states the bisection is first replayed with an estimate of
+        where ``rho(L_K)`` crosses 1 (:func:`kfio.riccati_bounds._perron.estimate_crossing`,
+        ``O(n^3)`` per operator application) instead of a solve per point, and the solve is
+        asked at the two ends the replay reached.  If stability is monotone along the
+        coordinate, the assumption of the bisection itself, two agreeing ends mean the same
+        decision at every step, hence the same point; otherwise the bisection runs again with a
+        solve at every point.
         """
         n = self.A.shape[0]
         closed = [self.A] + [self.A + k @ c for k, c in zip(K, self.C_S)]
@@ -326,15 +334,28 @@ class CertifiedSearch:
                 return False
             return bool(np.all(np.isfinite(y)))
 
-        a, b = float(lo), float(hi)
-        guide = None
+        def bisection(decide: Callable[[float], bool]) -> tuple[float, float]:
+            a, b = float(lo), float(hi)
+            while b - a > float(tol) / 4:
+                c = 0.5 * (a + b)
+                a, b = (a, c) if decide(c) else (c, b)
+            return a, b
+
+        guess = None
         if n > PERRON_MIN_N and self.perron:
-            guide = crossing(lambda x: self._float_weights(at(Fraction(x))), closed, a, b)
-            self.guided += guide is not None
-        while b - a > float(tol) / 4:
-            c = 0.5 * (a + b)
-            known = None if guide is None else guide.decide(c)
-            a, b = (a, c) if (stable(c) if known is None else known) else (c, b)
+            guess = estimate_crossing(lambda x: self._float_weights(at(Fraction(x))), closed, float(lo), float(hi))
+        if guess is not None:
+            # replay the bisection with the estimate, then ask the solver at the two ends it reached: if stability
+            # is monotone in x (what the bisection assumes), agreeing ends mean agreeing steps all along
+            t = guess
+            a, b = bisection(lambda c: c > t)
+            if (a == float(lo) or not stable(a)) and (b == float(hi) or stable(b)):
+                self.guided += 1
+            else:
+                guess = None
+                near.clear()
+        if guess is None:
+            a, b = bisection(stable)
         x = Fraction(math.ceil(Fraction(b) / GRID)) * GRID
         if not lo < x < hi - tol / 2:
             return None

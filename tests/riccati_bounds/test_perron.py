@@ -16,7 +16,7 @@ import pytest
 from kfio.riccati_bounds import _search
 from kfio.riccati_bounds._certificate import ExactPlant
 from kfio.riccati_bounds._compute import critical_lower_bound
-from kfio.riccati_bounds._perron import CLEAR, PerronRadius, crossing
+from kfio.riccati_bounds._perron import PerronRadius, estimate_crossing
 from kfio.riccati_bounds._riccati import spectral_radius
 from kfio.riccati_bounds._search import CertifiedSearch
 from kfio.riccati_bounds._vech import congruence_matrix
@@ -37,39 +37,53 @@ def family(seed: int, n: int, p: int):
     return [A, A + K @ C]
 
 
-@pytest.mark.parametrize("seed", range(3))
 @pytest.mark.parametrize("n", [2, 3, 5, 9, 16, 30])
-def test_perron_radius_matches_dense_eigenvalues(seed: int, n: int) -> None:
-    matrices = family(seed, n, 2)
-    rho = PerronRadius(matrices)
-    for x in (0.3, 0.7, 1.0):
-        weights = (1 - x, x)
-        expected = dense_radius(weights, matrices)
-        assert abs(rho(weights) - expected) <= 1e-11 * max(1.0, expected)
+def test_perron_radius_matches_dense_eigenvalues(n: int) -> None:
+    """A radius it returns is right; where ARPACK finds another eigenvalue first it says so (rarely)."""
+    answered = 0
+    for seed in range(3):
+        matrices = family(seed, n, 2)
+        rho = PerronRadius(matrices)
+        for x in (0.3, 0.7, 1.0):
+            weights = (1 - x, x)
+            expected = dense_radius(weights, matrices)
+            try:
+                got = rho(weights)
+            except ArithmeticError:
+                continue
+            answered += 1
+            assert abs(got - expected) <= 1e-8 * max(1.0, expected)  # ARPACK to EIGS_TOL = 1e-10
+    assert answered >= 7
+
+
+def dense_crossing(matrices, lo: float, hi: float) -> float:
+    """Bisection on dense eigenvalues to 1e-13 (assumes one crossing)."""
+    a, b = lo, hi
+    while b - a > 1e-13:
+        c = 0.5 * (a + b)
+        a, b = (a, c) if dense_radius((1 - c, c), matrices) < 1 else (c, b)
+    return b
 
 
 @pytest.mark.parametrize("seed", range(4))
 @pytest.mark.parametrize("n,p", [(3, 1), (8, 2), (14, 2), (20, 3)])
-def test_crossing_brackets_the_dense_threshold(seed: int, n: int, p: int) -> None:
+def test_estimated_crossing_matches_the_dense_threshold(seed: int, n: int, p: int) -> None:
     matrices = family(seed, n, p)
-    lo = critical_lower_bound(spectral_radius(matrices[0]))
-    hi = 1.0
-    if not dense_radius((0.0, 1.0), matrices) < 1 - CLEAR:
-        return  # the gain does not stabilize even with every packet: no crossing to find (checked below)
-    c = crossing(lambda x: (1 - x, x), matrices, lo, hi)
-    assert c is not None
-    assert lo <= c.unstable_at_most < c.stable_from < hi
-    # by dense eigenvalues: unstable at the lower confirmed point (unless it is lo), stable at the upper
-    assert dense_radius((1 - c.stable_from, c.stable_from), matrices) < 1 - CLEAR / 2
-    if c.unstable_at_most > lo:
-        assert dense_radius((1 - c.unstable_at_most, c.unstable_at_most), matrices) > 1 + CLEAR / 2
-    assert c.decide(c.stable_from) is True and c.decide(c.unstable_at_most) is False
-    assert c.decide(0.5 * (c.unstable_at_most + c.stable_from)) is None
+    lo, hi = critical_lower_bound(spectral_radius(matrices[0])), 1.0
+    if not dense_radius((0.0, 1.0), matrices) < 1:
+        assert estimate_crossing(lambda x: (1 - x, x), matrices, lo, hi) is None
+        return
+    t = estimate_crossing(lambda x: (1 - x, x), matrices, lo, hi)
+    assert t is not None
+    expected = dense_crossing(matrices, lo, hi)
+    assert abs(t - expected) <= 1e-8
 
 
-def test_crossing_declines_when_the_upper_end_is_not_stable() -> None:
+def test_a_crossing_at_or_below_lo_is_lo() -> None:
     A = np.diag([1.5, 0.5])
-    assert crossing(lambda x: (1 - x, x), [A, A], 0.1, 1.0) is None
+    F = np.diag([0.0, 0.5])  # the gain annihilates the unstable mode: rho = (1 - x) 2.25 crosses 1 at x = 5/9
+    assert estimate_crossing(lambda x: (1 - x, x), [A, F], 0.6, 1.0) == 0.6
+    assert estimate_crossing(lambda x: (1 - x, x), [A, A], 0.1, 1.0) is None  # unstable at hi
 
 
 def random_search(seed: int, n: int) -> tuple[CertifiedSearch, float]:
