@@ -81,9 +81,9 @@ class PerronRadius:
             return out.ravel()
 
         op = scipy.sparse.linalg.LinearOperator((n * n, n * n), matvec=matvec, dtype=float)
-        # the last Perron vector plus I / sqrt(n): positive definite, so it has a positive component
-        # <U, v0> along every positive semidefinite left eigenvector U, the Perron one included
-        v0 = self.v + np.eye(n).ravel() / np.sqrt(n)
+        # from I (positive definite: it has a positive component <U, I> along the Perron left eigenvector U),
+        # then from the last Perron vector (a nearby operator's)
+        v0 = self.v
         try:
             vals, vecs = scipy.sparse.linalg.eigs(op, k=1, which="LM", v0=v0, tol=EIGS_TOL, ncv=EIGS_NCV)
         except scipy.sparse.linalg.ArpackError as e:  # includes ArpackNoConvergence
@@ -101,13 +101,20 @@ class PerronRadius:
         self.v = v / np.linalg.norm(v)
         return float(r.real)
 
+    def rayleigh(self, weights: Sequence[float]) -> float:
+        """``<V, L(V)> / <V, V>`` for the last Perron vector ``V`` and any real ``weights``: a derivative's guess."""
+        V = self.v.reshape(self.n, self.n)
+        LV = sum(float(w) * (M @ V @ Mt) for w, M, Mt in zip(weights, self.M, self.Mt) if w != 0)
+        return float(np.sum(V * LV) / np.sum(V * V))
+
 
 def estimate_crossing(
     weights_at: Callable[[float], Sequence[float]], matrices: Sequence[np.ndarray], lo: float, hi: float
 ) -> float | None:
     r"""An estimate of the ``x`` in ``(lo, hi)`` where ``rho(sum_i w_i(x) M_i . M_i')`` crosses 1, or ``None``.
 
-    The secant method on ``f(x) = rho - 1`` from ``hi`` and the midpoint; a step that leaves
+    The secant method on ``f(x) = rho - 1`` from ``hi`` and a Newton step from there (the slope
+    guessed by :meth:`PerronRadius.rayleigh`; the midpoint if that leaves ``(lo, hi)``); a step that leaves
     the bracket ``a < x < b`` known so far (``f(a) > 0 > f(b)``) is replaced by regula falsi
     or by the bracket's midpoint.  ``lo`` itself when ``f(lo) <= 0``.  ``None`` when
     ``f(hi) >= 0``, when a spectral radius cannot be trusted (:class:`PerronRadius`), or after
@@ -125,7 +132,14 @@ def estimate_crossing(
             if not fb < 0:
                 return None
             x0, f0 = b, fb
+            # a Newton step with the slope <V, L'(V)> / <V, V> at hi (V its Perron vector), else the midpoint
             x1 = 0.5 * (lo + hi)
+            if len(matrices) > 1:
+                w_hi, w_lo = weights_at(hi), weights_at(lo)
+                slope = rho.rayleigh([(p - q) / (hi - lo) for p, q in zip(w_hi, w_lo)])
+                newton = hi - fb / slope if slope < 0 else np.nan
+                if lo < newton < hi:
+                    x1 = newton
             f1 = f(x1)
             for _ in range(MAX_STEPS):
                 if f1 > 0:
