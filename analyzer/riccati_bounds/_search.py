@@ -259,11 +259,16 @@ class CertifiedSearch:
         K: Sequence[np.ndarray],
         solver_margin: float | None = None,
         route: str = "LMI",
+        near: Sequence | None = None,
     ) -> StabilityCertificate | None:
-        """Re-check gains ``K`` (user coordinates) at ``lambdas`` without solving anything."""
+        """Re-check gains ``K`` (user coordinates) at ``lambdas`` without solving anything.
+
+        ``near``: a nearby operator's LU factors and solution, for
+        :func:`kfio.riccati_bounds._certificate.lyapunov_certificate`.
+        """
         exact_w = pattern_weights([Fraction(x) for x in lambdas])
         model = self._model([float(w) for w in exact_w])
-        cert = certify(model, self.plant, lambdas, exact_w, K, solver_margin, self.exact, route)
+        cert = certify(model, self.plant, lambdas, exact_w, K, solver_margin, self.exact, route, near)
         if cert is not None:
             self.routes[route] = self.routes.get(route, 0) + 1
             if self.recenter:
@@ -359,7 +364,7 @@ class CertifiedSearch:
         x = Fraction(math.ceil(Fraction(b) / GRID)) * GRID
         if not lo < x < hi - tol / 2:
             return None
-        cert = self.check_gains(at(x), K, route=route)
+        cert = self.check_gains(at(x), K, route=route, near=near)  # x is within tol / 4 of the last point solved
         return None if cert is None else (x, cert)
 
     def _recenter(self, X: np.ndarray) -> None:

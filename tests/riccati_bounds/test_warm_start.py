@@ -78,3 +78,29 @@ def test_v_bar_is_remembered_and_handed_out_as_copies() -> None:
     # another model, another answer
     other = solve_v_bar(model(5, 4, 0.9))
     assert other.matrix is not None and not np.array_equal(other.matrix, second.matrix)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_a_certificate_from_a_nearby_factorization_is_the_dense_solve(seed: int, monkeypatch) -> None:
+    """``lyapunov_certificate(..., near)``: GMRES preconditioned by the LU of the operator at a nearby point."""
+    import scipy.linalg
+
+    from kfio.riccati_bounds import _certificate
+    from kfio.riccati_bounds._certificate import lyapunov_certificate
+
+    n = 26
+    m = model(seed, n, 0.95)
+    V = solve_v_bar(m).matrix
+    assert V is not None
+    K = gains(V, m)
+    terms = _riccati.closed_loop_terms(m, K)
+    nearby = [(w * (1 + 1e-7 * (-1) ** i), M) for i, (w, M) in enumerate(terms)]
+    L = np.eye(n * (n + 1) // 2) - sum(w * congruence_matrix(M) for w, M in nearby)
+    factor = scipy.linalg.lu_factor(L)
+    start = scipy.linalg.lu_solve(factor, vech(np.eye(n)))
+    Y = dense(terms, np.eye(n))
+    monkeypatch.setattr(_certificate, "solve_stein", None)  # neither fallback may answer
+    monkeypatch.setattr(_certificate, "closed_loop_operator", None)
+    X = lyapunov_certificate(m, K, (factor, start))
+    assert X is not None
+    assert np.linalg.norm(X - Y) <= 1e-9 * np.linalg.norm(Y)
