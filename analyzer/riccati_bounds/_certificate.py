@@ -37,7 +37,7 @@ import numpy as np
 from .._reporting import ReportPart
 from ..model import Matrix
 from ._riccati import ArrivalModel, closed_loop_operator, closed_loop_terms
-from ._stein import DENSE_MAX_N, solve_stein
+from ._stein import DENSE_MAX_N, solve_near, solve_stein
 from ._vech import unvech, vech
 
 #: Rounding allowance of the float check, in units of ``n * eps * scale``.
@@ -84,14 +84,24 @@ class StabilityCertificate(ReportPart):
     route: str = "LMI"
 
 
-def lyapunov_certificate(model: ArrivalModel, K: Sequence[np.ndarray]) -> np.ndarray | None:
+def lyapunov_certificate(
+    model: ArrivalModel, K: Sequence[np.ndarray], near: Sequence | None = None
+) -> np.ndarray | None:
     """The ``X`` with ``X - L_K(X) = I``, or ``None`` if singular.
 
     A ``vech`` linear solve, or above :data:`kfio.riccati_bounds._stein.DENSE_MAX_N` states
     :func:`kfio.riccati_bounds._stein.solve_stein` (the dense solve where that declines).
-    Either way the certificate is then re-proved exactly, whatever solved for ``X``.
+    ``near`` (the LU factors of a nearby operator's ``vech`` matrix, and a first guess: what the
+    slide's last stability test factored) makes it :func:`kfio.riccati_bounds._stein.solve_near`
+    first: near the threshold GMRES with the single-term preconditioner stalls, and the dense
+    solve then forms the operator afresh.  Either way the certificate is then re-proved
+    exactly, whatever solved for ``X``.
     """
     n = model.n
+    if n > DENSE_MAX_N and near:
+        h = solve_near(closed_loop_terms(model, K), near[0], vech(np.eye(n)), near[1])
+        if h is not None:
+            return unvech(h, n)
     if n > DENSE_MAX_N:
         sol = solve_stein(closed_loop_terms(model, K), [np.eye(n)])
         if sol is not None:
@@ -273,8 +283,11 @@ def certify(
     solver_margin: float | None,
     exact: bool = True,
     route: str = "LMI",
+    near: Sequence | None = None,
 ) -> StabilityCertificate | None:
     """Re-check gains ``K`` (user coordinates) at ``lambdas``; a certificate or ``None``.
+
+    ``near``: see :func:`lyapunov_certificate`.
 
     ``model`` carries the same probabilities as floats.  A float test runs
     first (cheap, and it rejects gains that do not stabilize): with ``exact``
@@ -282,7 +295,7 @@ def certify(
     check decides; without, :func:`float_check` with its rounding allowance
     is the verdict.
     """
-    X = lyapunov_certificate(model, K)
+    X = lyapunov_certificate(model, K, near)
     if X is None:
         return None
     if exact:  # the float test only has to reject gains that do not stabilize: signs, no allowance

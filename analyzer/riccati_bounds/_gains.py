@@ -85,7 +85,7 @@ def policy_gains(
     best = tuple(K)
     for _ in range(steps):
         K_next = gains(X, model)
-        X_next = policy_evaluation(model, K_next)
+        X_next = policy_evaluation(model, K_next, X)
         if X_next is None:  # rounding at the edge of stability: keep the last stabilizing gains
             break
         best_prev, best = best, K_next

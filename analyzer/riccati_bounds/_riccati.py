@@ -19,6 +19,7 @@ matching block of ``R``.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Any, Sequence
@@ -191,7 +192,9 @@ def closed_loop_operator(model: ArrivalModel, K: Sequence[np.ndarray]) -> np.nda
     return L
 
 
-def policy_evaluation(model: ArrivalModel, K: Sequence[np.ndarray]) -> np.ndarray | None:
+def policy_evaluation(
+    model: ArrivalModel, K: Sequence[np.ndarray], start: np.ndarray | None = None
+) -> np.ndarray | None:
     r"""Solve :math:`X = \phi(K, X) = \mathcal L_K(X) + Q + \sum_S \pi(S) K_S R_{SS} K_S'`.
 
     Returns ``None`` unless ``K`` is mean-square stabilizing, i.e. unless
@@ -206,7 +209,8 @@ def policy_evaluation(model: ArrivalModel, K: Sequence[np.ndarray]) -> np.ndarra
     else (or where that declines) on ``vech``.
     There, when ``W > 0``, ``X > 0`` replaces the test on ``Y``: ``X - L_K(X) = W > 0`` with
     ``X > 0`` gives ``rho(L_K) < 1`` (Lyapunov's theorem for positive operators), and
-    ``rho(L_K) < 1`` gives ``X = sum_k L_K^k(W) > 0``.
+    ``rho(L_K) < 1`` gives ``X = sum_k L_K^k(W) > 0``.  ``start`` (the previous evaluation of a
+    policy iteration) is GMRES's first guess there; the dense solve does not use it.
     """
     n = model.n
     W = model.Q.copy()
@@ -217,7 +221,7 @@ def policy_evaluation(model: ArrivalModel, K: Sequence[np.ndarray]) -> np.ndarra
         terms = closed_loop_terms(model, K)
         if np.linalg.eigvalsh(_sym(W)).min() > 0:
             # W > 0: X > 0 with X - L_K(X) = W > 0 is itself the proof that rho(L_K) < 1, no Y needed
-            fast = solve_stein(terms, [W])
+            fast = solve_stein(terms, [W], [start])
             if fast is not None:
                 return fast[0] if np.linalg.eigvalsh(fast[0]).min() > 0 else None
         else:
@@ -322,7 +326,7 @@ def _newton_from(model: ArrivalModel, V: np.ndarray, max_steps: int = 60) -> tup
     if X is None:
         return None, 0
     for step in range(1, max_steps + 1):
-        X_next = policy_evaluation(model, gains(X, model))
+        X_next = policy_evaluation(model, gains(X, model), X)
         if X_next is None:  # rounding near the threshold; keep the last valid upper bound
             return X, step
         done = np.linalg.norm(X_next - X) <= 1e-15 * np.linalg.norm(X)
@@ -330,6 +334,26 @@ def _newton_from(model: ArrivalModel, V: np.ndarray, max_steps: int = 60) -> tup
         if done:
             return X, step
     return X, max_steps
+
+
+#: The latest answers of :func:`solve_v_bar` (the model's bytes and the options -> the answer): ``kfio bounds``
+#: asks for the same ``V_bar`` twice, for the covariance bounds and as ``P_hat_1`` (Rohr, Marelli and Fu 2010).
+_V_BAR_CACHE: dict[tuple, VBarIteration] = {}
+_V_BAR_CACHE_SIZE = 4
+
+
+def _model_key(model: ArrivalModel) -> tuple:
+    arrays = (model.A, model.Q, *model.C_S, *model.R_S)
+    return tuple((a.shape, np.ascontiguousarray(a, float).tobytes()) for a in arrays) + (model.weights,)
+
+
+def _copy(it: VBarIteration) -> VBarIteration:
+    """The same answer with its own arrays (callers may write into them)."""
+    return dataclasses.replace(
+        it,
+        matrix=None if it.matrix is None else it.matrix.copy(),
+        lower=None if it.lower is None else it.lower.copy(),
+    )
 
 
 def solve_v_bar(
@@ -340,6 +364,9 @@ def solve_v_bar(
     budget: Budget | None = None,
 ) -> VBarIteration:
     """``V_bar``, the fixed point of :func:`g_partial`, by monotone iteration.
+
+    The answer is remembered for the last few models (a deterministic computation, so a repeated
+    request gets the same floats; the budget is not ticked again).
 
     The iteration ``V_{k+1} = g(V_k)`` from ``V_0 = 0`` increases
     monotonically to ``V_bar`` when it exists (Sinopoli et al. (2004), Theorem 6(a) and the
@@ -355,6 +382,17 @@ def solve_v_bar(
     ``V_k >= S_k`` diverges, Sinopoli et al. (2004) Lemma 1(f)), or when the trace
     explodes, or when ``max_iter`` steps neither converge nor diverge.
     """
+    key = (_model_key(model), rtol, max_iter)
+    hit = _V_BAR_CACHE.get(key)
+    if hit is None:
+        hit = _solve_v_bar(model, rtol, max_iter, budget)
+        if len(_V_BAR_CACHE) >= _V_BAR_CACHE_SIZE:
+            _V_BAR_CACHE.clear()  # one atomic call: safe with the service's threads (no iteration over the dict)
+        _V_BAR_CACHE[key] = hit
+    return _copy(hit)
+
+
+def _solve_v_bar(model: ArrivalModel, rtol: float, max_iter: int, budget: Budget | None) -> VBarIteration:
     p0 = model.loss_probability
     if p0 * spectral_radius(model.A) ** 2 >= 1.0:
         return VBarIteration(None, None, 0, 0, None, None, "pi(empty) rho(A)^2 >= 1: the lower bound S_bar diverges")

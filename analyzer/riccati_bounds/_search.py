@@ -35,6 +35,7 @@ from .._budget import Budget
 from ._certificate import ExactPlant, StabilityCertificate, certify
 from ._gains import annihilating_gains, normalized_model, policy_gains
 from ._lmi import StabilityLMI, balancing_scaling
+from ._perron import estimate_crossing
 from ._riccati import ArrivalModel, gains, pattern_weights, solve_v_bar, subset_rows
 from ._stein import DENSE_MAX_N, solve_near
 from ._vech import congruence_matrix, unvech, vech
@@ -48,6 +49,9 @@ MARE_MAX_ITER = 4096
 LMI_PROBE_MAX_N = 12
 #: Slide / re-optimize rounds of the continuation in :meth:`CertifiedSearch.bisect`.
 MAX_ROUNDS = 64
+#: Above this many states the slide's bisection is first replayed with an estimate of where ``rho(L_K)``
+#: crosses 1 (:func:`kfio.riccati_bounds._perron.estimate_crossing`); the solver is asked at its two ends only.
+PERRON_MIN_N = 24
 
 
 @dataclass(frozen=True)
@@ -137,6 +141,8 @@ class CertifiedSearch:
         self._annihilating: tuple[np.ndarray, ...] | None | bool = False  # False: not computed yet
         self.solves = 0
         self.routes: dict[str, int] = {}  # certificates found, by route
+        self.perron = True  # the slide's bisection guided by the Perron root (False: a solve at every point)
+        self.guided = 0  # slides whose bisection the Perron root guided
 
     @property
     def lmi(self) -> StabilityLMI:
@@ -253,11 +259,16 @@ class CertifiedSearch:
         K: Sequence[np.ndarray],
         solver_margin: float | None = None,
         route: str = "LMI",
+        near: Sequence | None = None,
     ) -> StabilityCertificate | None:
-        """Re-check gains ``K`` (user coordinates) at ``lambdas`` without solving anything."""
+        """Re-check gains ``K`` (user coordinates) at ``lambdas`` without solving anything.
+
+        ``near``: a nearby operator's LU factors and solution, for
+        :func:`kfio.riccati_bounds._certificate.lyapunov_certificate`.
+        """
         exact_w = pattern_weights([Fraction(x) for x in lambdas])
         model = self._model([float(w) for w in exact_w])
-        cert = certify(model, self.plant, lambdas, exact_w, K, solver_margin, self.exact, route)
+        cert = certify(model, self.plant, lambdas, exact_w, K, solver_margin, self.exact, route, near)
         if cert is not None:
             self.routes[route] = self.routes.get(route, 0) + 1
             if self.recenter:
@@ -283,11 +294,18 @@ class CertifiedSearch:
         single unstable mode the gains that zero it work all the way down to
         the lower bound (Sinopoli et al. (2004) Sec. IV), so one solve near the threshold
         finishes the search.
+
+        Above :data:`PERRON_MIN_N` states the bisection is first replayed with an estimate of
+        where ``rho(L_K)`` crosses 1 (:func:`kfio.riccati_bounds._perron.estimate_crossing`,
+        ``O(n^3)`` per operator application) instead of a solve per point, and the solve is
+        asked at the two ends the replay reached.  If stability is monotone along the
+        coordinate, the assumption of the bisection itself, two agreeing ends mean the same
+        decision at every step, hence the same point; otherwise the bisection runs again with a
+        solve at every point.
         """
         n = self.A.shape[0]
         closed = [self.A] + [self.A + k @ c for k, c in zip(K, self.C_S)]
-        terms = [congruence_matrix(F) for F in closed]
-        eye = np.eye(len(terms[0]))
+        terms: list[np.ndarray] = []  # the congruence matrices, formed at the first dense solve
         rhs = vech(np.eye(n))
         near: list = []  # above DENSE_MAX_N states: the LU factors of the last operator factored, the latest solution
 
@@ -300,7 +318,9 @@ class CertifiedSearch:
                 if y is not None:
                     near[1] = y
             if y is None:
-                L = eye.copy()
+                if not terms:
+                    terms.extend(congruence_matrix(F) for F in closed)
+                L = np.eye(len(rhs))
                 for w, T in zip(weights, terms):
                     if w > 0:
                         L -= w * T
@@ -319,14 +339,32 @@ class CertifiedSearch:
                 return False
             return bool(np.all(np.isfinite(y)))
 
-        a, b = float(lo), float(hi)
-        while b - a > float(tol) / 4:
-            c = 0.5 * (a + b)
-            a, b = (a, c) if stable(c) else (c, b)
+        def bisection(decide: Callable[[float], bool]) -> tuple[float, float]:
+            a, b = float(lo), float(hi)
+            while b - a > float(tol) / 4:
+                c = 0.5 * (a + b)
+                a, b = (a, c) if decide(c) else (c, b)
+            return a, b
+
+        guess = None
+        if n > PERRON_MIN_N and self.perron:
+            guess = estimate_crossing(lambda x: self._float_weights(at(Fraction(x))), closed, float(lo), float(hi))
+        if guess is not None:
+            # replay the bisection with the estimate, then ask the solver at the two ends it reached: if stability
+            # is monotone in x (what the bisection assumes), agreeing ends mean agreeing steps all along
+            t = guess
+            a, b = bisection(lambda c: c > t)
+            if (a == float(lo) or not stable(a)) and (b == float(hi) or stable(b)):
+                self.guided += 1
+            else:
+                guess = None
+                near.clear()
+        if guess is None:
+            a, b = bisection(stable)
         x = Fraction(math.ceil(Fraction(b) / GRID)) * GRID
         if not lo < x < hi - tol / 2:
             return None
-        cert = self.check_gains(at(x), K, route=route)
+        cert = self.check_gains(at(x), K, route=route, near=near)  # x is within tol / 4 of the last point solved
         return None if cert is None else (x, cert)
 
     def _recenter(self, X: np.ndarray) -> None:

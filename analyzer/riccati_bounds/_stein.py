@@ -163,11 +163,14 @@ def _gmres(op, pre, b: np.ndarray, x: np.ndarray, tol: float, cycles: int = 0) -
     return x
 
 
-def solve_stein(terms: Sequence[Term], rhs: Sequence[np.ndarray]) -> list[np.ndarray] | None:
+def solve_stein(
+    terms: Sequence[Term], rhs: Sequence[np.ndarray], starts: Sequence[np.ndarray | None] | None = None
+) -> list[np.ndarray] | None:
     r"""``X - sum_i w_i M_i X M_i' = W`` for each ``W`` in ``rhs`` by preconditioned GMRES on ``n x n`` matrices.
 
-    ``terms`` are the pairs ``(w_i, M_i)`` with ``w_i > 0``; GMRES starts from the
-    preconditioner's answer.  Returns ``None`` where it declines.
+    ``terms`` are the pairs ``(w_i, M_i)`` with ``w_i > 0``; GMRES starts from ``starts[k]``
+    where given (a nearby equation's solution: policy iteration's previous evaluation), else from
+    the preconditioner's answer.  Returns ``None`` where it declines.
 
     Declines (the caller then solves densely) when no term can precondition, when GMRES does not
     reach :data:`RESIDUAL_RTOL` in :data:`MAX_RESTARTS` cycles, or when the substituted-back
@@ -188,10 +191,12 @@ def solve_stein(terms: Sequence[Term], rhs: Sequence[np.ndarray]) -> list[np.nda
 
     out = []
     with np.errstate(all="ignore"):
-        for W in rhs:
+        for k, W in enumerate(rhs):
             W = 0.5 * (W + W.T)
             b = W.ravel()
-            x = _gmres(op, pre, b, P(W).ravel(), RESIDUAL_RTOL * float(np.linalg.norm(b)))
+            x0 = starts[k] if starts is not None else None
+            x0 = P(W).ravel() if x0 is None else np.array(x0, float).ravel()
+            x = _gmres(op, pre, b, x0, RESIDUAL_RTOL * float(np.linalg.norm(b)))
             X = x.reshape(n, n)
             X = 0.5 * (X + X.T)
             if not np.all(np.isfinite(X)):
