@@ -305,7 +305,11 @@ def _expand(
     b, e, closures, later = b[ppc], e[ppc], closures[ppc], later[ppc]
     dims = d - rank[b, e]
     if affine is not None:
-        canonical = affine.lex_first_possible(closures, e)
+        # The size test first, and the lex-first test (a product with every map) only on the
+        # children to expand: a maximal child offered needlessly costs the collector one key.
+        canonical = found.alive_hulls(closures | later)
+        test = canonical & (dims > 1)
+        canonical[test] = affine.lex_first_possible(closures[test], e[test])
     elif one:
         # The closure adds slots after e only: the decided gaps stay, the last phase moves.
         last = space.size - 1 - np.argmax(closures[:, ::-1], axis=1)
