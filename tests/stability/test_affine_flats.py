@@ -154,3 +154,18 @@ def test_two_sensor_front_is_that_without_the_affine_walk(
     monkeypatch.setattr(proof, "AFFINE", False)
     slow = pareto.pareto_search(space, Budget(max_steps=10_000_000), Margins(space.tol))
     assert vectors(space, fast.maximal) == vectors(space, slow.maximal)
+
+
+@pytest.mark.parametrize("N0", [7, 42, 84, 100])
+def test_rotation_keys_are_equal_exactly_on_shift_orbits(N0: int) -> None:
+    """Against the sorted-tuple orbit key, on random masks and rotations of them (one and several 42-bit words)."""
+    from kfio.search._affine import _rotation_keys
+
+    rng = np.random.default_rng([SEED, N0])
+    base = rng.random((12, N0)) < 0.4
+    masks = np.concatenate([base, np.roll(base, 5, axis=1), np.roll(base[:, ::-1], 3, axis=1)])
+    space = SlotSpace(n_phases=N0, n_groups=1, rows=np.zeros((N0, 1, 1)), tol=1e-9)
+    keys = _rotation_keys(masks)
+    ref = [space.orbit_key_reference(m) for m in masks]
+    for i, j in itertools.combinations(range(len(masks)), 2):
+        assert (keys[i] == keys[j]) == (ref[i] == ref[j]), (i, j)
