@@ -27,6 +27,7 @@ from typing import Protocol
 import numpy as np
 
 from .._budget import Budget
+from ._affine import Affine
 from ._blind import Margins, SearchResult, SlotSpace, _chunks, root
 
 #: Most flats expanded in one batched step.
@@ -255,8 +256,14 @@ def _expand(
     K: np.ndarray,
     margins: Margins,
     found: Collector,
+    affine: Affine | None = None,
 ) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
-    """Expand a batch of flats sharing a kernel dimension; return the child batches to expand."""
+    """Expand a batch of flats sharing a kernel dimension; return the child batches to expand.
+
+    With ``affine`` (one group) the flats kept are those that may be
+    lex-first in their affine orbit (:mod:`kfio.search._affine`) instead of
+    gap-canonical.
+    """
     index = np.arange(space.size)
     d = K.shape[2]
     S, p, L = space.rows.shape
@@ -282,7 +289,9 @@ def _expand(
     early = found.alive_hulls(grown | later)
     b, e, grown, later = b[early], e[early], grown[early], later[early]
     one = space.n_groups == 1
-    if one:
+    if affine is not None:
+        early = affine.pairs_possible(Q, b, e)
+    elif one:
         early, gap = _gap_canonical_children(Q, b, e)
         gap = gap[early]
     else:
@@ -295,7 +304,13 @@ def _expand(
     ppc = ~(new & (index[None, :] < e[:, None])).any(axis=1)
     b, e, closures, later = b[ppc], e[ppc], closures[ppc], later[ppc]
     dims = d - rank[b, e]
-    if one:
+    if affine is not None:
+        # The size test first, and the lex-first test (a product with every map) only on the
+        # children to expand: a maximal child offered needlessly costs the collector one key.
+        canonical = found.alive_hulls(closures | later)
+        test = canonical & (dims > 1)
+        canonical[test] = affine.lex_first_possible(closures[test], e[test])
+    elif one:
         # The closure adds slots after e only: the decided gaps stay, the last phase moves.
         last = space.size - 1 - np.argmax(closures[:, ::-1], axis=1)
         canonical = gap[ppc] <= space.size - last
@@ -316,8 +331,20 @@ def _expand(
     return out
 
 
-def walk(space: SlotSpace, budget: Budget, margins: Margins, found: Collector, max_nodes: int | None = None) -> int:
+def walk(
+    space: SlotSpace,
+    budget: Budget,
+    margins: Margins,
+    found: Collector,
+    max_nodes: int | None = None,
+    affine: Affine | None = None,
+) -> int:
     """Batched closure extension over gap-canonical flats, offering maximal blind sets to ``found``.
+
+    With ``affine`` (one group whose matroid the maps of
+    :class:`~kfio.search._affine.Affine` preserve) the walk keeps the flats
+    that may be lex-first in their affine orbit instead: every orbit is
+    still met, by its lex-first flat.
 
     ``found.alive_hulls`` may prune subtrees (a branch and bound) from a
     superset of every flat below a child (its hull), asked before any
@@ -350,7 +377,7 @@ def walk(space: SlotSpace, budget: Budget, margins: Margins, found: Collector, m
         nodes += masks.shape[0]
         if max_nodes is not None and nodes > max_nodes:
             raise NodeCap(f"more than {max_nodes} flats")
-        stack.extend(_expand(space, masks, cores, K, margins, found))
+        stack.extend(_expand(space, masks, cores, K, margins, found, affine))
     return nodes
 
 

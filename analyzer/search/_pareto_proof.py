@@ -38,6 +38,7 @@ from typing import Protocol
 import numpy as np
 
 from .._budget import Budget
+from ._affine import Affine, unit_symmetries
 from ._blind import Flat, Margins, SlotSpace, expand, group_space, root
 from ._blind_batch import walk
 
@@ -72,26 +73,67 @@ class _BigFlats:
     rest of the walk.
     """
 
-    def __init__(self, space: SlotSpace, T: int, on_found: Callable[[FlatList], int | None] | None = None) -> None:
+    def __init__(
+        self,
+        space: SlotSpace,
+        T: int,
+        on_found: Callable[[FlatList], int | None] | None = None,
+        affine: Affine | None = None,
+        on_seed: Callable[[FlatList], int | None] | None = None,
+    ) -> None:
         self.space = space
+        self.on_seed = on_seed
         self.T = T
         self.found: FlatList = []
         self.pending: FlatList = []
         self.seen: set[bytes] = set()
         self.on_found = on_found
         self.nodes = 0
+        self.affine = affine
+        self.orbits: set[bytes] = set()  # with affine: shift-orbit keys listed
+        self.unrolled: FlatList = []  # with affine: flats found, not yet turned into shift orbits
 
     def _add(self, mask: np.ndarray, K: np.ndarray | None) -> None:
         key = mask.tobytes()
         if key in self.seen:
             return  # a maximal flat is visited with its kernel and then offered as a leaf
         self.seen.add(key)
+        if self.affine is not None:
+            self.unrolled.append((mask.copy(), K))
+            return
         self.found.append((mask.copy(), K))
         if self.on_found is not None:
             self.pending.append(self.found[-1])
 
+    def unroll(self) -> None:
+        """With ``affine``: list every shift orbit in the affine orbits of the flats found since the last call.
+
+        The unit multiples ``a^{-1} F`` of each flat, one per shift orbit
+        (:meth:`kfio.search._affine.Affine.rotation_orbits`); ``F`` itself
+        keeps its kernel, the others get theirs when they are checked.
+        """
+        if self.affine is None or not self.unrolled:
+            return
+        batch, self.unrolled = self.unrolled, []
+        for mask, i, u in self.affine.rotation_orbits([m for m, _ in batch], self.orbits):
+            self.found.append((mask, batch[i][1] if u == 0 else None))
+            if self.on_found is not None:
+                self.pending.append(self.found[-1])
+
     def flush(self) -> None:
-        """Hand the pending flats to ``on_found`` and raise ``T`` to its answer."""
+        """Hand the pending flats to ``on_found`` and raise ``T`` to its answer.
+
+        With ``affine``, ``on_seed`` first sees the flats found (one per
+        affine orbit; sizes and ranks are those of every flat of the orbit)
+        and may raise ``T``, so only the orbits of the flats of at least
+        ``T`` slots are unrolled.
+        """
+        if self.affine is not None and self.unrolled:
+            if self.on_seed is not None:
+                T = self.on_seed(self.unrolled)
+                self.T = max(self.T, self.space.size + 1 if T is None else T)
+            self.unrolled = [flat for flat in self.unrolled if flat[0].sum() >= self.T]
+        self.unroll()
         if self.on_found is None or not self.pending:
             return
         batch, self.pending = self.pending, []
@@ -295,6 +337,8 @@ def big_flats(
     budget: Budget,
     margins: Margins,
     on_found: Callable[[FlatList], int | None] | None = None,
+    affine: Affine | None = None,
+    on_seed: Callable[[FlatList], int | None] | None = None,
 ) -> tuple[FlatList, int]:
     """Every blind flat of a one-group space with at least ``T`` slots, one per shift orbit, and the least size kept.
 
@@ -304,9 +348,14 @@ def big_flats(
     maximal ones (``None``) get theirs when they are checked, most never are.
     With ``on_found`` (see :class:`_BigFlats`) the size ``T`` may rise during
     the walk: every flat of at least the returned size is listed.
+
+    With ``affine`` (maps that preserve the matroid of ``space``,
+    :func:`kfio.search._affine.unit_symmetries`) the walk lists one flat per
+    affine orbit, each then unrolled into one per shift orbit (after
+    ``on_seed``, see :meth:`_BigFlats.flush`).
     """
-    found = _BigFlats(space, T, on_found)
-    walk(space, budget, margins, found)
+    found = _BigFlats(space, T, on_found, affine, on_seed)
+    walk(space, budget, margins, found, affine=affine)
     found.flush()
     return found.found, found.T
 
@@ -657,10 +706,13 @@ class FrontProof:
         self.most = (n - int(front.lower[0]), n - int(front.lower[1]))
         self.groups = [group_space(space, g) for g in (0, 1)]
         self.shared = shared_matroid(self.groups[0], self.groups[1], margins)
+        self.affine = [_affine_of(g) for g in self.groups]
         self.walked: dict[int, tuple[int, FlatList]] = {}
         self.passed: dict[int, set[bytes]] = {0: set(), 1: set()}
         self.largest: list[dict[int, np.ndarray]] = [{}, {}]
         self.seeded: set[bytes] = set()
+        self.classes: list[dict[tuple[int, int], np.ndarray]] = [{}, {}]
+        self.tried: set[tuple[int, int, int, int]] = set()
         self.checked = 0
         self.passes: list[int] = []
 
@@ -701,8 +753,18 @@ class FrontProof:
             def on_found(batch: FlatList) -> int | None:
                 return self._on_found(source, batch)
 
+            def on_seed(batch: FlatList) -> int | None:
+                self._seed(source, sorted(batch, key=_largest_first))
+                return self.least(source)
+
             found, kept = big_flats(
-                self.groups[source], T if want is None else min(T, want), self.budget, self.margins, on_found
+                self.groups[source],
+                T if want is None else min(T, want),
+                self.budget,
+                self.margins,
+                on_found,
+                self.affine[source],
+                on_seed,
             )
             found.sort(key=_largest_first)
             self.walked[source] = (kept, found)
@@ -711,13 +773,21 @@ class FrontProof:
     def _on_found(self, source: int, batch: FlatList) -> int | None:
         """Check a batch as the walk finds it: a hit raises the front, and with it the size the walk needs."""
         batch = sorted(batch, key=_largest_first)
-        for g in self.served(source):
-            largest_by_rank(batch, self.space.n_columns, self.largest[g])
-        seed_generic(self.space, self.front, self.groups, self.largest, self.margins, self.seeded)
+        self._seed(source, batch)
         for g in self.served(source):
             if threshold(self.front, g, self.most) is not None:
                 self.checked += self._check(g, self.as_side(g, source, batch))
         return self.least(source)
+
+    def _seed(self, source: int, batch: FlatList) -> None:
+        """Keep the largest flat per rank of ``batch`` (largest first) and offer the generic front they give."""
+        for g in self.served(source):
+            largest_by_rank(batch, self.space.n_columns, self.largest[g])
+        seed_generic(self.space, self.front, self.groups, self.largest, self.margins, self.seeded)
+        if self.affine[source] is not None:
+            for g in self.served(source):
+                first_by_class(batch, self.space.n_columns, self.classes[g])
+            seed_meets(self.space, self.front, self.groups, self.classes, self.margins, self.tried)
 
     def _check(self, side: int, flats: FlatList) -> int:
         return _check(
@@ -731,6 +801,20 @@ class FrontProof:
             self.budget,
             self.margins,
         )
+
+
+#: Whether the front proof lists one group's big flats once per affine orbit when its matroid allows it.
+#: Off: the fronts are the same, but a hit of the proof may come from another flat first, so the set
+#: representing a front vector (shown in the answer) can differ from the rotation walk's.
+AFFINE = False
+
+
+def _affine_of(space: SlotSpace) -> Affine | None:
+    """The affine maps preserving the matroid of one group (:mod:`kfio.search._affine`), ``None``: rotations only."""
+    if not AFFINE:
+        return None
+    affine = Affine(space.n_phases, unit_symmetries(space))
+    return None if affine.trivial else affine
 
 
 def _largest_first(flat: tuple[np.ndarray, np.ndarray | None]) -> tuple[int, int]:
@@ -782,6 +866,63 @@ def seed_generic(
             continue  # the rank calls of the walk and of this factorization disagree: offer nothing
         u = K0 @ both[: K0.shape[1], 0]
         front.offer(maximal_zero_set(space, u / np.linalg.norm(u), margins)[None, :])
+
+
+def first_by_class(flats: FlatList, L: int, classes: dict[tuple[int, int], np.ndarray]) -> None:
+    """Keep in ``classes`` the first flat of each ``(rank, slots)`` (maximal flats, with no kernel given, have rank ``L - 1``)."""
+    for mask, K in flats:
+        key = (L - 1 if K is None else L - K.shape[1], int(mask.sum()))
+        if key not in classes:
+            classes[key] = mask
+
+
+#: Most pairs of flat classes :func:`seed_meets` intersects in one call.
+_MEETS = 4096
+
+
+def seed_meets(
+    space: SlotSpace,
+    front: Front,
+    groups: list[SlotSpace],
+    classes: list[dict[tuple[int, int], np.ndarray]],
+    margins: Margins,
+    tried: set[tuple[int, int, int, int]],
+) -> None:
+    """Offer the blind sets of flats ``F_0``, ``F_1`` (one per class of each group) whose kernels meet beyond ``front``.
+
+    Where ranks sum to less than ``L - 1`` the kernels meet only for
+    special rows, e.g. when both flats come from one block of a
+    block-diagonal plant (for ``Phi_3``, ``Phi_4``, ``Phi_7`` the words of
+    the ``Phi_7`` part alone give the front ``(12 i, 12 (5 - i))``).  A
+    common kernel vector ``u`` zeroes both flats, a real blind set that
+    raises the front early; the proof does not rely on it.  Pairs whose
+    counts the front already dominates are skipped, the largest first, at
+    most :data:`_MEETS` per call; pairs tried once are not tried again.
+    """
+    L = space.n_columns
+    counts = _blind_counts(front, 0)
+    pairs = sorted(
+        ((r0, s0, r1, s1) for (r0, s0) in classes[0] for (r1, s1) in classes[1] if (r0, s0, r1, s1) not in tried),
+        key=lambda p: -(p[1] + p[3]),
+    )
+    done = 0
+    for r0, s0, r1, s1 in pairs:
+        if done >= _MEETS:
+            break
+        if any(x >= s0 and y >= s1 for x, y in counts):
+            continue
+        tried.add((r0, s0, r1, s1))
+        done += 1
+        K0 = _kernel(groups[0].rows[classes[0][(r0, s0)]].reshape(-1, L), margins)
+        K1 = _kernel(groups[1].rows[classes[1][(r1, s1)]].reshape(-1, L), margins)
+        if K0.shape[1] + K1.shape[1] > L:
+            continue  # a generic meet: seed_generic offers those
+        both = _kernel(np.concatenate([K0, -K1], axis=1), margins)
+        if both.shape[1] == 0:
+            continue
+        u = K0 @ both[: K0.shape[1], 0]
+        front.offer(maximal_zero_set(space, u / np.linalg.norm(u), margins)[None, :])
+        counts = _blind_counts(front, 0)
 
 
 def shared_matroid(a: SlotSpace, b: SlotSpace, margins: Margins) -> np.ndarray | None:
