@@ -139,6 +139,8 @@ class StabilityLMI:
                     c.problem.solve(solver=SOLVER, warm_start=True, **LMI_SOLVER_OPTIONS)
             except cp.SolverError:
                 return LMISolution("solver_error", None, None, None)
+            finally:
+                c.problem._solver_cache = {}  # the Clarabel instance lives as long as this StabilityLMI only
             status = str(c.problem.status)
             if c.Y.value is None or c.t.value is None:
                 return LMISolution(status, None, None, None)
@@ -180,11 +182,16 @@ class _CompiledLMI:
 
 #: Compiled problems kept, one per shape ``(n, rows of each pattern)``, least recently used first.
 CACHE_SIZE = 8
+#: Largest ``n`` whose compiled problem is kept.  Above, compiling is a small part of the solves
+#: and the compiled program is large, so each :class:`StabilityLMI` compiles its own, as before.
+CACHED_MAX_N = 12
 _CACHE: OrderedDict[tuple[int, tuple[int, ...]], _CompiledLMI] = OrderedDict()
 _CACHE_LOCK = threading.Lock()
 
 
 def _compiled(n: int, pattern_rows: tuple[int, ...]) -> _CompiledLMI:
+    if n > CACHED_MAX_N:
+        return _CompiledLMI(n, pattern_rows)
     key = (n, pattern_rows)
     with _CACHE_LOCK:
         c = _CACHE.get(key)

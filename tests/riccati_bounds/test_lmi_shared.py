@@ -65,3 +65,10 @@ def test_cache_is_bounded() -> None:
     for n in range(1, _lmi.CACHE_SIZE + 3):
         StabilityLMI(n, (1,))
     assert len(_lmi._CACHE) == _lmi.CACHE_SIZE
+
+
+def test_large_problems_are_not_kept(monkeypatch) -> None:
+    monkeypatch.setattr(_lmi, "CACHED_MAX_N", 2)
+    _lmi._CACHE.clear()
+    a, b = StabilityLMI(3, (1,)), StabilityLMI(3, (1,))
+    assert a._compiled is not b._compiled and not _lmi._CACHE
