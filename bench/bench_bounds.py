@@ -28,6 +28,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from kfio.riccati_bounds import _lmi  # noqa: E402
 from kfio.riccati_bounds import _riccati as riccati  # noqa: E402
 from kfio.riccati_bounds._certificate import ExactPlant  # noqa: E402
 from kfio.riccati_bounds._compute import critical_lower_bound  # noqa: E402
@@ -57,6 +58,7 @@ class RebuildingSearch(CertifiedSearch):
     """The naive baseline: a new CVXPY problem (and compilation) for every LMI solve."""
 
     def certify_lmi(self, lambdas):
+        _lmi._CACHE.clear()  # the compiled problem is kept per shape otherwise
         self.lmi = StabilityLMI(self.A.shape[0], self.lmi.pattern_rows)
         return super().certify_lmi(lambdas)
 

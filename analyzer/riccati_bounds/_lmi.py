@@ -13,7 +13,9 @@ lets it update its data in place, it does not seed the iterates).
 
 from __future__ import annotations
 
+import threading
 import warnings
+from collections import OrderedDict
 from dataclasses import dataclass
 from typing import Sequence
 
@@ -93,7 +95,8 @@ class StabilityLMI:
 
     The products ``sqrt(pi(S)) A`` and ``sqrt(pi(S)) C_S`` are the parameters
     (in whatever coordinates the caller works), so the problem is DPP and
-    re-solving it only re-fills the solver's data.
+    re-solving it only re-fills the solver's data.  The compiled problem is shared by every
+    instance of the same shape (:class:`_CompiledLMI`); each instance keeps its own solver.
 
     Parameters
     ----------
@@ -106,29 +109,15 @@ class StabilityLMI:
     def __init__(self, n: int, pattern_rows: Sequence[int]) -> None:
         self.n = n
         self.pattern_rows = tuple(pattern_rows)
-        self._Y = cp.Variable((n, n), symmetric=True)
-        self._t = cp.Variable()
-        self._Z = [cp.Variable((n, p)) for p in self.pattern_rows]
-        self._MA = [cp.Parameter((n, n)) for _ in self.pattern_rows]
-        self._MC = [cp.Parameter((p, n)) for p in self.pattern_rows]
-        self._M0 = cp.Parameter((n, n))
-        Y = self._Y
-        top = [Y @ MA + Z @ MC for MA, MC, Z in zip(self._MA, self._MC, self._Z)] + [Y @ self._M0]
-        k = len(top)
-        zero = np.zeros((n, n))
-        rows = [[Y, *top]]
-        for i, B in enumerate(top):
-            rows.append([B.T] + [Y if j == i else zero for j in range(k)])
-        psi = cp.bmat(rows)
-        size = n * (k + 1)
-        self._problem = cp.Problem(
-            cp.Maximize(self._t),
-            [psi - self._t * np.eye(size) >> 0, Y << np.eye(n), self._t <= 1],
-        )
-        self.size = size
+        self._compiled = _compiled(n, self.pattern_rows)
+        self.size = self._compiled.size
+        # This instance's own Clarabel instance, kept between its solves (``warm_start``) and
+        # never seen by another instance of the same shape: the answers are those of a problem
+        # of its own, whatever else the process solved before or in between.
+        self._solver_cache: dict = {}
 
     def is_dpp(self) -> bool:
-        return bool(self._problem.is_dcp(dpp=True))  # type: ignore[call-arg]  # CVXPY's stub lacks dpp
+        return bool(self._compiled.problem.is_dcp(dpp=True))  # type: ignore[call-arg]  # CVXPY's stub lacks dpp
 
     def solve(self, A: np.ndarray, C_S: Sequence[np.ndarray], weights: Sequence[float]) -> LMISolution:
         """Solve at pattern probabilities ``weights`` (``weights[0] = pi(empty)``).
@@ -136,19 +125,79 @@ class StabilityLMI:
         ``A`` and ``C_S`` are in the caller's working coordinates; the
         returned ``Y``, ``Z`` are in the same coordinates.
         """
-        for MA, MC, w, C in zip(self._MA, self._MC, weights[1:], C_S):
-            s = np.sqrt(max(0.0, float(w)))
-            MA.value = s * A
-            MC.value = s * C
-        self._M0.value = np.sqrt(max(0.0, float(weights[0]))) * A
-        try:
-            with warnings.catch_warnings():  # "may be inaccurate": the status says so and the answer is re-checked
-                warnings.simplefilter("ignore", UserWarning)
-                self._problem.solve(solver=SOLVER, warm_start=True, **LMI_SOLVER_OPTIONS)
-        except cp.SolverError:
-            return LMISolution("solver_error", None, None, None)
-        status = str(self._problem.status)
-        if self._Y.value is None or self._t.value is None:
-            return LMISolution(status, None, None, None)
-        Y = 0.5 * (self._Y.value + self._Y.value.T)
-        return LMISolution(status, float(self._t.value), Y, tuple(np.array(Z.value) for Z in self._Z))
+        c = self._compiled
+        with c.lock:  # the parameters, the solve and the values read back belong to one caller
+            for MA, MC, w, C in zip(c.MA, c.MC, weights[1:], C_S):
+                s = np.sqrt(max(0.0, float(w)))
+                MA.value = s * A
+                MC.value = s * C
+            c.M0.value = np.sqrt(max(0.0, float(weights[0]))) * A
+            c.problem._solver_cache = self._solver_cache
+            try:
+                with warnings.catch_warnings():  # "may be inaccurate": the status says so and the answer is re-checked
+                    warnings.simplefilter("ignore", UserWarning)
+                    c.problem.solve(solver=SOLVER, warm_start=True, **LMI_SOLVER_OPTIONS)
+            except cp.SolverError:
+                return LMISolution("solver_error", None, None, None)
+            finally:
+                c.problem._solver_cache = {}  # the Clarabel instance lives as long as this StabilityLMI only
+            status = str(c.problem.status)
+            if c.Y.value is None or c.t.value is None:
+                return LMISolution(status, None, None, None)
+            Y = 0.5 * (c.Y.value + c.Y.value.T)
+            return LMISolution(status, float(c.t.value), Y, tuple(np.array(Z.value) for Z in c.Z))
+
+
+class _CompiledLMI:
+    """The CVXPY problem of :class:`StabilityLMI` for one shape, compiled on its first solve.
+
+    CVXPY keeps the compiled program (its parameters' map to the solver's data) in the problem,
+    so one problem per shape serves every request; compiling it was about 20 ms of a 2x2
+    ``bounds`` request.  The Clarabel instance that ``warm_start`` updates stays per
+    :class:`StabilityLMI` (its ``_solver_cache``), so sharing the compiled problem changes no
+    answer.
+    """
+
+    def __init__(self, n: int, pattern_rows: tuple[int, ...]) -> None:
+        self.Y = Y = cp.Variable((n, n), symmetric=True)
+        self.t = cp.Variable()
+        self.Z = [cp.Variable((n, p)) for p in pattern_rows]
+        self.MA = [cp.Parameter((n, n)) for _ in pattern_rows]
+        self.MC = [cp.Parameter((p, n)) for p in pattern_rows]
+        self.M0 = cp.Parameter((n, n))
+        top = [Y @ MA + Z @ MC for MA, MC, Z in zip(self.MA, self.MC, self.Z)] + [Y @ self.M0]
+        k = len(top)
+        zero = np.zeros((n, n))
+        rows = [[Y, *top]]
+        for i, B in enumerate(top):
+            rows.append([B.T] + [Y if j == i else zero for j in range(k)])
+        psi = cp.bmat(rows)
+        self.size = size = n * (k + 1)
+        self.problem = cp.Problem(
+            cp.Maximize(self.t),
+            [psi - self.t * np.eye(size) >> 0, Y << np.eye(n), self.t <= 1],
+        )
+        self.lock = threading.Lock()
+
+
+#: Compiled problems kept, one per shape ``(n, rows of each pattern)``, least recently used first.
+CACHE_SIZE = 8
+#: Largest ``n`` whose compiled problem is kept.  Above, compiling is a small part of the solves
+#: and the compiled program is large, so each :class:`StabilityLMI` compiles its own, as before.
+CACHED_MAX_N = 12
+_CACHE: OrderedDict[tuple[int, tuple[int, ...]], _CompiledLMI] = OrderedDict()
+_CACHE_LOCK = threading.Lock()
+
+
+def _compiled(n: int, pattern_rows: tuple[int, ...]) -> _CompiledLMI:
+    if n > CACHED_MAX_N:
+        return _CompiledLMI(n, pattern_rows)
+    key = (n, pattern_rows)
+    with _CACHE_LOCK:
+        c = _CACHE.get(key)
+        if c is None:
+            c = _CACHE[key] = _CompiledLMI(n, pattern_rows)
+            while len(_CACHE) > CACHE_SIZE:
+                _CACHE.popitem(last=False)
+        _CACHE.move_to_end(key)
+        return c

@@ -83,6 +83,7 @@ class BatchedMare:
         self._q = vech(0.5 * (Q + Q.T))
         self._r = R.ravel().copy()
         self._weights: dict[int, list[np.ndarray]] = {}
+        self._wq: dict[int, np.ndarray] = {}
 
     def correction(self, h: np.ndarray) -> np.ndarray:
         """``vech(A X C'(C X C' + R)^-1 C X A')`` for a batch ``h`` of ``vech(X)`` rows."""
@@ -116,7 +117,45 @@ class BatchedMare:
                 w = ws[-1]
                 ws.append(np.concatenate([w * (1.0 - self.lam), w * self.lam]))
             self._weights[N] = ws
+            self._wq[N] = ws[-1].sum() * self._q
         return ws
+
+    def _inner_correction(self, level: np.ndarray) -> np.ndarray:
+        """:meth:`correction` of a level that only feeds ``Phi_0 - correction`` (elementwise, exact).
+
+        With one output the two gathers are ``ndarray.take`` (cheaper than fancy indexing); the
+        products are the same floats, only their memory layout differs, which an elementwise
+        subtraction does not see.
+        """
+        if self.p != 1:
+            return self.correction(level)
+        G = level @ self._AXC
+        S = level @ self._CXC
+        S += self._r
+        np.sqrt(S, out=S)
+        G /= S
+        c = G.take(self._iu, 1)
+        c *= G.take(self._ju, 1)
+        return c
+
+    def _last_correction(self, level: np.ndarray) -> np.ndarray:
+        """:meth:`correction` of the last level, in the memory layout of fancy indexing.
+
+        The last level is summed by a GEMV, whose order of summation may depend on the layout,
+        so the products are laid out as ``G[:, iu] * G[:, ju]`` lays them out (column-major for
+        more than one row): gathered along the rows of ``G'`` and transposed back.
+        """
+        if self.p != 1 or level.shape[0] == 1:
+            return self.correction(level)
+        G = level @ self._AXC
+        S = level @ self._CXC
+        S += self._r
+        np.sqrt(S, out=S)
+        G /= S
+        Gt = G.T
+        c = Gt.take(self._iu, 0)
+        c *= Gt.take(self._ju, 0)
+        return c.T
 
     def _descend(self, level: np.ndarray, k: int, depth: int, ws: list[np.ndarray] | None, w=None) -> np.ndarray:
         """Weighted sum over the ``2^depth`` continuations of the batch ``level``.
@@ -125,6 +164,7 @@ class BatchedMare:
         chunk of a level, ``w`` (then ``ws`` is ``None``).
         """
         lam, m = self.lam, level.shape[1]
+        AXA, q, inner = self._AXA, self._q, self._inner_correction
         while depth > 1:
             b = level.shape[0]
             if b > 1 and b << (depth - 1) > 1 << CHUNK_LEVELS:
@@ -135,16 +175,19 @@ class BatchedMare:
                 )
             nxt = np.empty((2 * b, m))
             phi0 = nxt[:b]
-            np.matmul(level, self._AXA, out=phi0)
-            phi0 += self._q
-            np.subtract(phi0, self.correction(level), out=nxt[b:])
+            np.matmul(level, AXA, out=phi0)
+            phi0 += q
+            np.subtract(phi0, inner(level), out=nxt[b:])
             if ws is None:
                 w = np.concatenate([w * (1.0 - lam), w * lam])
             level, k, depth = nxt, k + 1, depth - 1
-        w = ws[k] if ws is not None else w
         # Last step: sum_i w_i [(1-lam) Phi_0(X_i) + lam Phi_1(X_i)]
         #          = (sum_i w_i X_i) A-congruence + (sum_i w_i) Q - lam sum_i w_i corr_i.
-        return (w @ level) @ self._AXA + w.sum() * self._q - lam * (w @ self.correction(level))
+        if ws is not None:  # the whole last level: (sum_i w_i) Q was formed with the weights
+            w, wq = ws[k], self._wq[len(ws)]
+        else:
+            wq = w.sum() * q
+        return (w @ level) @ AXA + wq - lam * (w @ self._last_correction(level))
 
 
 @dataclass(frozen=True)
@@ -217,10 +260,12 @@ def p_hat_sequence(
     max_iter: int = 20_000,
     max_iter_from_zero: int = 200,
     budget: Budget | None = None,
+    v_bar_known: tuple[np.ndarray | None] | None = None,
 ) -> dict[int, PHat]:
     """``P_hat_N`` for every ``N`` in ``horizons`` (plus the divisors used as warm starts).
 
-    ``P_hat_1 = V_bar`` (:func:`kfio.riccati_bounds._riccati.v_bar`).  For ``N > 1`` the
+    ``P_hat_1 = V_bar`` (:func:`kfio.riccati_bounds._riccati.v_bar`), or ``v_bar_known[0]`` when
+    the caller has already solved the same MARE (``None`` inside: it diverges).  For ``N > 1`` the
     iteration ``X_{k+1} = g_N(X_k)`` (Rohr, Marelli and Fu (2010), eq. 22) starts at
     ``P_hat_d`` for the largest proper divisor ``d`` of ``N``: since
     ``g_N <= g_d^{N/d}`` (Lemma 2, eq. 12), ``g_N(P_hat_d) <= P_hat_d`` and the
@@ -238,7 +283,7 @@ def p_hat_sequence(
         if N in out:
             return out[N]
         if N == 1:
-            V1 = v_bar(A, C, Q, R, lam)
+            V1 = v_bar(A, C, Q, R, lam) if v_bar_known is None else v_bar_known[0]
             out[1] = PHat(1, V1, 0, 0.0, 1, None if V1 is not None else "V_bar does not exist (the MARE diverges)")
             return out[1]
         d = _largest_proper_divisor(N)

@@ -87,3 +87,29 @@ def test_fixed_points_keep_their_iterates(monkeypatch) -> None:
         assert (a.iterations, a.last_step, a.start, a.reason) == (b.iterations, b.last_step, b.start, b.reason)
         assert a.matrix is not None and np.array_equal(a.matrix, b.matrix)
     assert new[8].iterations > 1
+
+
+@pytest.mark.parametrize("n", range(1, 6))
+def test_g_n_keeps_every_bit_on_random_plants(n: int) -> None:
+    """The level loop with ``take`` gathers and the cached ``(sum w) Q``, against the old recursion."""
+    rng = np.random.default_rng(100 + n)
+    for trial in range(8):
+        p = 1 + trial % 2 if n > 1 else 1
+        A, C, Q, R = random_plant(rng, n, p)
+        op = BatchedMare(A, C, Q, R, rng.uniform(0.3, 0.97))
+        M = rng.normal(size=(n, n))
+        h = vech(M @ M.T + rng.uniform(0.1, 10.0) * np.eye(n))
+        for N in (1, 2, 3, 4, 6, 9):
+            assert np.array_equal(op.g_n(h, N), reference_descend(op, h[None, :], np.ones(1), N))
+
+
+def test_last_correction_has_the_layout_and_floats_of_fancy_indexing() -> None:
+    """The last level's products are laid out as ``G[:, iu] * G[:, ju]`` lays them out, since a GEMV sums them."""
+    rng = np.random.default_rng(11)
+    A, C, Q, R = random_plant(rng, 4, 1)
+    op = BatchedMare(A, C, Q, R, 0.6)
+    for b in (1, 2, 5, 64):
+        level = np.array([vech(M @ M.T + np.eye(4)) for M in rng.normal(size=(b, 4, 4))])
+        old, new = reference_correction(op, level), op._last_correction(level)
+        assert np.array_equal(old, new) and old.strides == new.strides
+        assert np.array_equal(op._inner_correction(level), old)
