@@ -153,6 +153,7 @@ class Front:
         when ``Q`` plus any chain and the short slots misses a vector the
         front dominates or equals.
         """
+        from ._chains import longest_chain  # local: _chains imports _pareto_proof
         from ._pareto_proof import parallel_chains, pivot_projections  # local: _pareto_proof imports Front's protocol
 
         C = masks.shape[0]
@@ -165,10 +166,19 @@ class Front:
         masks, later, kernels, need = masks[rows], later[rows], kernels[rows], need[rows]
         W = np.matmul(self.space.rows[None, :, 0, :], kernels)
         if kernels.shape[2] == 2:
-            alive[rows] = self._alive_chains(masks, *parallel_chains(W, later, self.space.tol))
+            # A chain escapes only with ``need`` slots: the largest chain first (:mod:`kfio.search._chains`).
+            best, short = longest_chain(W, later, self.space.tol)
+            sub = np.flatnonzero(best + short >= need)
+            if sub.size:
+                alive[rows[sub]] = self._alive_chains(masks[sub], *parallel_chains(W[sub], later[sub], self.space.tol))
             return alive
         for c, _, V, members in pivot_projections(W, later, need):
-            live = self._alive_chains(masks[c], *parallel_chains(V, members, 3 * self.space.tol))
+            best, short = longest_chain(V, members, 3 * self.space.tol)
+            sub = np.flatnonzero(best + short >= need[c])
+            if sub.size == 0:
+                continue
+            c = c[sub]
+            live = self._alive_chains(masks[c], *parallel_chains(V[sub], members[sub], 3 * self.space.tol))
             alive[rows[c[live]]] = True
         return alive
 
