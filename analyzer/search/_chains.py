@@ -73,3 +73,57 @@ def longest_chain(W: np.ndarray, rows: np.ndarray, tol: float) -> tuple[np.ndarr
         sizes[joined, 0] += sizes[joined, last_chain[joined]]
         best[rows_close] = sizes.max(axis=1)
     return np.asarray(best), np.count_nonzero(short, axis=1)
+
+
+def plane_candidates(W: np.ndarray, rows: np.ndarray, need: np.ndarray, tol: float) -> np.ndarray:
+    """Batch rows (three-dimensional ``W``) for which some pivot of :func:`~kfio.search._pareto_proof.pivot_projections` passes :func:`longest_chain`.
+
+    The pivots and members are those of ``pivot_projections(W, rows,
+    need)``: pivot ``p`` among the ``k - need + 1`` longest rows, members
+    the rows no longer than ``p`` (ties by position).  Sorted by length
+    (longest first, stable), the members of the pivot of rank ``r`` are the
+    ranks ``r .. k - 1``: the rows are gathered in that order, and the
+    pivots of :data:`_RANK_BLOCK` consecutive ranks are projected together
+    over the ranks from the block's first on, where the pairs of
+    ``pivot_projections`` span every slot.  The projection is that of
+    ``pivot_projections`` (the same plane coordinates); a batch row is
+    returned when some pivot leaves a chain (with ``3 tol``) that, with the
+    short rows, holds ``need`` rows.  The others cannot escape: no set of
+    ``need`` rows below lies near a plane.
+    """
+    C, n, _ = W.shape
+    size = np.where(rows, np.linalg.norm(W, axis=2), -1.0)
+    order = np.argsort(-size, axis=1, kind="stable")
+    k = rows.sum(axis=1)
+    width = int(k.max(initial=0))
+    Ws = np.take_along_axis(W, order[:, :width, None], axis=1)
+    ss = np.take_along_axis(size, order[:, :width], axis=1)
+    ranks = np.maximum(k - np.maximum(need, 1) + 1, 0)
+    pivot = (np.arange(width)[None, :] < ranks[:, None]) & (ss > 0)
+    found = np.zeros(C, dtype=bool)
+    cs, rs = np.nonzero(pivot)
+    block = rs // _RANK_BLOCK
+    for b in np.unique(block):
+        r0 = int(b) * _RANK_BLOCK
+        sel = np.flatnonzero(block == b)
+        for start in range(0, sel.size, _PAIRS):
+            part = sel[start : start + _PAIRS]
+            c, r = cs[part], rs[part]
+            u = Ws[c, r] / ss[c, r][:, None]
+            a = np.where(np.abs(u[:, :1]) < 0.9, np.array([[1.0, 0.0, 0.0]]), np.array([[0.0, 1.0, 0.0]]))
+            e1 = a - (a * u).sum(axis=1)[:, None] * u
+            e1 /= np.linalg.norm(e1, axis=1)[:, None]
+            e2 = np.cross(u, e1)
+            V = Ws[c, r0:] @ np.stack([e1, e2], axis=2)
+            col = np.arange(r0, width)[None, :]
+            members = (col >= r[:, None]) & (col < k[c, None])
+            best, short = longest_chain(V, members, tol)
+            found[c[best + short >= need[c]]] = True
+    return found
+
+
+#: Consecutive length ranks of pivots projected together by :func:`plane_candidates`.
+_RANK_BLOCK = 6
+
+#: Most ``(flat, pivot)`` pairs of :func:`plane_candidates` in one piece.
+_PAIRS = 1 << 12

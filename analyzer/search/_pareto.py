@@ -153,7 +153,7 @@ class Front:
         when ``Q`` plus any chain and the short slots misses a vector the
         front dominates or equals.
         """
-        from ._chains import longest_chain  # local: _chains imports _pareto_proof
+        from ._chains import longest_chain, plane_candidates  # local: _chains imports _pareto_proof
         from ._pareto_proof import parallel_chains, pivot_projections  # local: _pareto_proof imports Front's protocol
 
         C = masks.shape[0]
@@ -172,6 +172,9 @@ class Front:
             if sub.size:
                 alive[rows[sub]] = self._alive_chains(masks[sub], *parallel_chains(W[sub], later[sub], self.space.tol))
             return alive
+        # Most flats no pivot can save: one projection per length rank over its members only.
+        sub = np.flatnonzero(plane_candidates(W, later, need, 3 * self.space.tol))
+        rows, masks, later, W, need = rows[sub], masks[sub], later[sub], W[sub], need[sub]
         for c, _, V, members in pivot_projections(W, later, need):
             best, short = longest_chain(V, members, 3 * self.space.tol)
             sub = np.flatnonzero(best + short >= need[c])

@@ -54,3 +54,43 @@ def test_rows_in_general_position_are_single_chains() -> None:
     assert (short == 0).all()
     assert (best >= _labelled_count(W, rows, 1e-12)).all()
     assert (best == 1).mean() > 0.9, "random directions rarely fall within the gap threshold"
+
+
+def _pivot_reference(W: np.ndarray, rows: np.ndarray, need: np.ndarray, tol: float) -> np.ndarray:
+    """Batch rows where some pivot of ``pivot_projections`` leaves a chain of ``need`` rows (the walk's test before)."""
+    found = np.zeros(W.shape[0], dtype=bool)
+    for c, _, V, members in proof.pivot_projections(W, rows, need):
+        best, short = longest_chain(V, members, tol)
+        found[c[best + short >= need[c]]] = True
+    return found
+
+
+def test_plane_candidates_keep_every_flat_a_pivot_keeps_and_every_planted_plane() -> None:
+    rng = np.random.default_rng([SEED, 7])
+    tol = 1e-9
+    for _ in range(20):
+        C, n = 80, 16
+        W = rng.normal(size=(C, n, 3)) * rng.uniform(0.2, 3.0, size=(C, n, 1))
+        planted = np.zeros((C, n), dtype=bool)
+        for c in range(C):
+            if rng.random() < 0.5:
+                normal = rng.normal(size=3)
+                normal /= np.linalg.norm(normal)
+                on = rng.choice(n, size=int(rng.integers(3, 8)), replace=False)
+                W[c, on] -= (W[c, on] @ normal)[:, None] * normal[None, :]
+                W[c, on] += rng.uniform(-0.9, 0.9, size=(on.size, 1)) * tol * normal[None, :]
+                planted[c, on] = True
+        rows = rng.random((C, n)) < 0.9
+        rows |= planted
+        need = rng.integers(2, 8, size=C)
+        got = _plane_candidates(W, rows, need, 3 * tol)
+        want = _pivot_reference(W, rows, need, 3 * tol)
+        assert not (want & ~got).any(), "a flat a pivot keeps is kept"
+        assert got[planted.sum(axis=1) >= need].all(), "a plane of need rows is kept"
+        assert not got[~planted.any(axis=1) & (need >= 5)].any(), "rows in general position hold no plane of five"
+
+
+def _plane_candidates(W: np.ndarray, rows: np.ndarray, need: np.ndarray, tol: float) -> np.ndarray:
+    from kfio.search._chains import plane_candidates
+
+    return plane_candidates(W, rows, need, tol)
