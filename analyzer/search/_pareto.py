@@ -151,7 +151,11 @@ class Front:
         docstring gives the argument) they are parallel within ``3 tol``.  The
         subtree is cut
         when ``Q`` plus any chain and the short slots misses a vector the
-        front dominates or equals.
+        front dominates or equals.  First, a flat whose largest chain plus
+        short slots holds fewer than ``need`` slots is cut at once
+        (:func:`kfio.search._chains.longest_chain`, and per pivot rank
+        :func:`kfio.search._chains.plane_candidates`): the same flats are
+        cut, before any chain is labelled.
         """
         from ._chains import longest_chain, plane_candidates  # local: _chains imports _pareto_proof
         from ._pareto_proof import parallel_chains, pivot_projections  # local: _pareto_proof imports Front's protocol
