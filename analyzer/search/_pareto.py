@@ -151,8 +151,13 @@ class Front:
         docstring gives the argument) they are parallel within ``3 tol``.  The
         subtree is cut
         when ``Q`` plus any chain and the short slots misses a vector the
-        front dominates or equals.
+        front dominates or equals.  First, a flat whose largest chain plus
+        short slots holds fewer than ``need`` slots is cut at once
+        (:func:`kfio.search._chains.longest_chain`, and per pivot rank
+        :func:`kfio.search._chains.plane_candidates`): the same flats are
+        cut, before any chain is labelled.
         """
+        from ._chains import longest_chain, plane_candidates  # local: _chains imports _pareto_proof
         from ._pareto_proof import parallel_chains, pivot_projections  # local: _pareto_proof imports Front's protocol
 
         C = masks.shape[0]
@@ -165,10 +170,22 @@ class Front:
         masks, later, kernels, need = masks[rows], later[rows], kernels[rows], need[rows]
         W = np.matmul(self.space.rows[None, :, 0, :], kernels)
         if kernels.shape[2] == 2:
-            alive[rows] = self._alive_chains(masks, *parallel_chains(W, later, self.space.tol))
+            # A chain escapes only with ``need`` slots: the largest chain first (:mod:`kfio.search._chains`).
+            best, short = longest_chain(W, later, self.space.tol)
+            sub = np.flatnonzero(best + short >= need)
+            if sub.size:
+                alive[rows[sub]] = self._alive_chains(masks[sub], *parallel_chains(W[sub], later[sub], self.space.tol))
             return alive
+        # Most flats no pivot can save: one projection per length rank over its members only.
+        sub = np.flatnonzero(plane_candidates(W, later, need, 3 * self.space.tol))
+        rows, masks, later, W, need = rows[sub], masks[sub], later[sub], W[sub], need[sub]
         for c, _, V, members in pivot_projections(W, later, need):
-            live = self._alive_chains(masks[c], *parallel_chains(V, members, 3 * self.space.tol))
+            best, short = longest_chain(V, members, 3 * self.space.tol)
+            sub = np.flatnonzero(best + short >= need[c])
+            if sub.size == 0:
+                continue
+            c = c[sub]
+            live = self._alive_chains(masks[c], *parallel_chains(V[sub], members[sub], 3 * self.space.tol))
             alive[rows[c[live]]] = True
         return alive
 
