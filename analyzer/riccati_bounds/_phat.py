@@ -87,16 +87,24 @@ class BatchedMare:
 
     def correction(self, h: np.ndarray) -> np.ndarray:
         """``vech(A X C'(C X C' + R)^-1 C X A')`` for a batch ``h`` of ``vech(X)`` rows."""
+        if self.p == 1:
+            G = self._one_output_gain(h)
+            return G[:, self._iu] * G[:, self._ju]
         AXC = h @ self._AXC
         S = h @ self._CXC
         S += self._r
-        if self.p == 1:
-            np.sqrt(S, out=S)
-            AXC /= S  # in place: the same quotients, the same layout
-            return AXC[:, self._iu] * AXC[:, self._ju]
         L = np.linalg.cholesky(S.reshape(-1, self.p, self.p))
         G = np.linalg.solve(L, AXC.reshape(-1, self.n, self.p).transpose(0, 2, 1))
         return np.einsum("bki,bki->bi", G[:, :, self._iu], G[:, :, self._ju])
+
+    def _one_output_gain(self, h: np.ndarray) -> np.ndarray:
+        """With one output: the rows ``vec(A X C') / sqrt(C X C' + R)`` for a batch ``h`` of ``vech(X)`` (divided in place)."""
+        G = h @ self._AXC
+        S = h @ self._CXC
+        S += self._r
+        np.sqrt(S, out=S)
+        G /= S
+        return G
 
     def g_n(self, h: np.ndarray, N: int) -> np.ndarray:
         """``vech(g_N(X))`` for one ``h = vech(X)`` (Rohr, Marelli and Fu (2010), eq. 11)."""
@@ -129,11 +137,7 @@ class BatchedMare:
         """
         if self.p != 1:
             return self.correction(level)
-        G = level @ self._AXC
-        S = level @ self._CXC
-        S += self._r
-        np.sqrt(S, out=S)
-        G /= S
+        G = self._one_output_gain(level)
         c = G.take(self._iu, 1)
         c *= G.take(self._ju, 1)
         return c
@@ -147,11 +151,7 @@ class BatchedMare:
         """
         if self.p != 1 or level.shape[0] == 1:
             return self.correction(level)
-        G = level @ self._AXC
-        S = level @ self._CXC
-        S += self._r
-        np.sqrt(S, out=S)
-        G /= S
+        G = self._one_output_gain(level)
         Gt = G.T
         c = Gt.take(self._iu, 0)
         c *= Gt.take(self._ju, 0)

@@ -82,22 +82,31 @@ def v_bar_sdp(model: ArrivalModel) -> SDPSolution:
     return SDPSolution(status, V, solve_time)
 
 
-def v_bar_sdp_fresh(model: ArrivalModel) -> SDPSolution:
-    """:func:`v_bar_sdp` with a new CVXPY problem built from constant matrices.
+def lmi_blocks(model: ArrivalModel, V: np.ndarray | cp.Expression) -> list[list]:
+    """The blocks of the constraint matrix of :func:`v_bar_sdp` at ``V``, row by row.
 
-    The route above :data:`COMPILED_MAX_N` states, and the reference of the tests.
+    ``[[A V A' + Q - V, sqrt(pi_1) A V C_1', ...], [sqrt(pi_1) C_1 V A', C_1 V C_1' + R_1, 0, ...], ...]``
+    (Sinopoli et al. (2004) Theorem 6(b), one block row per packet as in Liu and Goldsmith
+    (2004), eq. 21).  ``V`` may be a NumPy array (``np.block`` of the result is the matrix) or a
+    CVXPY variable (``cp.bmat``).
     """
     A, Q = model.A, model.Q
-    n = model.n
-    V = cp.Variable((n, n), symmetric=True)
     active = model.active()
-    top = [A @ V @ A.T + Q - V] + [np.sqrt(w) * A @ V @ C.T for w, C, _ in active]
-    rows = [top]
+    rows = [[A @ V @ A.T + Q - V] + [np.sqrt(w) * A @ V @ C.T for w, C, _ in active]]
     for i, (w, C, R) in enumerate(active):
         row = [np.sqrt(w) * C @ V @ A.T]
         for j, (_, Cj, _) in enumerate(active):
             row.append(C @ V @ C.T + R if i == j else np.zeros((C.shape[0], Cj.shape[0])))
         rows.append(row)
-    gamma = cp.bmat(rows)
+    return rows
+
+
+def v_bar_sdp_fresh(model: ArrivalModel) -> SDPSolution:
+    """:func:`v_bar_sdp` with a new CVXPY problem built from constant matrices.
+
+    The route above :data:`COMPILED_MAX_N` states, and the reference of the tests.
+    """
+    V = cp.Variable((model.n, model.n), symmetric=True)
+    gamma = cp.bmat(lmi_blocks(model, V))
     problem = cp.Problem(cp.Maximize(cp.trace(V)), [0.5 * (gamma + gamma.T) >> 0, V >> 0])
     return _solve(problem, V, warm_start=False)

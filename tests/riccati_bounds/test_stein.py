@@ -18,13 +18,7 @@ from kfio.riccati_bounds._riccati import closed_loop_operator, gains, solve_v_ba
 from kfio.riccati_bounds._stein import DENSE_MAX_N, apply, solve_near, solve_stein
 from kfio.riccati_bounds._vech import congruence_matrix, unvech, vech
 
-
-def dense(terms, W):
-    n = W.shape[0]
-    L = np.eye(n * (n + 1) // 2)
-    for w, M in terms:
-        L -= w * congruence_matrix(M)
-    return unvech(np.linalg.solve(L, vech(W)), n)
+from support.stein_dense import dense
 
 
 def case(seed: int, n: int, rows: list[int]):

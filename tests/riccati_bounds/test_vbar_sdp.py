@@ -8,7 +8,7 @@ import pytest
 
 from kfio.riccati_bounds import _riccati as riccati
 from kfio.riccati_bounds import _vbar_conic, _vbar_sdp
-from kfio.riccati_bounds._vbar_sdp import v_bar_sdp, v_bar_sdp_fresh
+from kfio.riccati_bounds._vbar_sdp import lmi_blocks, v_bar_sdp, v_bar_sdp_fresh
 
 THREE_A = np.array([[1.25, 1, 0], [0, 0.9, 7], [0, 0, 0.6]])
 THREE_C = np.array([[1.0, 0, 2]])
@@ -41,16 +41,7 @@ def svec(M: np.ndarray) -> np.ndarray:
 
 def gamma(model: riccati.ArrivalModel, V: np.ndarray) -> np.ndarray:
     """The LMI matrix of Sinopoli et al. (2004) Theorem 6(b) at ``V``, block by block."""
-    A, Q = model.A, model.Q
-    active = model.active()
-    top = [A @ V @ A.T + Q - V] + [np.sqrt(w) * A @ V @ C.T for w, C, _ in active]
-    rows = [top]
-    for i, (w, C, R) in enumerate(active):
-        row = [np.sqrt(w) * C @ V @ A.T]
-        for j, (_, Cj, _) in enumerate(active):
-            row.append(C @ V @ C.T + R if i == j else np.zeros((C.shape[0], Cj.shape[0])))
-        rows.append(row)
-    return np.block(rows)
+    return np.block(lmi_blocks(model, V))
 
 
 @pytest.mark.parametrize("seed", range(5))

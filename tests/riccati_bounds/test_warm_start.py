@@ -14,15 +14,9 @@ from kfio.riccati_bounds import _riccati
 from kfio.riccati_bounds._gains import normalized_model
 from kfio.riccati_bounds._riccati import gains, policy_evaluation, solve_v_bar
 from kfio.riccati_bounds._stein import solve_stein
-from kfio.riccati_bounds._vech import congruence_matrix, unvech, vech
+from kfio.riccati_bounds._vech import congruence_matrix, vech
 
-
-def dense(terms, W):
-    n = W.shape[0]
-    L = np.eye(n * (n + 1) // 2)
-    for w, M in terms:
-        L -= w * congruence_matrix(M)
-    return unvech(np.linalg.solve(L, vech(W)), n)
+from support.stein_dense import dense
 
 
 def model(seed: int, n: int, lam: float):
