@@ -24,6 +24,16 @@ def vech_layout(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return iu, ju, dup
 
 
+@lru_cache(maxsize=64)
+def _congruence_layout(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The column gathers of :func:`congruence_matrix` (``k n + l``, ``l n + k``) and its diagonal columns."""
+    iu, ju, _ = vech_layout(n)
+    out = (iu * n + ju, ju * n + iu, np.flatnonzero(iu == ju))
+    for a in out:
+        a.setflags(write=False)
+    return out
+
+
 def congruence_matrix(M: np.ndarray) -> np.ndarray:
     r"""The matrix ``T`` with ``vech(M X M') = T vech(X)`` for symmetric ``X``.
 
@@ -49,11 +59,12 @@ def congruence_matrix(M: np.ndarray) -> np.ndarray:
     M = np.asarray(M, float)
     n = M.shape[0]
     iu, ju, _ = vech_layout(n)
+    upper, lower, diagonal = _congruence_layout(n)
     P, Q = M[iu], M[ju]  # rows M_i. and M_j. for every p = (i, j)
     W = (P[:, :, None] * Q[:, None, :]).reshape(len(iu), n * n)  # W[p, k n + l] = M_ik M_jl
-    T = W[:, iu * n + ju]
-    T += W[:, ju * n + iu]
-    T[:, iu == ju] *= 0.5  # k = l: both terms are M_ik M_jk, and halving 2ab is exact
+    T = W[:, upper]
+    T += W[:, lower]
+    T[:, diagonal] *= 0.5  # k = l: both terms are M_ik M_jk, and halving 2ab is exact
     return T
 
 

@@ -41,3 +41,32 @@ def test_float_weights_on_bisection_points():
         for lambdas in ([c], [Fraction(c), other], [other, c]):
             assert float_pattern_weights(lambdas) == _old(lambdas)
         a, b = (a, c) if c > 0.3 else (c, b)
+
+
+def test_congruence_matrix_and_residual_unchanged_bit_for_bit():
+    """The cached gathers give the old ``T``; the unscaled residual is the scaled one's ``M``."""
+    import numpy as np
+
+    from kfio.riccati_bounds._certificate import _float_residual
+    from kfio.riccati_bounds._riccati import ArrivalModel
+    from kfio.riccati_bounds._vech import congruence_matrix, vech_layout
+
+    rng = np.random.default_rng(7)
+    for n in range(1, 7):
+        iu, ju, _ = vech_layout(n)
+        for _ in range(10):
+            M = rng.standard_normal((n, n))
+            P, Q = M[iu], M[ju]
+            W = (P[:, :, None] * Q[:, None, :]).reshape(len(iu), n * n)
+            old = W[:, iu * n + ju]
+            old += W[:, ju * n + iu]
+            old[:, iu == ju] *= 0.5
+            assert np.array_equal(congruence_matrix(M), old)
+            C = (rng.standard_normal((1, n)),)
+            K = (rng.standard_normal((n, 1)),)
+            model = ArrivalModel(M, np.zeros((n, n)), C, (np.zeros((1, 1)),), (0.3, 0.7))
+            B = rng.standard_normal((n, n))
+            X = B @ B.T
+            full, scale = _float_residual(model, K, X)
+            bare, nan = _float_residual(model, K, X, scaled=False)
+            assert np.array_equal(full, bare) and scale > 0 and nan != nan
