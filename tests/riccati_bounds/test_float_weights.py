@@ -52,7 +52,7 @@ def test_congruence_matrix_and_residual_unchanged_bit_for_bit():
     from kfio.riccati_bounds._vech import congruence_matrix, vech_layout
 
     rng = np.random.default_rng(7)
-    for n in range(1, 7):
+    for n in (1, 2, 3, 4, 5, 6, 8, 9):
         iu, ju, _ = vech_layout(n)
         for _ in range(10):
             M = rng.standard_normal((n, n))
@@ -62,6 +62,7 @@ def test_congruence_matrix_and_residual_unchanged_bit_for_bit():
             old += W[:, ju * n + iu]
             old[:, iu == ju] *= 0.5
             assert np.array_equal(congruence_matrix(M), old)
+            assert np.array_equal(congruence_matrix(M.T), congruence_matrix(M.T.copy()))
             C = (rng.standard_normal((1, n)),)
             K = (rng.standard_normal((n, 1)),)
             model = ArrivalModel(M, np.zeros((n, n)), C, (np.zeros((1, 1)),), (0.3, 0.7))
