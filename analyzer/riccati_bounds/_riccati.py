@@ -22,6 +22,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
+from fractions import Fraction
 from typing import Any, Sequence
 
 import numpy as np
@@ -49,6 +50,32 @@ def pattern_weights(lambdas: Sequence[Any]) -> list[Any]:
     return [
         math.prod((lam if mask >> s & 1 else 1 - lam for s, lam in enumerate(lambdas)), start=1)
         for mask in range(1 << len(lambdas))
+    ]
+
+
+def float_pattern_weights(lambdas: Sequence[Any]) -> list[float]:
+    """``[float(w) for w in pattern_weights([Fraction(x) for x in lambdas])]``, in integers.
+
+    Each probability is ``lambda_s = a_s / b_s`` exactly (a float's ``as_integer_ratio`` or a
+    fraction's numerator and denominator), so ``pi(S) = prod_s c_s / prod_s b_s`` with
+    ``c_s = a_s`` if packet ``s`` arrives and ``b_s - a_s`` if not.  Python's integer division
+    ``N / D`` is correctly rounded, as is :class:`fractions.Fraction`'s ``float`` (which divides
+    the reduced numerator by the reduced denominator: the same rational), so every float is the
+    one of the exact weight, bit for bit, without the gcds of the fraction arithmetic.
+
+    Examples
+    --------
+    >>> float_pattern_weights([0.5, Fraction(1, 3)])
+    [0.3333333333333333, 0.3333333333333333, 0.16666666666666666, 0.16666666666666666]
+    """
+    ratios = [
+        (x.numerator, x.denominator) if isinstance(x, (Fraction, int)) else Fraction(x).as_integer_ratio()
+        for x in lambdas
+    ]
+    den = math.prod(b for _, b in ratios)
+    return [
+        math.prod((a if mask >> s & 1 else b - a for s, (a, b) in enumerate(ratios)), start=1) / den
+        for mask in range(1 << len(ratios))
     ]
 
 

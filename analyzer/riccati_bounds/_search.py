@@ -36,7 +36,8 @@ from ._certificate import ExactPlant, StabilityCertificate, certify
 from ._gains import annihilating_gains, normalized_model, policy_gains
 from ._lmi import StabilityLMI, balancing_scaling
 from ._perron import estimate_crossing
-from ._riccati import ArrivalModel, gains, pattern_weights, solve_v_bar, subset_rows
+from ._riccati import ArrivalModel, float_pattern_weights, gains, pattern_weights, solve_v_bar, subset_rows
+from ._small_linalg import cholesky_succeeds, solve_finite
 from ._stein import DENSE_MAX_N, solve_near
 from ._vech import congruence_matrix, unvech, vech
 
@@ -167,7 +168,7 @@ class CertifiedSearch:
 
     @staticmethod
     def _float_weights(lambdas: Sequence[Fraction]) -> list[float]:
-        return [float(w) for w in pattern_weights([Fraction(x) for x in lambdas])]
+        return float_pattern_weights(lambdas)  # the floats of the exact weights, in integer arithmetic
 
     def _working_model(self, lambdas: Sequence[Fraction]) -> ArrivalModel:
         T, Ti = self._T0, self._T0i
@@ -329,8 +330,9 @@ class CertifiedSearch:
                         factor = scipy.linalg.lu_factor(L, check_finite=False)
                         y = scipy.linalg.lu_solve(factor, rhs, check_finite=False)
                         near[:] = [factor, y]
-                    else:
-                        y = np.linalg.solve(L, rhs)
+                    else:  # LAPACK's gesv and potrf without NumPy's per-call checks: the same floats and decisions
+                        y = solve_finite(L, rhs)
+                        return y is not None and cholesky_succeeds(unvech(y, n))
                 except (np.linalg.LinAlgError, ValueError):
                     return False
             try:

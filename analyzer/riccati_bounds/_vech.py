@@ -24,6 +24,36 @@ def vech_layout(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return iu, ju, dup
 
 
+@lru_cache(maxsize=64)
+def _congruence_layout(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The column gathers of :func:`congruence_matrix` (``k n + l``, ``l n + k``) and its diagonal columns."""
+    iu, ju, _ = vech_layout(n)
+    out = (iu * n + ju, ju * n + iu, np.flatnonzero(iu == ju))
+    for a in out:
+        a.setflags(write=False)
+    return out
+
+
+#: Up to this many states :func:`congruence_matrix` gathers from ``N x N`` index arrays kept per size
+#: (``4 N^2`` integers); above, from the ``N x n^2`` products (the arrays would outgrow them).
+SMALL_CONGRUENCE_N = 8
+
+
+@lru_cache(maxsize=16)
+def _small_congruence_layout(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Flat indices into ``M`` for :func:`congruence_matrix`, and its column factors (``1/2`` where ``k = l``).
+
+    For ``p = (i, j)`` and ``q = (k, l)``: ``M_ik``, ``M_jl``, ``M_il``, ``M_jk`` as ``(N, N)`` index arrays.
+    """
+    iu, ju, _ = vech_layout(n)
+    i, j = iu[:, None], ju[:, None]
+    k, m = iu[None, :], ju[None, :]  # q = (k, m): the column
+    out = (i * n + k, j * n + m, i * n + m, j * n + k, np.where(iu == ju, 0.5, 1.0))
+    for a in out:
+        a.setflags(write=False)
+    return out
+
+
 def congruence_matrix(M: np.ndarray) -> np.ndarray:
     r"""The matrix ``T`` with ``vech(M X M') = T vech(X)`` for symmetric ``X``.
 
@@ -35,9 +65,10 @@ def congruence_matrix(M: np.ndarray) -> np.ndarray:
         T_{pq} = M_{ik} M_{jl} + M_{il} M_{jk} \ (k < l), \qquad T_{pq} = M_{ik} M_{jk} \ (k = l),
 
     since ``(M X M')_ij = sum_{k,l} M_ik X_kl M_jl`` and ``X_kl = X_lk``.
-    Formed from the ``N x n^2`` products ``M_ik M_jl`` (``N = n(n+1)/2``) by two
-    column gathers, with no ``n^2 x n^2`` Kronecker product: ``O(n^4)`` work
-    instead of ``O(n^6)``, and the same floating-point sums entry by entry.
+    Formed from the ``N x n^2`` products ``M_ik M_jl`` (``N = n(n+1)/2``) by two column
+    gathers (up to :data:`SMALL_CONGRUENCE_N` states, from two ``N x N`` products gathered
+    directly), with no ``n^2 x n^2`` Kronecker product: ``O(n^4)`` work instead of
+    ``O(n^6)``, and the same floating-point sums entry by entry.
 
     Examples
     --------
@@ -48,12 +79,20 @@ def congruence_matrix(M: np.ndarray) -> np.ndarray:
     """
     M = np.asarray(M, float)
     n = M.shape[0]
+    if n <= SMALL_CONGRUENCE_N:  # the same products and sums as below, in fewer NumPy calls
+        ik, jl, il, jk, halves = _small_congruence_layout(n)
+        m = M.ravel()
+        T = m.take(ik) * m.take(jl)  # the products M_ik M_jl and M_il M_jk, summed in that order
+        T += m.take(il) * m.take(jk)
+        T *= halves  # k = l: both terms are M_ik M_jk, and halving 2ab is exact (elsewhere times 1, exact too)
+        return T
     iu, ju, _ = vech_layout(n)
+    upper, lower, diagonal = _congruence_layout(n)
     P, Q = M[iu], M[ju]  # rows M_i. and M_j. for every p = (i, j)
     W = (P[:, :, None] * Q[:, None, :]).reshape(len(iu), n * n)  # W[p, k n + l] = M_ik M_jl
-    T = W[:, iu * n + ju]
-    T += W[:, ju * n + iu]
-    T[:, iu == ju] *= 0.5  # k = l: both terms are M_ik M_jk, and halving 2ab is exact
+    T = W[:, upper]
+    T += W[:, lower]
+    T[:, diagonal] *= 0.5
     return T
 
 
