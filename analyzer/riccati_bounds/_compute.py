@@ -30,17 +30,7 @@ from ._filtered import filtered_bounds, filtered_mean
 from ._options import BoundsOptions, parse_bounds_options
 from ._phat import PHat, p_hat_sequence
 from ._report import BoundsReport, CovarianceBounds, CriticalInterval, PHatBounds, RegionMap
-from ._riccati import (
-    ArrivalModel,
-    VBarIteration,
-    arrival_model,
-    lyapunov_residual,
-    one_packet_model,
-    s_bar,
-    solve_v_bar,
-    spectral_radius,
-    subset_rows,
-)
+from ._riccati import ArrivalModel, arrival_model, lyapunov_residual, s_bar, solve_v_bar, spectral_radius, subset_rows
 from ._search import CertifiedSearch
 from ._targets import parse_trace_target, smallest_arrival_for_trace
 from ._vbar_sdp import SDPSolution, v_bar_sdp
@@ -139,33 +129,18 @@ def _covariance(model: ArrivalModel, budget: Budget, opts: BoundsOptions) -> Cov
     return CovarianceBounds(S, res, it, v_bar_sdp(model), None, filtered)
 
 
-def _same_model(a: ArrivalModel, b: ArrivalModel) -> bool:
-    """The two models hold the same floats, so :func:`solve_v_bar` gives both the same ``V_bar``."""
-    return (
-        a.weights == b.weights
-        and len(a.C_S) == len(b.C_S)
-        and all(np.array_equal(x, y) for x, y in zip((a.A, a.Q, *a.C_S, *a.R_S), (b.A, b.Q, *b.C_S, *b.R_S)))
-    )
-
-
-def _p_hat(
-    A, C, Q, R, lam: float, horizon: int, budget: Budget, solved: tuple[ArrivalModel, VBarIteration] | None = None
-) -> PHatBounds:
+def _p_hat(A, C, Q, R, lam: float, horizon: int, budget: Budget) -> PHatBounds:
     """Rohr, Marelli and Fu (2010)'s ``P_hat_N`` for ``N = 1, 2, 4, ...`` and ``horizon``.
 
-    ``P_hat_1 = V_bar``: when ``solved`` (a model and its :func:`solve_v_bar`) holds the MARE of
-    the same floats, its ``V_bar`` is taken instead of solving it again (the same function on the
-    same floats, so the same matrix).
+    ``P_hat_1 = V_bar``: :func:`solve_v_bar` remembers the covariance part's answer for the same
+    floats, so the MARE is solved once per request.
     """
     wanted = sorted({1 << k for k in range(horizon.bit_length()) if 1 << k <= horizon} | {horizon})
     if (1.0 - lam) * spectral_radius(A) ** 2 >= 1.0:
         # P_hat_N >= lim E[P_t] >= S_bar = infinity (Rohr, Marelli and Fu (2010) Theorem 1, Sinopoli et al. (2004) Theorem 3): no need to iterate.
         why = "(1 - lambda) rho(A)^2 >= 1: E[P_t] diverges, and P_hat_N >= lim E[P_t]"
         return PHatBounds(horizon, tuple(PHat(N, None, 0, None, 0, why) for N in wanted))
-    known = None
-    if solved is not None and _same_model(solved[0], one_packet_model(A, C, Q, R, lam)):
-        known = (solved[1].matrix,)
-    seq = p_hat_sequence(A, C, Q, R, lam, wanted, budget=budget, v_bar_known=known)
+    seq = p_hat_sequence(A, C, Q, R, lam, wanted, budget=budget)
     model = ArrivalModel(A, Q, (C,), (R,), (1.0 - lam, lam))
     entries = tuple(seq[N] for N in wanted)
     filtered = tuple(None if e.matrix is None else filtered_mean(model, e.matrix) for e in entries)
@@ -249,8 +224,7 @@ def compute_bounds(
     p_hat = None
     if one and opts.horizon is not None:
         rows = list(opts.packets[0].rows)
-        solved = (model, covariance.v_bar)
-        p_hat = _p_hat(A, C[rows, :], Q, R[np.ix_(rows, rows)], float(lams[0]), opts.horizon, budget, solved)
+        p_hat = _p_hat(A, C[rows, :], Q, R[np.ix_(rows, rows)], float(lams[0]), opts.horizon, budget)
     region = _region(search, opts, rho, request, budget) if opts.grid is not None else None
     target = parse_trace_target(request)
     if target is not None and not one:

@@ -260,12 +260,10 @@ def p_hat_sequence(
     max_iter: int = 20_000,
     max_iter_from_zero: int = 200,
     budget: Budget | None = None,
-    v_bar_known: tuple[np.ndarray | None] | None = None,
 ) -> dict[int, PHat]:
     """``P_hat_N`` for every ``N`` in ``horizons`` (plus the divisors used as warm starts).
 
-    ``P_hat_1 = V_bar`` (:func:`kfio.riccati_bounds._riccati.v_bar`), or ``v_bar_known[0]`` when
-    the caller has already solved the same MARE (``None`` inside: it diverges).  For ``N > 1`` the
+    ``P_hat_1 = V_bar`` (:func:`kfio.riccati_bounds._riccati.v_bar`).  For ``N > 1`` the
     iteration ``X_{k+1} = g_N(X_k)`` (Rohr, Marelli and Fu (2010), eq. 22) starts at
     ``P_hat_d`` for the largest proper divisor ``d`` of ``N``: since
     ``g_N <= g_d^{N/d}`` (Lemma 2, eq. 12), ``g_N(P_hat_d) <= P_hat_d`` and the
@@ -283,7 +281,7 @@ def p_hat_sequence(
         if N in out:
             return out[N]
         if N == 1:
-            V1 = v_bar(A, C, Q, R, lam) if v_bar_known is None else v_bar_known[0]
+            V1 = v_bar(A, C, Q, R, lam)
             out[1] = PHat(1, V1, 0, 0.0, 1, None if V1 is not None else "V_bar does not exist (the MARE diverges)")
             return out[1]
         d = _largest_proper_divisor(N)

@@ -1,9 +1,9 @@
-"""A ``bounds`` request solves the MARE once: ``P_hat_1`` is the covariance part's ``V_bar`` when the floats agree.
+"""A ``bounds`` request solves the MARE once: ``P_hat_1`` is the covariance part's ``V_bar``.
 
-``P_hat_1 = V_bar`` (Rohr, Marelli and Fu (2010), Theorem 1).  The covariance bounds already solve
-the MARE of Sinopoli et al. (2004) for the request's packet, so the ``P_hat`` sequence takes that
-matrix instead of solving the same MARE again.  The report must be the same, bit for bit, as when
-the sequence solves it itself.
+``P_hat_1 = V_bar`` (Rohr, Marelli and Fu (2010), Theorem 1).  The covariance bounds solve the
+MARE of Sinopoli et al. (2004) for the request's packet; :func:`solve_v_bar` remembers that
+answer for the same floats, so the ``P_hat`` sequence does not solve it again.  The report must be
+the same, bit for bit, as when nothing is remembered.
 """
 
 from __future__ import annotations
@@ -15,10 +15,17 @@ import numpy as np
 import pytest
 
 from kfio import load_request
-from kfio.riccati_bounds import _compute
+from kfio.riccati_bounds import _compute, _riccati
 from kfio.riccati_bounds._riccati import arrival_model, one_packet_model
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
+
+
+class Forgetful(dict):
+    """A cache that keeps nothing: every :func:`solve_v_bar` call solves."""
+
+    def __setitem__(self, key, value) -> None:
+        pass
 
 
 def report_json(text: str) -> str:
@@ -26,30 +33,32 @@ def report_json(text: str) -> str:
 
 
 @pytest.mark.parametrize("name", ["bounds_seed004_3x3.json", "bounds_seed004_scalar.json"])
-def test_reused_v_bar_gives_the_same_report(name: str, monkeypatch) -> None:
+def test_the_mare_is_solved_once_and_the_report_is_the_same(name: str, monkeypatch) -> None:
     text = (EXAMPLES / name).read_text()
-    calls = []
-    real = _compute.p_hat_sequence
+    solved = []
+    real = _riccati._solve_v_bar
 
-    def spy(*args, **kwargs):
-        calls.append(kwargs.get("v_bar_known"))
-        return real(*args, **kwargs)
+    def spy(model, *args):
+        solved.append(_riccati._model_key(model))
+        return real(model, *args)
 
-    monkeypatch.setattr(_compute, "p_hat_sequence", spy)
-    reused = report_json(text)
-    assert calls and calls[-1] is not None  # the covariance part's V_bar was taken
-    monkeypatch.setattr(_compute, "_same_model", lambda a, b: False)
+    monkeypatch.setattr(_riccati, "_solve_v_bar", spy)
+    monkeypatch.setattr(_riccati, "_V_BAR_CACHE", {})
+    remembered = report_json(text)
+    assert solved and len(solved) == len(set(solved))  # no model solved twice in one request
+    solved.clear()
+    monkeypatch.setattr(_riccati, "_V_BAR_CACHE", Forgetful())
     solved_again = report_json(text)
-    assert calls[-1] is None
-    assert reused == solved_again
+    assert len(solved) > len(set(solved))  # the covariance part's MARE solved again for P_hat_1
+    assert remembered == solved_again
 
 
-def test_same_model_tells_different_floats_apart() -> None:
+def test_the_remembered_answer_tells_different_floats_apart() -> None:
     A = np.array([[1.25, 1.0], [0.0, 0.9]])
     C = np.array([[1.0, 0.0], [0.0, 1.0]])
     Q, R = np.eye(2), np.eye(2)
-    model = arrival_model(A, C, Q, R, [[0, 1]], [0.4])
-    assert _compute._same_model(model, one_packet_model(A, C, Q, R, 0.4))
-    assert not _compute._same_model(model, one_packet_model(A, C, Q, R, 0.5))
-    assert not _compute._same_model(model, one_packet_model(A, C[::-1], Q, R, 0.4))  # rows in another order
-    assert not _compute._same_model(model, one_packet_model(A, C[:1], Q, R[:1, :1], 0.4))
+    key = _riccati._model_key(arrival_model(A, C, Q, R, [[0, 1]], [0.4]))
+    assert key == _riccati._model_key(one_packet_model(A, C, Q, R, 0.4))
+    assert key != _riccati._model_key(one_packet_model(A, C, Q, R, 0.5))
+    assert key != _riccati._model_key(one_packet_model(A, C[::-1], Q, R, 0.4))  # rows in another order
+    assert key != _riccati._model_key(one_packet_model(A, C[:1], Q, R[:1, :1], 0.4))
