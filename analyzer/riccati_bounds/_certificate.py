@@ -99,12 +99,13 @@ def lyapunov_certificate(
     exactly, whatever solved for ``X``.
     """
     n = model.n
-    if n > DENSE_MAX_N and near:
-        h = solve_near(closed_loop_terms(model, K), near[0], vech(np.eye(n)), near[1])
-        if h is not None:
-            return unvech(h, n)
     if n > DENSE_MAX_N:
-        sol = solve_stein(closed_loop_terms(model, K), [np.eye(n)])
+        terms = closed_loop_terms(model, K)
+        if near:
+            h = solve_near(terms, near[0], vech(np.eye(n)), near[1])
+            if h is not None:
+                return unvech(h, n)
+        sol = solve_stein(terms, [np.eye(n)])
         if sol is not None:
             return sol[0]
     M = np.eye(n * (n + 1) // 2) - closed_loop_operator(model, K)

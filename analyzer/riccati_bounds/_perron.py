@@ -36,6 +36,8 @@ from typing import Callable, Sequence
 import numpy as np
 import scipy.sparse.linalg
 
+from ._stein import apply
+
 #: ARPACK's relative accuracy for the Ritz value, and its Krylov dimension.
 EIGS_TOL, EIGS_NCV = 1e-10, 20
 #: The secant method stops when its step or its bracket is below this.
@@ -55,7 +57,6 @@ class PerronRadius:
 
     def __init__(self, matrices: Sequence[np.ndarray]) -> None:
         self.M = [np.asarray(M, float) for M in matrices]
-        self.Mt = [M.T.copy() for M in self.M]
         self.n = self.M[0].shape[0]
         self.v = np.eye(self.n).ravel()  # a positive definite start: it has a component along the Perron vector
         self.evaluations = 0
@@ -64,21 +65,17 @@ class PerronRadius:
         """The spectral radius at ``weights``; raises ``ArithmeticError`` when it cannot be trusted."""
         self.evaluations += 1
         n = self.n
-        active = [(float(w), M, Mt) for w, M, Mt in zip(weights, self.M, self.Mt) if w > 0]
+        active = [(float(w), M) for w, M in zip(weights, self.M) if w > 0]
         if not active:
             return 0.0
         if len(active) == 1:  # one congruence: its eigenvalues are w theta_i theta_j, so rho = w rho(M)^2
             return active[0][0] * float(np.max(np.abs(np.linalg.eigvals(active[0][1])))) ** 2
         if n * n <= DENSE_DIM:
-            L = sum(w * np.kron(M, M) for w, M, _ in active)
+            L = sum(w * np.kron(M, M) for w, M in active)
             return float(np.max(np.abs(np.linalg.eigvals(L))))
 
         def matvec(h: np.ndarray) -> np.ndarray:
-            X = h.reshape(n, n)
-            out = active[0][0] * (active[0][1] @ X @ active[0][2])
-            for w, M, Mt in active[1:]:
-                out += w * (M @ X @ Mt)
-            return out.ravel()
+            return apply(active, h.reshape(n, n)).ravel()
 
         op = scipy.sparse.linalg.LinearOperator((n * n, n * n), matvec=matvec, dtype=float)
         # from I (positive definite: it has a positive component <U, I> along the Perron left eigenvector U),
@@ -104,7 +101,7 @@ class PerronRadius:
     def rayleigh(self, weights: Sequence[float]) -> float:
         """``<V, L(V)> / <V, V>`` for the last Perron vector ``V`` and any real ``weights``: a derivative's guess."""
         V = self.v.reshape(self.n, self.n)
-        LV = sum(float(w) * (M @ V @ Mt) for w, M, Mt in zip(weights, self.M, self.Mt) if w != 0)
+        LV = apply([(float(w), M) for w, M in zip(weights, self.M) if w != 0], V)
         return float(np.sum(V * LV) / np.sum(V * V))
 
 
