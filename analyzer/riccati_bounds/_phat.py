@@ -25,6 +25,7 @@ import numpy as np
 
 from .._budget import Budget
 from ..errors import InvalidInput, NumericalFailure
+from . import _small_linalg
 from ._riccati import DIVERGENCE_RATIO, v_bar
 from ._vech import congruence_matrix, unvech, vech, vech_layout
 
@@ -93,8 +94,8 @@ class BatchedMare:
         AXC = h @ self._AXC
         S = h @ self._CXC
         S += self._r
-        L = np.linalg.cholesky(S.reshape(-1, self.p, self.p))
-        G = np.linalg.solve(L, AXC.reshape(-1, self.n, self.p).transpose(0, 2, 1))
+        L = _small_linalg.cholesky(S.reshape(-1, self.p, self.p))
+        G = _small_linalg.solve(L, AXC.reshape(-1, self.n, self.p).transpose(0, 2, 1))
         return np.einsum("bki,bki->bi", G[:, :, self._iu], G[:, :, self._ju])
 
     def _one_output_gain(self, h: np.ndarray) -> np.ndarray:

@@ -8,6 +8,14 @@ calls the same LAPACK kernels (NumPy's ``_umath_linalg`` gufuncs, the ones those
 directly: the same floats, the same decisions.  A failed factorization fills its output with
 NaN, which is how failure is read here.  Where the private module is missing, the public
 functions are used.
+
+:func:`cholesky` and :func:`solve` serve the batched gain of ``P_hat_N`` with two or more outputs
+(:class:`kfio.riccati_bounds._phat.BatchedMare`): NumPy's answer on every input, the kernel's
+floats where it succeeds, and the public function itself (its floats or its ``LinAlgError``)
+wherever a NaN shows up.  They skip the ``errstate`` context of the functions above (a third of
+a call's cost): a failing kernel raises the invalid-value flag, so outside an ``errstate`` that
+ignores it a ``RuntimeWarning`` comes before the public function's ``LinAlgError``.  ``P_hat_N``
+iterates inside such a context.
 """
 
 from __future__ import annotations
@@ -18,6 +26,7 @@ try:  # the kernels behind numpy.linalg.solve and numpy.linalg.cholesky
     from numpy.linalg import _umath_linalg as _kernels
 
     _solve1 = _kernels.solve1
+    _solve = _kernels.solve
     _cholesky_lo = _kernels.cholesky_lo
     _DIRECT = True
 except (ImportError, AttributeError):  # pragma: no cover - another NumPy layout
@@ -56,3 +65,30 @@ def cholesky_succeeds(M: np.ndarray) -> bool:
     with np.errstate(all="ignore"):
         F = _cholesky_lo(M, signature="d->d")
     return not np.isnan(F).any()
+
+
+def cholesky(M: np.ndarray) -> np.ndarray:
+    """``numpy.linalg.cholesky(M)`` for a float64 stack ``M`` (``... x p x p``), the same floats and errors.
+
+    The kernel's factor where it holds no NaN (a failed factorization is all NaN, and a successful
+    one of a matrix without NaN has none: each entry below the diagonal enters a later pivot);
+    otherwise the public function decides, raising ``LinAlgError`` as it does.
+    """
+    if _DIRECT:
+        F = _cholesky_lo(M, signature="d->d")
+        if not np.isnan(F).any():
+            return np.asarray(F)
+    return np.linalg.cholesky(M)
+
+
+def solve(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``numpy.linalg.solve(a, b)`` for float64 stacks ``a`` (``... x p x p``) and ``b`` (``... x p x k``): same floats and errors.
+
+    The kernel's answer (LAPACK ``gesv``, the gufunc NumPy calls for a matrix right-hand side) where
+    it holds no NaN; otherwise the public function's answer or its ``LinAlgError``.
+    """
+    if _DIRECT:
+        y = _solve(a, b, signature="dd->d")
+        if not np.isnan(y).any():
+            return np.asarray(y)
+    return np.linalg.solve(a, b)

@@ -57,3 +57,46 @@ def test_cholesky_succeeds_is_numpy_cholesky():
             assert cholesky_succeeds(M) == old
             decided.add(old)
     assert decided == {True, False}
+
+
+def _numpy_or_error(f, *args):
+    try:
+        return f(*args)
+    except np.linalg.LinAlgError as e:
+        return type(e)
+
+
+def test_stacked_cholesky_and_solve_are_numpy_bit_for_bit():
+    """The batched gain of ``P_hat_N`` (two or more outputs): the same floats, and the same ``LinAlgError``."""
+    from kfio.riccati_bounds import _small_linalg
+
+    rng = np.random.default_rng(12)
+    with np.errstate(all="ignore"):
+        for p in (1, 2, 3, 5):
+            for k in range(60):
+                B = rng.standard_normal((1 + k % 9, p, p))
+                S = B @ B.transpose(0, 2, 1) + (1e-17 if k % 4 == 0 else 1.0) * np.eye(p)
+                if k % 6 == 1:
+                    S[-1] = -S[-1]  # not positive definite: LinAlgError
+                if k % 6 == 2:
+                    S[0, 0, 0] = np.nan
+                if k % 6 == 3:
+                    S[0, -1, -1] = np.inf  # an infinite factor without NaN, or a failure
+                if k % 6 == 4:
+                    S *= 1e300
+                new = _numpy_or_error(_small_linalg.cholesky, S)
+                old = _numpy_or_error(np.linalg.cholesky, S)
+                if isinstance(old, type):
+                    assert new is old
+                    continue
+                assert np.array_equal(new, old, equal_nan=True)
+                rhs = rng.standard_normal((S.shape[0], p, 3))
+                L = old.copy()
+                if k % 5 == 0 and p > 1:
+                    L[0, -1] = 0.0  # exactly singular: LinAlgError
+                new_y = _numpy_or_error(_small_linalg.solve, L, rhs)
+                old_y = _numpy_or_error(np.linalg.solve, L, rhs)
+                if isinstance(old_y, type):
+                    assert new_y is old_y
+                else:
+                    assert np.array_equal(new_y, old_y, equal_nan=True)
