@@ -54,6 +54,10 @@ class Front(Protocol):
         """Add maximal blind sets whose miss vectors the front does not dominate or equal."""
         ...  # pragma: no cover - protocol
 
+    def copy(self) -> Front:
+        """A front with the same vectors and sets, which later offers to either do not share."""
+        ...  # pragma: no cover - protocol
+
 
 #: Most ``(k - 1)``-subsets of the other group's rows (``C(n, k - 1)``) for which
 #: :func:`_hyperplanes` answers; beyond it the closure search over the projected rows does.
@@ -700,13 +704,21 @@ class FrontProof:
     does not suffice.)
     """
 
-    def __init__(self, space: SlotSpace, front: Front, budget: Budget, margins: Margins) -> None:
+    def __init__(
+        self, space: SlotSpace, front: Front, budget: Budget, margins: Margins, affine: bool | None = None
+    ) -> None:
         self.space, self.front, self.budget, self.margins = space, front, budget, margins
         n = space.n_phases
         self.most = (n - int(front.lower[0]), n - int(front.lower[1]))
         self.groups = [group_space(space, g) for g in (0, 1)]
         self.shared = shared_matroid(self.groups[0], self.groups[1], margins)
-        self.affine = [_affine_of(g) for g in self.groups]
+        self.affine = [_affine_of(g, affine) for g in self.groups]
+        # The completeness certificate (:meth:`_certify`): hand-overs of the walk so far, the one
+        # at which the front last changed, and the final front's vectors once a certificate knows them.
+        self.handovers = 0
+        self.changed_at = 0
+        self.target: set[tuple[int, ...]] | None = None
+        self.certified = False
         self.walked: dict[int, tuple[int, FlatList]] = {}
         self.passed: dict[int, set[bytes]] = {0: set(), 1: set()}
         self.largest: list[dict[int, np.ndarray]] = [{}, {}]
@@ -717,16 +729,59 @@ class FrontProof:
         self.passes: list[int] = []
 
     def run(self) -> int:
-        """Pass over both sides until a pass leaves the front unchanged; returns the flats checked."""
-        while True:
-            start = self.front.vectors.copy()
-            for side in (0, 1):
-                T = threshold(self.front, side, self.most)
-                if T is not None:
-                    self.checked += self._check(side, self.flats(side, T))
-            self.passes.append(len(self.front.vectors))
-            if np.array_equal(start, self.front.vectors):
-                return self.checked
+        """Pass over both sides until a pass leaves the front unchanged; returns the flats checked.
+
+        Returns early, with the same front and the same representative
+        sets, once the front holds the final front's vectors, known from a
+        certificate (:meth:`_certify`).
+        """
+        try:
+            while True:
+                start = self.front.vectors.copy()
+                for side in (0, 1):
+                    T = threshold(self.front, side, self.most)
+                    if T is not None:
+                        self.checked += self._check(side, self.flats(side, T))
+                        self._stop_if_final()
+                self.passes.append(len(self.front.vectors))
+                if np.array_equal(start, self.front.vectors):
+                    return self.checked
+        except _Complete:
+            return self.checked
+
+    def _stop_if_final(self) -> None:
+        """Raise :class:`_Complete` when the front's vectors are the final front's (known from a certificate)."""
+        if self.target is not None and _vector_set(self.front) == self.target:
+            raise _Complete
+
+    def _certify(self) -> None:
+        """Learn the final front's vectors from a second proof over a copy of the front, with the affine walk.
+
+        Which vectors the front ends with does not depend on the order in
+        which the proof meets its hits, only which set represents each
+        does (:meth:`kfio.search._pareto.Front.offer` keeps the first set
+        offered with a vector).  A proof over a copy of the front that
+        lists one sensor's big flats once per affine orbit
+        (:mod:`kfio.search._affine`: the same flats, met up to
+        ``phi(N0)`` times sooner) therefore ends with the final vectors,
+        whatever it offers to its copy.  Once this proof's own front holds
+        exactly those vectors, every maximal blind set's vector is
+        dominated by or equal to one of them, so no later offer changes
+        the front or a representative set: the proof may stop there
+        (:meth:`_stop_if_final`), with the answer it would have reached at
+        its end.  Tried once, when the walk has gone on for as many
+        hand-overs again as it took to the last change of the front (and
+        at least :data:`_CERTIFY_AFTER`), and only when every group walked
+        has non-trivial affine maps.
+        """
+        self.certified = True
+        walked = [self.groups[0]] if self.shared is not None else self.groups
+        if any(_affine_of(g, True) is None for g in walked):
+            return
+        copy = self.front.copy()
+        self.checked += FrontProof(self.space, copy, self.budget, self.margins, affine=True).run()
+        self.target = _vector_set(copy)
+        self._stop_if_final()
 
     def served(self, source: int) -> tuple[int, ...]:
         """The groups whose flats the walk over ``source`` lists."""
@@ -773,10 +828,22 @@ class FrontProof:
     def _on_found(self, source: int, batch: FlatList) -> int | None:
         """Check a batch as the walk finds it: a hit raises the front, and with it the size the walk needs."""
         batch = sorted(batch, key=_largest_first)
+        before = self.front.vectors
         self._seed(source, batch)
         for g in self.served(source):
             if threshold(self.front, g, self.most) is not None:
                 self.checked += self._check(g, self.as_side(g, source, batch))
+        self.handovers += 1
+        if self.front.vectors is not before:  # Front.offer replaces the array when the front changes
+            self.changed_at = self.handovers
+        self._stop_if_final()
+        if (
+            CERTIFY
+            and not self.certified
+            and self.affine[source] is None
+            and self.handovers >= max(_CERTIFY_AFTER, 2 * self.changed_at)
+        ):
+            self._certify()
         return self.least(source)
 
     def _seed(self, source: int, batch: FlatList) -> None:
@@ -809,9 +876,30 @@ class FrontProof:
 AFFINE = False
 
 
-def _affine_of(space: SlotSpace) -> Affine | None:
-    """The affine maps preserving the matroid of one group (:mod:`kfio.search._affine`), ``None``: rotations only."""
-    if not AFFINE:
+#: Whether the front proof, after a long walk with no change of the front, learns the final front's vectors
+#: from a proof with the affine walk over a copy of the front and stops once it holds them
+#: (:meth:`FrontProof._certify`): the same answer, representative sets included.
+CERTIFY = True
+
+#: Fewest hand-overs of the walk (:data:`_ONLINE_NODES` flats asked each) before a certificate is tried.
+_CERTIFY_AFTER = 16
+
+
+class _Complete(Exception):
+    """The front holds the final front's vectors: no later offer can change it."""
+
+
+def _vector_set(front: Front) -> set[tuple[int, ...]]:
+    """The front's vectors, as a set of tuples."""
+    return {tuple(int(x) for x in v) for v in front.vectors}
+
+
+def _affine_of(space: SlotSpace, affine: bool | None = None) -> Affine | None:
+    """The affine maps preserving the matroid of one group (:mod:`kfio.search._affine`), ``None``: rotations only.
+
+    ``affine``: ``None`` follows :data:`AFFINE`; ``True`` or ``False`` decides.
+    """
+    if not (AFFINE if affine is None else affine):
         return None
     affine = Affine(space.n_phases, unit_symmetries(space))
     return None if affine.trivial else affine
