@@ -841,7 +841,7 @@ class FrontProof:
             CERTIFY
             and not self.certified
             and self.affine[source] is None
-            and self.handovers >= max(_CERTIFY_AFTER, 2 * self.changed_at)
+            and self.handovers >= max(_CERTIFY_AFTER, _CERTIFY_FACTOR * self.changed_at)
         ):
             self._certify()
         return self.least(source)
@@ -883,6 +883,10 @@ CERTIFY = True
 
 #: Fewest hand-overs of the walk (:data:`_ONLINE_NODES` flats asked each) before a certificate is tried.
 _CERTIFY_AFTER = 16
+
+#: A certificate is tried once the walk has made this many times the hand-overs it made up to the
+#: last change of the front (a certificate tried too early costs a proof at low thresholds).
+_CERTIFY_FACTOR = 2
 
 
 class _Complete(Exception):
