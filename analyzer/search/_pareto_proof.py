@@ -905,8 +905,8 @@ def _affine_of(space: SlotSpace, affine: bool | None = None) -> Affine | None:
     """
     if not (AFFINE if affine is None else affine):
         return None
-    affine = Affine(space.n_phases, unit_symmetries(space))
-    return None if affine.trivial else affine
+    maps = Affine(space.n_phases, unit_symmetries(space))
+    return None if maps.trivial else maps
 
 
 def _largest_first(flat: tuple[np.ndarray, np.ndarray | None]) -> tuple[int, int]:
