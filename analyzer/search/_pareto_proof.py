@@ -882,7 +882,7 @@ AFFINE = False
 CERTIFY = True
 
 #: Fewest hand-overs of the walk (:data:`_ONLINE_NODES` flats asked each) before a certificate is tried.
-_CERTIFY_AFTER = 16
+_CERTIFY_AFTER = 4
 
 #: A certificate is tried once the walk has made this many times the hand-overs it made up to the
 #: last change of the front (a certificate tried too early costs a proof at low thresholds).
