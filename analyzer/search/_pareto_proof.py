@@ -705,7 +705,13 @@ class FrontProof:
     """
 
     def __init__(
-        self, space: SlotSpace, front: Front, budget: Budget, margins: Margins, affine: bool | None = None
+        self,
+        space: SlotSpace,
+        front: Front,
+        budget: Budget,
+        margins: Margins,
+        affine: bool | None = None,
+        give_up: bool = False,
     ) -> None:
         self.space, self.front, self.budget, self.margins = space, front, budget, margins
         n = space.n_phases
@@ -713,12 +719,15 @@ class FrontProof:
         self.groups = [group_space(space, g) for g in (0, 1)]
         self.shared = shared_matroid(self.groups[0], self.groups[1], margins)
         self.affine = [_affine_of(g, affine) for g in self.groups]
-        # The completeness certificate (:meth:`_certify`): hand-overs of the walk so far, the one
-        # at which the front last changed, and the final front's vectors once a certificate knows them.
+        # The certificate (:meth:`_certify`): hand-overs of the walk so far, the one at which the
+        # front last changed and the one of the last certificate tried, whether the walked groups
+        # have affine maps (None: not asked yet); with give_up, the vectors the proof gives up on
+        # changing (raising _Premature).
         self.handovers = 0
         self.changed_at = 0
-        self.target: set[tuple[int, ...]] | None = None
-        self.certified = False
+        self.tried_at = 0
+        self.certifiable: bool | None = None
+        self.give_up = front.vectors if give_up else None
         self.walked: dict[int, tuple[int, FlatList]] = {}
         self.passed: dict[int, set[bytes]] = {0: set(), 1: set()}
         self.largest: list[dict[int, np.ndarray]] = [{}, {}]
@@ -732,8 +741,9 @@ class FrontProof:
         """Pass over both sides until a pass leaves the front unchanged; returns the flats checked.
 
         Returns early, with the same front and the same representative
-        sets, once the front holds the final front's vectors, known from a
-        certificate (:meth:`_certify`).
+        sets, once a certificate shows the front final (:meth:`_certify`).
+        With ``give_up``, raises :class:`_Premature` as soon as the front
+        changes.
         """
         try:
             while True:
@@ -742,46 +752,48 @@ class FrontProof:
                     T = threshold(self.front, side, self.most)
                     if T is not None:
                         self.checked += self._check(side, self.flats(side, T))
-                        self._stop_if_final()
+                        self._give_up_if_changed()
                 self.passes.append(len(self.front.vectors))
                 if np.array_equal(start, self.front.vectors):
                     return self.checked
         except _Complete:
             return self.checked
 
-    def _stop_if_final(self) -> None:
-        """Raise :class:`_Complete` when the front's vectors are the final front's (known from a certificate)."""
-        if self.target is not None and _vector_set(self.front) == self.target:
-            raise _Complete
+    def _give_up_if_changed(self) -> None:
+        """With ``give_up``: raise :class:`_Premature` once the front is no longer the one the proof started from."""
+        if self.give_up is not None and self.front.vectors is not self.give_up:  # offer replaces changed vectors
+            raise _Premature
 
     def _certify(self) -> None:
-        """Learn the final front's vectors from a second proof over a copy of the front, with the affine walk.
+        """Raise :class:`_Complete` if a second proof, over a copy of the front and with the affine walk, changes nothing.
 
-        Which vectors the front ends with does not depend on the order in
-        which the proof meets its hits, only which set represents each
-        does (:meth:`kfio.search._pareto.Front.offer` keeps the first set
-        offered with a vector).  A proof over a copy of the front that
-        lists one sensor's big flats once per affine orbit
-        (:mod:`kfio.search._affine`: the same flats, met up to
-        ``phi(N0)`` times sooner) therefore ends with the final vectors,
-        whatever it offers to its copy.  Once this proof's own front holds
-        exactly those vectors, every maximal blind set's vector is
-        dominated by or equal to one of them, so no later offer changes
-        the front or a representative set: the proof may stop there
-        (:meth:`_stop_if_final`), with the answer it would have reached at
-        its end.  Tried once, when the walk has gone on for as many
-        hand-overs again as it took to the last change of the front (and
-        at least :data:`_CERTIFY_AFTER`), and only when every group walked
-        has non-trivial affine maps.
+        The second proof lists one sensor's big flats once per affine orbit
+        (:mod:`kfio.search._affine`: the same flats, met up to ``phi(N0)``
+        times sooner) and checks them against its copy.  If it ends with
+        the copy unchanged, no maximal blind set has a vector the front
+        does not dominate or equal: the front is final, and so are its
+        representative sets, since :meth:`kfio.search._pareto.Front.offer`
+        changes neither for such a set.  Stopping now gives the answer this
+        proof would reach at its end, set for set.  The second proof gives
+        up at its first change of the copy (its hits cannot be offered
+        here: the set representing a vector is the first one *this* proof
+        offers), and a later hand-over tries again (:meth:`_on_found`).
+        Nothing is tried when a walked group has only the rotations.
         """
-        self.certified = True
-        walked = [self.groups[0]] if self.shared is not None else self.groups
-        if any(_affine_of(g, True) is None for g in walked):
+        self.tried_at = self.handovers
+        if self.certifiable is None:
+            walked = [self.groups[0]] if self.shared is not None else self.groups
+            self.certifiable = all(_affine_of(g, True) is not None for g in walked)
+        if not self.certifiable:
             return
-        copy = self.front.copy()
-        self.checked += FrontProof(self.space, copy, self.budget, self.margins, affine=True).run()
-        self.target = _vector_set(copy)
-        self._stop_if_final()
+        proof = FrontProof(self.space, self.front.copy(), self.budget, self.margins, affine=True, give_up=True)
+        try:
+            proof.run()
+        except _Premature:
+            self.checked += proof.checked
+            return
+        self.checked += proof.checked
+        raise _Complete
 
     def served(self, source: int) -> tuple[int, ...]:
         """The groups whose flats the walk over ``source`` lists."""
@@ -833,15 +845,18 @@ class FrontProof:
         for g in self.served(source):
             if threshold(self.front, g, self.most) is not None:
                 self.checked += self._check(g, self.as_side(g, source, batch))
+        self._give_up_if_changed()
         self.handovers += 1
         if self.front.vectors is not before:  # Front.offer replaces the array when the front changes
             self.changed_at = self.handovers
-        self._stop_if_final()
+        # A certificate once the walk has made twice the hand-overs it had made at the last change
+        # of the front and at the last certificate tried (a doubling rule: the waits cost at most
+        # what came before them, and a certificate tried at low thresholds walks many flats).
         if (
             CERTIFY
-            and not self.certified
             and self.affine[source] is None
-            and self.handovers >= max(_CERTIFY_AFTER, _CERTIFY_FACTOR * self.changed_at)
+            and self.certifiable is not False
+            and self.handovers >= max(_CERTIFY_AFTER, _CERTIFY_FACTOR * max(self.changed_at, self.tried_at))
         ):
             self._certify()
         return self.least(source)
@@ -876,26 +891,25 @@ class FrontProof:
 AFFINE = False
 
 
-#: Whether the front proof, after a long walk with no change of the front, learns the final front's vectors
-#: from a proof with the affine walk over a copy of the front and stops once it holds them
-#: (:meth:`FrontProof._certify`): the same answer, representative sets included.
+#: Whether the front proof, after a long walk with no change of the front, tries to show the front final
+#: by a proof with the affine walk over a copy of it, and stops if so (:meth:`FrontProof._certify`): the
+#: same answer, representative sets included.
 CERTIFY = True
 
 #: Fewest hand-overs of the walk (:data:`_ONLINE_NODES` flats asked each) before a certificate is tried.
-_CERTIFY_AFTER = 4
+_CERTIFY_AFTER = 16
 
-#: A certificate is tried once the walk has made this many times the hand-overs it made up to the
-#: last change of the front (a certificate tried too early costs a proof at low thresholds).
+#: A certificate is tried once the walk has made this many times the hand-overs it had made at the last
+#: change of the front and at the last certificate tried.
 _CERTIFY_FACTOR = 2
 
 
 class _Complete(Exception):
-    """The front holds the final front's vectors: no later offer can change it."""
+    """A certificate showed the front final: no later offer can change it."""
 
 
-def _vector_set(front: Front) -> set[tuple[int, ...]]:
-    """The front's vectors, as a set of tuples."""
-    return {tuple(int(x) for x in v) for v in front.vectors}
+class _Premature(Exception):
+    """A certificate's proof changed its copy of the front: the front was not final."""
 
 
 def _affine_of(space: SlotSpace, affine: bool | None = None) -> Affine | None:
