@@ -42,14 +42,15 @@ def _basis(rows: np.ndarray) -> list[int] | None:
     """Greedy phases whose rows are independent and span every row (``None``: the rows do not span)."""
     L = rows.shape[1]
     picked: list[int] = []
-    Q = np.zeros((L, 0), dtype=rows.dtype)
+    U = np.zeros((0, L), dtype=rows.dtype)  # orthonormal rows spanning the rows picked
     scale = max(1.0, float(np.abs(rows).max()))
     for n in range(rows.shape[0]):
-        r = rows[n] - (rows[n] @ Q.conj()) @ Q.T if Q.shape[1] else rows[n]
+        # The part of the row orthogonal to those picked (Hermitian products: complex rows too).
+        r = rows[n] - (rows[n] @ U.conj().T) @ U if U.shape[0] else rows[n]
         size = float(np.linalg.norm(r))
         if size > 1e-6 * scale:
             picked.append(n)
-            Q = np.concatenate([Q, (r / size)[:, None].conj()], axis=1)
+            U = np.concatenate([U, (r / size)[None, :]])
             if len(picked) == L:
                 return picked
     return None
@@ -80,7 +81,7 @@ def unit_symmetries(space: SlotSpace) -> tuple[int, ...]:
         if math.gcd(a, N0) != 1:
             continue
         moved = rows[(a * np.arange(N0)) % N0]
-        if np.linalg.cond(moved[B]) > 1e8:
+        if not np.linalg.cond(moved[B]) <= 1e8:  # also a NaN condition number
             continue
         lam2 = np.linalg.solve(moved[B].T, moved.T).T
         zero2 = np.abs(lam2) <= 1e-8 * np.abs(lam2).max(axis=1, keepdims=True)

@@ -79,6 +79,13 @@ class Front:
         self._escape_of: np.ndarray | None = None
         self._escape: np.ndarray = np.zeros(0, dtype=int)
 
+    def copy(self) -> Front:
+        """A front with the same vectors and representative sets; offers to either leave the other as it is."""
+        out = Front(self.space, self.lower)
+        out.vectors = self.vectors.copy()
+        out.masks = [m.copy() for m in self.masks]
+        return out
+
     def misses(self, masks: np.ndarray) -> np.ndarray:
         """``z`` per row of ``masks``: per group, the phases not held."""
         C = masks.shape[0]

@@ -54,6 +54,10 @@ class Front(Protocol):
         """Add maximal blind sets whose miss vectors the front does not dominate or equal."""
         ...  # pragma: no cover - protocol
 
+    def copy(self) -> Front:
+        """A front with the same vectors and sets, which later offers to either do not share."""
+        ...  # pragma: no cover - protocol
+
 
 #: Most ``(k - 1)``-subsets of the other group's rows (``C(n, k - 1)``) for which
 #: :func:`_hyperplanes` answers; beyond it the closure search over the projected rows does.
@@ -700,13 +704,30 @@ class FrontProof:
     does not suffice.)
     """
 
-    def __init__(self, space: SlotSpace, front: Front, budget: Budget, margins: Margins) -> None:
+    def __init__(
+        self,
+        space: SlotSpace,
+        front: Front,
+        budget: Budget,
+        margins: Margins,
+        affine: bool | None = None,
+        give_up: bool = False,
+    ) -> None:
         self.space, self.front, self.budget, self.margins = space, front, budget, margins
         n = space.n_phases
         self.most = (n - int(front.lower[0]), n - int(front.lower[1]))
         self.groups = [group_space(space, g) for g in (0, 1)]
         self.shared = shared_matroid(self.groups[0], self.groups[1], margins)
-        self.affine = [_affine_of(g) for g in self.groups]
+        self.affine = [_affine_of(g, affine) for g in self.groups]
+        # The certificate (:meth:`_certify`): hand-overs of the walk so far, the one at which the
+        # front last changed and the one of the last certificate tried, whether the walked groups
+        # have affine maps (None: not asked yet); with give_up, the vectors the proof gives up on
+        # changing (raising _Premature).
+        self.handovers = 0
+        self.changed_at = 0
+        self.tried_at = 0
+        self.certifiable: bool | None = None
+        self.give_up = front.vectors if give_up else None
         self.walked: dict[int, tuple[int, FlatList]] = {}
         self.passed: dict[int, set[bytes]] = {0: set(), 1: set()}
         self.largest: list[dict[int, np.ndarray]] = [{}, {}]
@@ -717,16 +738,62 @@ class FrontProof:
         self.passes: list[int] = []
 
     def run(self) -> int:
-        """Pass over both sides until a pass leaves the front unchanged; returns the flats checked."""
-        while True:
-            start = self.front.vectors.copy()
-            for side in (0, 1):
-                T = threshold(self.front, side, self.most)
-                if T is not None:
-                    self.checked += self._check(side, self.flats(side, T))
-            self.passes.append(len(self.front.vectors))
-            if np.array_equal(start, self.front.vectors):
-                return self.checked
+        """Pass over both sides until a pass leaves the front unchanged; returns the flats checked.
+
+        Returns early, with the same front and the same representative
+        sets, once a certificate shows the front final (:meth:`_certify`).
+        With ``give_up``, raises :class:`_Premature` as soon as the front
+        changes.
+        """
+        try:
+            while True:
+                start = self.front.vectors.copy()
+                for side in (0, 1):
+                    T = threshold(self.front, side, self.most)
+                    if T is not None:
+                        self.checked += self._check(side, self.flats(side, T))
+                        self._give_up_if_changed()
+                self.passes.append(len(self.front.vectors))
+                if np.array_equal(start, self.front.vectors):
+                    return self.checked
+        except _Complete:
+            return self.checked
+
+    def _give_up_if_changed(self) -> None:
+        """With ``give_up``: raise :class:`_Premature` once the front is no longer the one the proof started from."""
+        if self.give_up is not None and self.front.vectors is not self.give_up:  # offer replaces changed vectors
+            raise _Premature
+
+    def _certify(self) -> None:
+        """Raise :class:`_Complete` if a second proof, over a copy of the front and with the affine walk, changes nothing.
+
+        The second proof lists one sensor's big flats once per affine orbit
+        (:mod:`kfio.search._affine`: the same flats, met up to ``phi(N0)``
+        times sooner) and checks them against its copy.  If it ends with
+        the copy unchanged, no maximal blind set has a vector the front
+        does not dominate or equal: the front is final, and so are its
+        representative sets, since :meth:`kfio.search._pareto.Front.offer`
+        changes neither for such a set.  Stopping now gives the answer this
+        proof would reach at its end, set for set.  The second proof gives
+        up at its first change of the copy (its hits cannot be offered
+        here: the set representing a vector is the first one *this* proof
+        offers), and a later hand-over tries again (:meth:`_on_found`).
+        Nothing is tried when a walked group has only the rotations.
+        """
+        self.tried_at = self.handovers
+        if self.certifiable is None:
+            walked = [self.groups[0]] if self.shared is not None else self.groups
+            self.certifiable = all(_affine_of(g, True) is not None for g in walked)
+        if not self.certifiable:
+            return
+        proof = FrontProof(self.space, self.front.copy(), self.budget, self.margins, affine=True, give_up=True)
+        try:
+            proof.run()
+        except _Premature:
+            self.checked += proof.checked
+            return
+        self.checked += proof.checked
+        raise _Complete
 
     def served(self, source: int) -> tuple[int, ...]:
         """The groups whose flats the walk over ``source`` lists."""
@@ -773,10 +840,25 @@ class FrontProof:
     def _on_found(self, source: int, batch: FlatList) -> int | None:
         """Check a batch as the walk finds it: a hit raises the front, and with it the size the walk needs."""
         batch = sorted(batch, key=_largest_first)
+        before = self.front.vectors
         self._seed(source, batch)
         for g in self.served(source):
             if threshold(self.front, g, self.most) is not None:
                 self.checked += self._check(g, self.as_side(g, source, batch))
+        self._give_up_if_changed()
+        self.handovers += 1
+        if self.front.vectors is not before:  # Front.offer replaces the array when the front changes
+            self.changed_at = self.handovers
+        # A certificate once the walk has made twice the hand-overs it had made at the last change
+        # of the front and at the last certificate tried (a doubling rule: the waits cost at most
+        # what came before them, and a certificate tried at low thresholds walks many flats).
+        if (
+            CERTIFY
+            and self.affine[source] is None
+            and self.certifiable is not False
+            and self.handovers >= max(_CERTIFY_AFTER, _CERTIFY_FACTOR * max(self.changed_at, self.tried_at))
+        ):
+            self._certify()
         return self.least(source)
 
     def _seed(self, source: int, batch: FlatList) -> None:
@@ -809,12 +891,36 @@ class FrontProof:
 AFFINE = False
 
 
-def _affine_of(space: SlotSpace) -> Affine | None:
-    """The affine maps preserving the matroid of one group (:mod:`kfio.search._affine`), ``None``: rotations only."""
-    if not AFFINE:
+#: Whether the front proof, after a long walk with no change of the front, tries to show the front final
+#: by a proof with the affine walk over a copy of it, and stops if so (:meth:`FrontProof._certify`): the
+#: same answer, representative sets included.
+CERTIFY = True
+
+#: Fewest hand-overs of the walk (:data:`_ONLINE_NODES` flats asked each) before a certificate is tried.
+_CERTIFY_AFTER = 16
+
+#: A certificate is tried once the walk has made this many times the hand-overs it had made at the last
+#: change of the front and at the last certificate tried.
+_CERTIFY_FACTOR = 2
+
+
+class _Complete(Exception):
+    """A certificate showed the front final: no later offer can change it."""
+
+
+class _Premature(Exception):
+    """A certificate's proof changed its copy of the front: the front was not final."""
+
+
+def _affine_of(space: SlotSpace, affine: bool | None = None) -> Affine | None:
+    """The affine maps preserving the matroid of one group (:mod:`kfio.search._affine`), ``None``: rotations only.
+
+    ``affine``: ``None`` follows :data:`AFFINE`; ``True`` or ``False`` decides.
+    """
+    if not (AFFINE if affine is None else affine):
         return None
-    affine = Affine(space.n_phases, unit_symmetries(space))
-    return None if affine.trivial else affine
+    maps = Affine(space.n_phases, unit_symmetries(space))
+    return None if maps.trivial else maps
 
 
 def _largest_first(flat: tuple[np.ndarray, np.ndarray | None]) -> tuple[int, int]:
