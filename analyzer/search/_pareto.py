@@ -108,7 +108,9 @@ class Front:
             return
         z = self.misses(masks)
         steps = np.eye(self.space.n_groups, dtype=int)
-        self.bounds = np.unique(np.concatenate([self.bounds, (z[:, None, :] + steps[None]).reshape(-1, z.shape[1])]), axis=0)
+        self.bounds = np.unique(
+            np.concatenate([self.bounds, (z[:, None, :] + steps[None]).reshape(-1, z.shape[1])]), axis=0
+        )
         self._cut_of = None
 
     def _cut_vectors(self) -> np.ndarray:
