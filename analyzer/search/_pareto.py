@@ -54,10 +54,6 @@ from ._blind import Margins, Objective, SearchResult, SlotSpace, group_space, se
 PROBE_FLATS: int | None = 0
 
 
-#: Whether the walk over three or more groups also cuts what the blind sets of :func:`generic_meets` dominate strictly.
-SEED_MEETS = True
-
-
 #: Largest grid of miss vectors for which :meth:`Front.dead` looks its answer up in a table.
 _TABLE_ENTRIES = 1 << 22
 
@@ -78,9 +74,6 @@ class Front:
         self.lower = lower
         self.vectors = np.zeros((0, space.n_groups), dtype=int)
         self.masks: list[np.ndarray] = []
-        self.bounds = np.zeros((0, space.n_groups), dtype=int)
-        self._cut_of: np.ndarray | None = None
-        self._cut = self.vectors
         self._table_of: np.ndarray | None = None
         self._dead_table: np.ndarray | None = None
         self._escape_of: np.ndarray | None = None
@@ -91,43 +84,9 @@ class Front:
         C = masks.shape[0]
         return self.space.n_phases - masks.reshape(C, self.space.n_phases, self.space.n_groups).sum(axis=1)
 
-    def bound_by(self, masks: np.ndarray) -> None:
-        """Cut also what the miss vectors of the blind sets ``masks`` dominate strictly (they do not enter the front).
-
-        A maximal blind set ``D`` attains ``z(D)``: every ``z`` with
-        ``z >= z(D)`` and ``z != z(D)`` is strictly dominated, so it is in no
-        undominated vector's place, and a subtree all of whose sets miss
-        such vectors holds nothing the answer needs.  ``z(D)`` itself stays
-        open (the walk must still reach a set attaining it, whose first
-        representative is the answer's), so the cut region is the union of
-        the upper orthants of ``z(D) + e_g`` over the groups ``g``:
-        :meth:`dead` and :meth:`slots_to_escape` count those points as front
-        vectors, :meth:`offer` still adds only sets the walk finds.
-        """
-        if masks.shape[0] == 0:
-            return
-        z = self.misses(masks)
-        steps = np.eye(self.space.n_groups, dtype=int)
-        self.bounds = np.unique(
-            np.concatenate([self.bounds, (z[:, None, :] + steps[None]).reshape(-1, z.shape[1])]), axis=0
-        )
-        self._cut_of = None
-
-    def _cut_vectors(self) -> np.ndarray:
-        """The front vectors and the points of :meth:`bound_by`: ``z`` is cut iff ``z >= `` one of them."""
-        if self.bounds.shape[0] == 0:
-            return self.vectors
-        if self._cut_of is not self.vectors:
-            self._cut_of, self._cut = self.vectors, np.concatenate([self.vectors, self.bounds])
-        return self._cut
-
     def dead(self, bounds: np.ndarray) -> np.ndarray:
-        """Rows ``b`` of ``bounds`` such that every ``z >= b`` is dominated by or equal to a front vector.
-
-        Also those where every ``z >= b`` is strictly dominated by a vector of :meth:`bound_by`.
-        """
-        vectors = self._cut_vectors()
-        if vectors.shape[0] == 0:
+        """Rows ``b`` of ``bounds`` such that every ``z >= b`` is dominated by or equal to a front vector."""
+        if self.vectors.shape[0] == 0:
             return np.zeros(bounds.shape[0], dtype=bool)
         b = np.maximum(bounds, self.lower[None, :])
         table = self._table()
@@ -136,7 +95,7 @@ class Front:
             side = self.space.n_phases + 1
             strides = side ** np.arange(self.space.n_groups - 1, -1, -1)
             return np.asarray(table.ravel()[np.minimum(b, self.space.n_phases) @ strides])
-        return np.asarray((b[:, None, :] >= vectors[None, :, :]).all(axis=2).any(axis=1))
+        return np.asarray((b[:, None, :] >= self.vectors[None, :, :]).all(axis=2).any(axis=1))
 
     def _table(self) -> np.ndarray | None:
         """The dominated-or-equal region of the front on the grid ``[0, N0]^G`` (``None``: grid too large).
@@ -146,18 +105,16 @@ class Front:
         running ``or`` along each axis from the vectors' own points.  Rebuilt
         when the front changes (:meth:`offer` replaces :attr:`vectors`).
         """
-        vectors = self._cut_vectors()
-        if self._table_of is vectors:
+        if self._table_of is self.vectors:
             return self._dead_table
         side = self.space.n_phases + 1
         table = None
         if side**self.space.n_groups <= _TABLE_ENTRIES:
             table = np.zeros((side,) * self.space.n_groups, dtype=bool)
-            inside = vectors[(vectors <= self.space.n_phases).all(axis=1)]
-            table[tuple(np.maximum(inside, 0).T)] = True
+            table[tuple(np.clip(self.vectors, 0, self.space.n_phases).T)] = True
             for axis in range(self.space.n_groups):
                 table = np.logical_or.accumulate(table, axis=axis)
-        self._table_of, self._dead_table = vectors, table
+        self._table_of, self._dead_table = self.vectors, table
         return table
 
     def alive(self, masks: np.ndarray, cores: np.ndarray, kernels: np.ndarray | None = None) -> np.ndarray:
@@ -174,7 +131,7 @@ class Front:
             and kernels.shape[2] in (2, 3)
             and self.space.rows.shape[1] == 1
             and not np.iscomplexobj(self.space.rows)
-            and self._cut_vectors().shape[0] > 0
+            and self.vectors.shape[0] > 0
         ):
             rows = np.flatnonzero(ok)
             if rows.size:
@@ -206,10 +163,8 @@ class Front:
         C = masks.shape[0]
         alive = np.zeros(C, dtype=bool)
         need = self.slots_to_escape(self.misses(masks))
-        # Q itself escapes (need 0: kept, e.g. every slot blind, where no later slot is left to pivot on);
-        # any other set below Q escapes the front only with at least ``need`` later slots.
-        alive[need == 0] = True
-        rows = np.flatnonzero((later.sum(axis=1) >= need) & (need > 0))
+        # A set below Q escapes the front only with at least ``need`` later slots.
+        rows = np.flatnonzero(later.sum(axis=1) >= need)
         if rows.size == 0:
             return alive
         masks, later, kernels, need = masks[rows], later[rows], kernels[rows], need[rows]
@@ -247,7 +202,7 @@ class Front:
         table = self._table()
         if table is None:
             return np.zeros(z.shape[0], dtype=int)
-        if self._escape_of is not self._cut_vectors():
+        if self._escape_of is not self.vectors:
             G, big = self.space.n_groups, self.space.n_phases * self.space.n_groups + 1
             D = np.where(table, big, 0)
             while True:
@@ -261,7 +216,7 @@ class Front:
                 if np.array_equal(step, D):
                     break
                 D = step
-            self._escape_of, self._escape = self._cut_vectors(), D
+            self._escape_of, self._escape = self.vectors, D
         side = self.space.n_phases + 1
         strides = side ** np.arange(self.space.n_groups - 1, -1, -1)
         return np.asarray(self._escape.ravel()[np.clip(z, 0, self.space.n_phases) @ strides])
@@ -344,117 +299,6 @@ def group_extremes(
             v = vh[-1].conj()
             seeds.append(margins.record(np.linalg.norm(space.rows @ v, axis=1)))
     return out, seeds
-
-
-#: Most flats of one group :func:`generic_meets` expands to find its largest flat of each rank.
-_RANK_FLATS = 50_000
-
-#: Most rank splits :func:`generic_meets` tries.
-_MEET_SPLITS = 4096
-
-
-class _LargestByRank:
-    """Collector of the walk over one group: the flat of most slots of each rank (hyperplanes: rank ``L - 1``).
-
-    A branch and bound: the flats below a flat ``Q`` of rank ``r`` (kernel
-    dimension ``L - r``) have rank at least ``r`` and hold ``Q`` plus some
-    slots after its core, so the subtree is cut when that many slots are no
-    more than the largest flat already kept of every rank from ``r`` to ``L - 1``.
-    """
-
-    def __init__(self, space: SlotSpace, margins: Margins) -> None:
-        self.space, self.margins, self.L = space, margins, space.n_columns
-        self.largest: dict[int, np.ndarray] = {}
-        self.size = np.full(self.L, -1)
-
-    def _keep(self, mask: np.ndarray, r: int) -> None:
-        n = int(mask.sum())
-        if n > self.size[r]:
-            self.largest[r], self.size[r] = mask.copy(), n
-
-    def alive(self, masks: np.ndarray, cores: np.ndarray, kernels: np.ndarray) -> np.ndarray:
-        r = self.L - kernels.shape[2]
-        later = (np.arange(masks.shape[1])[None, :] > cores[:, None]) & ~masks
-        most = masks.sum(axis=1) + later.sum(axis=1)
-        return np.asarray(most > self.size[max(r, 0) :].min(initial=self.L * masks.shape[1]))
-
-    def alive_hulls(self, hulls: np.ndarray) -> np.ndarray:
-        return np.ones(hulls.shape[0], dtype=bool)
-
-    def visit(self, masks: np.ndarray, kernels: np.ndarray) -> None:
-        if 0 < kernels.shape[2] <= self.L:
-            for m in masks:
-                self._keep(m, self.L - kernels.shape[2])
-
-    def offer(self, masks: np.ndarray) -> None:
-        """Maximal blind sets: hyperplanes, or the whole group when it is rank-deficient (its rank counted)."""
-        for m in masks[masks.sum(axis=1) > self.size[self.L - 1]]:
-            sv = np.linalg.svd(self.space.rows[m].reshape(-1, self.L), compute_uv=False)
-            self._keep(m, int((~self.margins.record(sv)).sum()))
-
-
-def _largest_by_rank(space: SlotSpace, budget: Budget, margins: Margins) -> dict[int, np.ndarray]:
-    """The flat of most slots of each rank of a one-group ``space`` (the empty flat for rank 0), as far as found.
-
-    The walk of :class:`_LargestByRank` under a budget of its own: at most
-    :data:`_RANK_FLATS` flats and the time ``budget`` has left, so the
-    caller's step count does not move; cut short, it returns the flats found
-    so far (flats all the same, maybe not the largest).
-    """
-    from ._blind_batch import walk  # local: _blind_batch is heavier and imports _blind too
-
-    found = _LargestByRank(space, margins)
-    try:
-        walk(space, Budget(seconds=budget.remaining(), max_steps=_RANK_FLATS), margins, found)
-    except BudgetExceeded:
-        pass
-    found.largest[0] = np.zeros(space.n_phases, dtype=bool)
-    return found.largest
-
-
-def generic_meets(space: SlotSpace, budget: Budget, margins: Margins) -> np.ndarray:
-    """Maximal blind sets from flats ``F_g`` of each group alone whose ranks sum to at most ``L - 1``.
-
-    The rows of ``F_0, ..., F_{G-1}`` together have rank at most
-    ``sum_g rank F_g <= L - 1``, so they share a kernel vector ``u``
-    whatever the rows: its zero set, made maximal
-    (:func:`kfio.search._pareto_proof.maximal_zero_set`), is a blind set
-    holding at least ``|F_g|`` slots of group ``g``.  With the largest flat
-    of each rank of each group (:func:`_largest_by_rank`; groups whose rows
-    are a column scaling of an earlier group's have its flats,
-    :func:`kfio.search._pareto_proof.shared_matroid`) and every split of
-    the ranks that no group can raise (at most :data:`_MEET_SPLITS`), these
-    are the blind sets of the *generic front*, the form for any number of
-    groups of :func:`kfio.search._pareto_proof.seed_generic`.  Rows are
-    those of ``space`` (real); no set when the splits are too many.
-    """
-    from ._pareto_proof import _kernel, maximal_zero_set, shared_matroid
-
-    L, G, N0 = space.n_columns, space.n_groups, space.n_phases
-    groups = [group_space(space, g) for g in range(G)]
-    per_group: list[dict[int, np.ndarray]] = []
-    for g in range(G):
-        same = [h for h in range(g) if shared_matroid(groups[h], groups[g], margins) is not None]
-        per_group.append(per_group[same[0]] if same else _largest_by_rank(groups[g], budget, margins))
-    splits: list[tuple[int, ...]] = [()]
-    for g in range(G):
-        splits = [s + (r,) for s in splits for r in per_group[g] if sum(s) + r <= L - 1]
-        if len(splits) > _MEET_SPLITS:
-            return np.zeros((0, space.size), dtype=bool)
-    # Only splits no group can raise: a higher rank's largest flat is a meet of at least as many slots.
-    splits = [
-        s for s in splits if not any(r > s[g] and sum(s) - s[g] + r <= L - 1 for g in range(G) for r in per_group[g])
-    ]
-    out = []
-    for split in splits:
-        mask = np.zeros((N0, G), dtype=bool)
-        for g, r in enumerate(split):
-            mask[:, g] = per_group[g][r]
-        K = _kernel(space.rows[mask.ravel()].reshape(-1, L), margins)
-        if K.shape[1] == 0:
-            continue  # the ranks the walk saw and this factorization's disagree: no set
-        out.append(maximal_zero_set(space, K[:, 0], margins))
-    return np.array(out, dtype=bool).reshape(-1, space.size)
 
 
 def group_lower_bounds(space: SlotSpace, budget: Budget, margins: Margins) -> np.ndarray:
@@ -549,13 +393,6 @@ def _pareto_search(
     real = real_space(space)
     front.space = real  # the walk's kernels are in the real rows' coordinates (Front.alive projects onto them)
     cap = PROBE_FLATS if space.n_groups == 2 else None
-    if space.n_groups > 2 and SEED_MEETS:
-        # The seeds' rank calls on margins of their own: the answer's margin note stays the walk's,
-        # and seeds from a close call (not ``clear``) are dropped rather than trusted.
-        own = Margins(margins.tol)
-        meets = generic_meets(real, budget, own)
-        if own.clear:
-            front.bound_by(meets)
     checked = None
     try:
         if cap == 0:
