@@ -1,7 +1,8 @@
 """User-facing text cites papers by author and year and never points outside the repository.
 
-Scanned: README.md, docs/*.md, the OpenAPI document, and what the CLI prints (human summary and
-``--json``) for every example request.  Forbidden: the project-internal design note ``MATH.md``,
+Scanned: README.md, docs/*.md, the OpenAPI document, the shipped package's sources (docstrings
+are what ``help()`` shows) and page files, and what the CLI prints (human summary and ``--json``)
+for every example request.  Forbidden: the project-internal design note ``MATH.md``,
 paths into ``../shared`` or ``seeds/``, and seed numbers ("seed 004", "seeds 000/003").
 """
 
@@ -37,6 +38,20 @@ def test_the_pattern_catches_what_it_must() -> None:
 )
 def test_documents(path: Path) -> None:
     assert _hits(path.read_text()) == []
+
+
+SHIPPED = sorted(
+    p
+    for folder in ("analyzer", "service")
+    for p in (ROOT / folder).rglob("*")
+    if p.suffix in {".py", ".html", ".js", ".css"} and "__pycache__" not in p.parts
+)
+
+
+def test_shipped_sources() -> None:
+    assert SHIPPED and any(p.name == "_cyclic.py" for p in SHIPPED)
+    bad = {str(p.relative_to(ROOT)): hits for p in SHIPPED if (hits := _hits(p.read_text()))}
+    assert bad == {}
 
 
 def _commands(example: Path) -> list[str]:

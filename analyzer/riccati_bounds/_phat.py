@@ -25,8 +25,9 @@ import numpy as np
 
 from .._budget import Budget
 from ..errors import InvalidInput, NumericalFailure
-from . import _small_linalg
 from ._riccati import DIVERGENCE_RATIO, v_bar
+from ._small_linalg import cholesky as _cholesky
+from ._small_linalg import solve as _solve
 from ._vech import congruence_matrix, unvech, vech, vech_layout
 
 #: The batch at the bottom of the tree holds at most ``2**CHUNK_LEVELS`` matrices.
@@ -94,8 +95,8 @@ class BatchedMare:
         AXC = h @ self._AXC
         S = h @ self._CXC
         S += self._r
-        L = _small_linalg.cholesky(S.reshape(-1, self.p, self.p))
-        G = _small_linalg.solve(L, AXC.reshape(-1, self.n, self.p).transpose(0, 2, 1))
+        L = _cholesky(S.reshape(-1, self.p, self.p))
+        G = _solve(L, AXC.reshape(-1, self.n, self.p).transpose(0, 2, 1))
         return np.einsum("bki,bki->bi", G[:, :, self._iu], G[:, :, self._ju])
 
     def _one_output_gain(self, h: np.ndarray) -> np.ndarray:

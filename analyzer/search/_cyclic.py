@@ -6,7 +6,7 @@ exponents ``E = {e_j}`` are distinct, a set ``F`` of phases is blind iff some
 ``v != 0`` has ``sum_j v_j c_j zeta^{e_j n} = 0`` for every ``n`` in ``F``: iff
 ``F`` lies in the zero set of a non-zero word of the code
 ``C(E) = span{n -> zeta^{e n} : e in E}`` of length ``N0`` (the cyclic code
-with non-zeros ``E``; MATH.md section 2, "sigma_k").  So the largest blind
+with non-zeros ``E``; the blind sets of ``sigma_k`` in docs/sigma.md).  So the largest blind
 set has ``N0 - d(E)`` phases, ``d`` the code's minimum distance.
 
 **Product bound.**  For ``N0 = q r`` with ``gcd(q, r) = 1`` the Chinese
