@@ -122,10 +122,11 @@ class Margins:
     def record(self, values: np.ndarray) -> np.ndarray:
         """Classify ``values`` as zero (``True``) or not, remembering the margins."""
         zero = values <= self.tol
-        if zero.any():
-            self.largest_zero = max(self.largest_zero, float(values[zero].max()))
-        if not zero.all():
-            self.smallest_nonzero = min(self.smallest_nonzero, float(values[~zero].min()))
+        if zero.size:
+            # The same extremes as values[zero].max() and values[~zero].min(), without the two
+            # compacting copies (a NaN is not zero and, as there, leaves the smallest unchanged).
+            self.largest_zero = max(self.largest_zero, float(np.where(zero, values, -np.inf).max()))
+            self.smallest_nonzero = min(self.smallest_nonzero, float(np.where(zero, np.inf, values).min()))
         return zero
 
     @property

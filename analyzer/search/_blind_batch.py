@@ -168,19 +168,41 @@ def _residuals(W: np.ndarray, Q: np.ndarray, b: np.ndarray, e: np.ndarray, rank:
     parts = []
     for part in _chunks(b.size, S * p * d):
         bb, ee = b[part], e[part]
-        Wb = W[bb]
+        if p == 1 and not np.iscomplexobj(W):
+            parts.append(_real_line_residuals(W[bb, :, 0, :], ee))
+            continue
         if p == 1:
-            rows = Wb[:, :, 0, :]
+            rows = W[bb, :, 0, :]
             ue = rows[np.arange(bb.size), ee]
             u = ue / np.linalg.norm(ue, axis=1)[:, None]
             coef = rows @ u.conj()[:, :, None]
             diff = rows - coef * u[:, None, :]
             parts.append(np.sqrt(np.einsum("csd,csd->cs", diff, diff.conj()).real))
             continue
+        Wb = W[bb]
         _, _, Vh = np.linalg.svd(Wb[np.arange(bb.size), ee])
         N = Vh.conj().swapaxes(1, 2) * (np.arange(d)[None, :] >= rank[bb, ee][:, None])[:, None, :]
         parts.append(np.linalg.norm(np.einsum("ctpd,cde->ctpe", Wb, N), axis=(2, 3)))
     return np.concatenate(parts)
+
+
+def _real_line_residuals(rows: np.ndarray, e: np.ndarray) -> np.ndarray:
+    """The one-row, real case of :func:`_residuals`: ``||W_t - (W_t . u_e) u_e||`` for ``rows`` of shape ``(pairs, S, d)``.
+
+    The same floating-point operations as the general one-row formula, in the
+    same order (the product ``(W_t . u_e) u_e`` formed one column at a time
+    instead of by a broadcast over a length-``d`` axis, which is about half
+    the cost at ``d = 2, 3``): the residuals are the same bits, which
+    ``tests/stability/test_residuals_same_bits.py`` checks.
+    """
+    ue = rows[np.arange(rows.shape[0]), e]
+    u = ue / np.linalg.norm(ue, axis=1)[:, None]
+    coef = (rows @ u[:, :, None])[:, :, 0]
+    diff = np.empty_like(rows)
+    for k in range(rows.shape[2]):
+        np.multiply(coef, u[:, k, None], out=diff[:, :, k])
+    np.subtract(rows, diff, out=diff)
+    return np.sqrt(np.einsum("csd,csd->cs", diff, diff))
 
 
 def gap_canonical_possible(space: SlotSpace, masks: np.ndarray, cores: np.ndarray) -> np.ndarray:
