@@ -168,16 +168,9 @@ def _residuals(W: np.ndarray, Q: np.ndarray, b: np.ndarray, e: np.ndarray, rank:
     parts = []
     for part in _chunks(b.size, S * p * d):
         bb, ee = b[part], e[part]
-        if p == 1 and not np.iscomplexobj(W):
-            parts.append(_real_line_residuals(W[bb, :, 0, :], ee))
-            continue
         if p == 1:
-            rows = W[bb, :, 0, :]
-            ue = rows[np.arange(bb.size), ee]
-            u = ue / np.linalg.norm(ue, axis=1)[:, None]
-            coef = rows @ u.conj()[:, :, None]
-            diff = rows - coef * u[:, None, :]
-            parts.append(np.sqrt(np.einsum("csd,csd->cs", diff, diff.conj()).real))
+            line = _line_residuals if np.iscomplexobj(W) else _real_line_residuals
+            parts.append(line(W[bb, :, 0, :], ee))
             continue
         Wb = W[bb]
         _, _, Vh = np.linalg.svd(Wb[np.arange(bb.size), ee])
@@ -186,10 +179,19 @@ def _residuals(W: np.ndarray, Q: np.ndarray, b: np.ndarray, e: np.ndarray, rank:
     return np.concatenate(parts)
 
 
-def _real_line_residuals(rows: np.ndarray, e: np.ndarray) -> np.ndarray:
-    """The one-row, real case of :func:`_residuals`: ``||W_t - (W_t . u_e) u_e||`` for ``rows`` of shape ``(pairs, S, d)``.
+def _line_residuals(rows: np.ndarray, e: np.ndarray) -> np.ndarray:
+    """The one-row case of :func:`_residuals`: ``||W_t - (W_t u_e^*) u_e||`` for ``rows`` of shape ``(pairs, S, d)``."""
+    ue = rows[np.arange(rows.shape[0]), e]
+    u = ue / np.linalg.norm(ue, axis=1)[:, None]
+    coef = rows @ u.conj()[:, :, None]
+    diff = rows - coef * u[:, None, :]
+    return np.sqrt(np.einsum("csd,csd->cs", diff, diff.conj()).real)
 
-    The same floating-point operations as the general one-row formula, in the
+
+def _real_line_residuals(rows: np.ndarray, e: np.ndarray) -> np.ndarray:
+    """:func:`_line_residuals` of real rows: ``||W_t - (W_t . u_e) u_e||`` for ``rows`` of shape ``(pairs, S, d)``.
+
+    The same floating-point operations as :func:`_line_residuals`, in the
     same order (the product ``(W_t . u_e) u_e`` formed one column at a time
     instead of by a broadcast over a length-``d`` axis, which is about half
     the cost at ``d = 2, 3``): the residuals are the same bits, which

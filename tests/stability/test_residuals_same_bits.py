@@ -18,7 +18,11 @@ SEED = 20261204
 
 
 def general_one_row(rows: np.ndarray, e: np.ndarray) -> np.ndarray:
-    """``||W_t - (W_t u_e^*) u_e||`` with the broadcast product, conjugates included (a no-op on real rows)."""
+    """``||W_t - (W_t u_e^*) u_e||`` with the broadcast product, conjugates included (a no-op on real rows).
+
+    A pinned copy of ``_blind_batch._line_residuals`` as it stood, not an import: the bits to keep
+    are those of this formula, whatever later becomes of that function.
+    """
     ue = rows[np.arange(rows.shape[0]), e]
     u = ue / np.linalg.norm(ue, axis=1)[:, None]
     coef = rows @ u.conj()[:, :, None]
