@@ -1,0 +1,218 @@
+"""Benchmark: what a compiled kernel would buy the two-sensor front proof (issue 25, decision data).
+
+kfio has no compiled code of its own and does not depend on Numba; this script measures what
+two of the blind walk's hot functions would cost compiled, so that the decision to add such a
+dependency is made on numbers.  It runs ``analyze`` on the two dense sensors of period 84
+(``bench_sensors.py``'s case) in this process, records the first calls of
+:meth:`kfio.search._affine.Affine.lex_first_possible` and of
+``kfio.search._blind_batch._real_line_residuals`` (their inputs and answers), then times the
+NumPy functions against Numba versions on the same inputs, alternating, CPU seconds:
+
+* the lex-first test decided per flat with an early exit: only the maps ``a (n - b)`` with
+  ``b`` in the flat can put a phase at 0, and a map is dropped at the first phase where its
+  image and the flat differ.  Integer logic: its answers must equal NumPy's exactly, and the
+  script fails if one differs;
+* the one-row residuals ``|W_t - (W_t . u_e) u_e|`` in a loop per pair and slot.  Its sums run
+  in another order than BLAS and ``einsum``, so the floats differ in their last bits: the
+  script prints the largest difference (relative to the largest row entry) and how many
+  residuals would change side at rank thresholds of 1e-10, 1e-9 and 1e-8 of that scale.
+
+Needs Numba beside kfio, in a virtual environment of its own:
+``python -m venv /tmp/nb && /tmp/nb/bin/pip install -e . numba`` then
+``OPENBLAS_NUM_THREADS=1 /tmp/nb/bin/python bench/bench_compiled_kernels.py [--calls 300] [--whole]``.
+With ``--whole`` it then runs the whole ``analyze`` twice more, with the NumPy functions and
+with both kernels in their place, and prints the CPU seconds of each and whether the two
+answers' JSON is the same.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+
+import numpy as np
+from bench_sensors import cases
+
+
+def record(calls: int) -> tuple[tuple[int, tuple[int, ...]], list, list]:
+    """Run the period-84 case once, keeping the first ``calls`` inputs and answers of both functions."""
+    from kfio import analyze, load_request
+    from kfio._budget import Budget
+    from kfio.model._limits import DEFAULT_LIMITS
+    from kfio.search import _affine, _blind_batch
+
+    lex: list = []
+    res: list = []
+    group: list[tuple[int, tuple[int, ...]]] = []
+    lex_np = _affine.Affine.lex_first_possible
+    res_np = _blind_batch._real_line_residuals
+
+    def lex_hook(self, masks, cores):  # type: ignore[no-untyped-def]
+        out = lex_np(self, masks, cores)
+        if not group:
+            group.append((self.n_phases, self.units))
+        if len(lex) < calls:
+            lex.append((masks.copy(), cores.copy(), out.copy()))
+        return out
+
+    def res_hook(rows, e):  # type: ignore[no-untyped-def]
+        out = res_np(rows, e)
+        if len(res) < calls:
+            res.append((rows.copy(), e.copy(), out.copy()))
+        return out
+
+    _affine.Affine.lex_first_possible = lex_hook  # type: ignore[method-assign]
+    _blind_batch._real_line_residuals = res_hook
+    try:
+        body = dict(cases())["period 84, random dense rows"]
+        analyze(load_request(body, DEFAULT_LIMITS.for_command("analyze")), budget=Budget(seconds=600))
+    finally:
+        _affine.Affine.lex_first_possible = lex_np  # type: ignore[method-assign]
+        _blind_batch._real_line_residuals = res_np
+    return group[0], lex, res
+
+
+def whole(lex_nb, res_nb, inverses) -> None:  # type: ignore[no-untyped-def]
+    """``analyze`` of the period-84 case with the NumPy functions, then with the kernels in their place."""
+    from kfio import analyze, load_request
+    from kfio._budget import Budget
+    from kfio.model._limits import DEFAULT_LIMITS
+    from kfio.search import _affine, _blind_batch
+
+    body = dict(cases())["period 84, random dense rows"]
+    lex_np, res_np = _affine.Affine.lex_first_possible, _blind_batch._real_line_residuals
+
+    def lex_compiled(self, masks, cores):  # type: ignore[no-untyped-def]
+        return lex_nb(masks, cores, inverses, self.n_phases, self.prefix)
+
+    answers = []
+    for name, lex, res in (("NumPy", lex_np, res_np), ("compiled", lex_compiled, res_nb)):
+        _affine.Affine.lex_first_possible = lex  # type: ignore[method-assign]
+        _blind_batch._real_line_residuals = res
+        try:
+            t = time.process_time()
+            report = analyze(load_request(body, DEFAULT_LIMITS.for_command("analyze")), budget=Budget(seconds=600))
+            print(f"analyze, period 84, {name}: {time.process_time() - t:.1f} s CPU, {report.verdict}")
+            answers.append(json.dumps(report.to_dict(), sort_keys=True))
+        finally:
+            _affine.Affine.lex_first_possible = lex_np  # type: ignore[method-assign]
+            _blind_batch._real_line_residuals = res_np
+    print(f"  same JSON: {answers[0] == answers[1]}")
+
+
+def compiled(numba):  # type: ignore[no-untyped-def]
+    """The two kernels, compiled by Numba."""
+
+    @numba.njit(cache=False)
+    def lex_first(masks, cores, inverses, N0, P):  # type: ignore[no-untyped-def]
+        out = np.ones(masks.shape[0], dtype=np.bool_)
+        for c in range(masks.shape[0]):
+            Q = masks[c]
+            last = min(cores[c], P - 1)
+            if not Q[0]:  # any map sending a phase of Q to 0 comes first
+                out[c] = not Q.any()
+                continue
+            done = False
+            for b in range(N0):
+                if not Q[b]:
+                    continue  # the image lacks phase 0: it comes after Q
+                for ai in inverses:  # g(n) = a (n - b): phase t of g(Q) is n = a^{-1} t + b
+                    for t in range(1, last + 1):
+                        g = Q[(ai * t + b) % N0]
+                        if g != Q[t]:
+                            done = g
+                            break
+                    if done:
+                        break
+                if done:
+                    break
+            out[c] = not done
+        return out
+
+    @numba.njit(cache=False)
+    def line_residuals(rows, e):  # type: ignore[no-untyped-def]
+        C, S, d = rows.shape
+        out = np.empty((C, S))
+        u = np.empty(d)
+        for c in range(C):
+            s = 0.0
+            for k in range(d):
+                s += rows[c, e[c], k] * rows[c, e[c], k]
+            size = math.sqrt(s)
+            for k in range(d):
+                u[k] = rows[c, e[c], k] / size
+            for t in range(S):
+                coef = 0.0
+                for k in range(d):
+                    coef += rows[c, t, k] * u[k]
+                acc = 0.0
+                for k in range(d):
+                    x = rows[c, t, k] - coef * u[k]
+                    acc += x * x
+                out[c, t] = math.sqrt(acc)
+        return out
+
+    return lex_first, line_residuals
+
+
+def timed(fn, calls: list, rounds: int) -> float:  # type: ignore[no-untyped-def]
+    best = math.inf
+    for _ in range(rounds):
+        t = time.process_time()
+        for args in calls:
+            fn(*args)
+        best = min(best, time.process_time() - t)
+    return best
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--calls", type=int, default=300, help="calls of each function recorded (memory grows with it)")
+    ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--whole", action="store_true", help="also time the whole analyze with the kernels in place")
+    args = ap.parse_args()
+    try:
+        import numba
+    except ImportError:
+        print("needs Numba beside kfio (not a kfio dependency): see this script's docstring", file=sys.stderr)
+        sys.exit(2)
+    from kfio.search._affine import Affine
+    from kfio.search._blind_batch import _real_line_residuals
+
+    (N0, units), lex, res = record(args.calls)
+    affine = Affine(N0, units)
+    inverses = np.array([pow(a, -1, N0) for a in units], dtype=np.int64)
+    lex_nb, res_nb = compiled(numba)
+    t = time.process_time()
+    lex_nb(lex[0][0], lex[0][1], inverses, N0, affine.prefix)
+    res_nb(res[0][0], res[0][1])
+    print(f"Numba {numba.__version__}, compile of both kernels: {time.process_time() - t:.2f} s CPU")
+    for masks, cores, want in lex:
+        if not np.array_equal(lex_nb(masks, cores, inverses, N0, affine.prefix), want):
+            sys.exit("the compiled lex-first test disagrees with NumPy's")
+    worst, flips = 0.0, 0
+    for rows, e, want in res:
+        got = res_nb(rows, e)
+        scale = float(np.abs(rows).max())
+        worst = max(worst, float(np.abs(got - want).max()) / scale)
+        flips += sum(int(((got <= tol * scale) != (want <= tol * scale)).sum()) for tol in (1e-10, 1e-9, 1e-8))
+    n_lex = sum(m.shape[0] for m, _, _ in lex)
+    n_res = sum(r.shape[0] for r, _, _ in res)
+    t_np = timed(lambda m, c, _: affine.lex_first_possible(m, c), lex, args.rounds)
+    t_nb = timed(lambda m, c, _: lex_nb(m, c, inverses, N0, affine.prefix), lex, args.rounds)
+    print(f"lex-first, {len(lex)} calls, {n_lex} flats: NumPy {t_np:.3f} s, Numba {t_nb:.3f} s, {t_np / t_nb:.1f}x;")
+    print("  answers identical")
+    t_np = timed(lambda r, e, _: _real_line_residuals(r, e), res, args.rounds)
+    t_nb = timed(lambda r, e, _: res_nb(r, e), res, args.rounds)
+    print(f"residuals, {len(res)} calls, {n_res} pairs: NumPy {t_np:.3f} s, Numba {t_nb:.3f} s, {t_np / t_nb:.1f}x;")
+    print(f"  largest difference {worst:.1e} of the largest entry, {flips} residuals change side at 1e-10..1e-8")
+    if args.whole:
+        del lex, res
+        whole(lex_nb, res_nb, inverses)
+
+
+if __name__ == "__main__":
+    main()
