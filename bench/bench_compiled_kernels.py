@@ -17,9 +17,17 @@ NumPy functions against Numba versions on the same inputs, alternating, CPU seco
   script prints the largest difference (relative to the largest row entry) and how many
   residuals would change side at rank thresholds of 1e-10, 1e-9 and 1e-8 of that scale.
 
+Third, ``P_hat_N`` of Rohr, Marelli and Fu (2010) for ``N = 2, 4, 8`` on Sinopoli et al.
+(2004)'s 3x3 system at ``lambda = 0.4`` (``examples/bounds_seed004_3x3.json``): the three
+fixed points of ``g_N`` (355 applications) by kfio's level-by-level NumPy recursion and by a
+compiled loop over the same tree, with the same start, stopping rule and tolerance.  It prints
+both times, the iteration counts (which must agree) and the largest relative difference of
+the fixed points (the sums run in another order, so they differ in their last bits), and the
+whole in-process ``bounds`` request for scale.
+
 Needs Numba beside kfio, in a virtual environment of its own:
 ``python -m venv /tmp/nb && /tmp/nb/bin/pip install -e . numba`` then
-``OPENBLAS_NUM_THREADS=1 /tmp/nb/bin/python bench/bench_compiled_kernels.py [--calls 300] [--whole]``.
+``OPENBLAS_NUM_THREADS=1 /tmp/nb/bin/python bench/bench_compiled_kernels.py [--calls 300] [--whole] [--part sensors|phat|all]``.
 With ``--whole`` it then runs the whole ``analyze`` twice more, with the NumPy functions and
 with both kernels in their place, and prints the CPU seconds of each and whether the two
 answers' JSON is the same.
@@ -32,9 +40,13 @@ import json
 import math
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 from bench_sensors import cases
+
+#: The request of the bounds part: Sinopoli et al. (2004)'s 3x3 system at lambda = 0.4.
+EXAMPLE = Path(__file__).resolve().parent.parent / "examples" / "bounds_seed004_3x3.json"
 
 
 def record(calls: int) -> tuple[tuple[int, tuple[int, ...]], list, list]:
@@ -173,12 +185,22 @@ def main() -> None:
     ap.add_argument("--calls", type=int, default=300, help="calls of each function recorded (memory grows with it)")
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--whole", action="store_true", help="also time the whole analyze with the kernels in place")
+    ap.add_argument("--part", choices=("sensors", "phat", "all"), default="all")
     args = ap.parse_args()
     try:
         import numba
     except ImportError:
         print("needs Numba beside kfio (not a kfio dependency): see this script's docstring", file=sys.stderr)
         sys.exit(2)
+    print(f"Numba {numba.__version__}, NumPy {np.__version__}, CPU seconds, best of {args.rounds} rounds")
+    if args.part in ("sensors", "all"):
+        sensors(args, numba)
+    if args.part in ("phat", "all"):
+        phat(numba, args.rounds)
+
+
+def sensors(args: argparse.Namespace, numba) -> None:  # type: ignore[no-untyped-def]
+    """The two kernels of the front proof on recorded period-84 calls (and, with ``--whole``, the whole run)."""
     from kfio.search._affine import Affine
     from kfio.search._blind_batch import _real_line_residuals
 
@@ -189,7 +211,7 @@ def main() -> None:
     t = time.process_time()
     lex_nb(lex[0][0], lex[0][1], inverses, N0, affine.prefix)
     res_nb(res[0][0], res[0][1])
-    print(f"Numba {numba.__version__}, compile of both kernels: {time.process_time() - t:.2f} s CPU")
+    print(f"compile of both kernels: {time.process_time() - t:.2f} s CPU")
     for masks, cores, want in lex:
         if not np.array_equal(lex_nb(masks, cores, inverses, N0, affine.prefix), want):
             sys.exit("the compiled lex-first test disagrees with NumPy's")
@@ -212,6 +234,110 @@ def main() -> None:
     if args.whole:
         del lex, res
         whole(lex_nb, res_nb, inverses)
+
+
+def phat(numba, rounds: int) -> None:  # type: ignore[no-untyped-def]
+    """``P_hat_2, P_hat_4, P_hat_8`` of the 3x3 seed system: the NumPy fixed points against a compiled ``g_N``."""
+    from kfio import bounds, load_request
+    from kfio.riccati_bounds import _phat
+    from kfio.riccati_bounds._vech import vech
+
+    A = np.array([[1.25, 1.0, 0.0], [0.0, 0.9, 7.0], [0.0, 0.0, 0.6]])
+    C, Q, R, lam = np.array([[1.0, 0.0, 2.0]]), 20.0 * np.eye(3), np.array([[2.5]]), 0.4
+    op = _phat.BatchedMare(A, C, Q, R, lam)
+    start = vech(_phat.p_hat_sequence(A, C, Q, R, lam, [1])[1].matrix)
+
+    @numba.njit(cache=False)
+    def g_n(h, N, AXA, AXC, CXC, q, r, iu, ju, leaves):  # type: ignore[no-untyped-def]
+        # Level k holds phi(X, S) for the 2^k prefixes S (lost first, then arrived), as vech rows.
+        m, n = h.shape[0], AXC.shape[1]
+        level = np.empty((1, m))
+        level[0] = h
+        gain = np.empty(n)
+        for _ in range(N):
+            b = level.shape[0]
+            nxt = np.empty((2 * b, m))
+            for i in range(b):
+                x = level[i]
+                for j in range(m):  # Phi_0 = A X A' + Q
+                    s = 0.0
+                    for k in range(m):
+                        s += x[k] * AXA[k, j]
+                    nxt[i, j] = s + q[j]
+                s = r
+                for k in range(m):
+                    s += x[k] * CXC[k]
+                s = math.sqrt(s)
+                for a in range(n):  # A X C' / sqrt(C X C' + R)
+                    t = 0.0
+                    for k in range(m):
+                        t += x[k] * AXC[k, a]
+                    gain[a] = t / s
+                for j in range(m):  # Phi_1 = Phi_0 - A X C' (C X C' + R)^-1 C X A'
+                    nxt[b + i, j] = nxt[i, j] - gain[iu[j]] * gain[ju[j]]
+            level = nxt
+        out = np.zeros(m)
+        for i in range(level.shape[0]):
+            for j in range(m):
+                out[j] += leaves[i] * level[i, j]
+        return out
+
+    def leaf_weights(N: int) -> np.ndarray:
+        w = np.ones(1)
+        for _ in range(N):
+            w = np.concatenate([w * (1.0 - lam), w * lam])
+        return w
+
+    leaves = {N: leaf_weights(N) for N in (2, 4, 8)}
+    fixed = (op._AXA, op._AXC, op._CXC[:, 0], op._q, float(op._r[0]), op._iu, op._ju)
+    cap = _phat.DIVERGENCE_RATIO * (1.0 + float(np.abs(op._q).max()))
+
+    def compiled_chain() -> dict[int, tuple[np.ndarray, int]]:
+        out = {1: (start, 0)}
+        for N, d in ((2, 1), (4, 2), (8, 4)):  # each starts at P_hat_d, d the largest proper divisor
+            h, iterations, step = out[d][0], 0, math.inf
+            while step > 1e-11 and iterations < 20_000:
+                nxt = g_n(h, N, *fixed, leaves[N])
+                top = float(np.abs(nxt).max())
+                if not top <= cap:
+                    sys.exit(f"the compiled g_{N} diverges")
+                step = float(np.abs(nxt - h).max() / max(1e-300, top))
+                h, iterations = nxt, iterations + 1
+            out[N] = (h, iterations)
+        return out
+
+    def numpy_chain() -> dict[int, _phat.PHat]:
+        out = {1: _phat.PHat(1, None, 0, 0.0, 1)}
+        h = start
+        for N, d in ((2, 1), (4, 2), (8, 4)):
+            out[N] = _phat._fixed_point(op, N, h, d, 1e-11, 20_000, None)
+            h = vech(out[N].matrix)
+        return out
+
+    t = time.process_time()
+    compiled_chain()
+    print(f"compile of g_N: {time.process_time() - t:.2f} s CPU")
+    t_np, t_nb = math.inf, math.inf
+    for _ in range(rounds):
+        t = time.process_time()
+        want = numpy_chain()
+        t_np = min(t_np, time.process_time() - t)
+        t = time.process_time()
+        got = compiled_chain()
+        t_nb = min(t_nb, time.process_time() - t)
+    print(f"P_hat_2, _4, _8 of the 3x3 seed system: NumPy {1000 * t_np:.1f} ms, Numba {1000 * t_nb:.2f} ms, ", end="")
+    print(f"{t_np / t_nb:.1f}x")
+    for N in (2, 4, 8):
+        M = vech(want[N].matrix)
+        diff = float(np.abs(got[N][0] - M).max() / np.abs(M).max())
+        print(f"  N = {N}: iterations {got[N][1]} (NumPy {want[N].iterations}), largest relative difference {diff:.1e}")
+    request = load_request(EXAMPLE.read_text())
+    times = []
+    for _ in range(20):
+        t = time.process_time()
+        bounds(request)
+        times.append(time.process_time() - t)
+    print(f"  the whole bounds request in process (NumPy): median {1000 * sorted(times)[10]:.1f} ms of 20")
 
 
 if __name__ == "__main__":
