@@ -28,9 +28,9 @@ whole in-process ``bounds`` request for scale.
 Needs Numba beside kfio, in a virtual environment of its own:
 ``python -m venv /tmp/nb && /tmp/nb/bin/pip install -e . numba`` then
 ``OPENBLAS_NUM_THREADS=1 /tmp/nb/bin/python bench/bench_compiled_kernels.py [--calls 300] [--whole] [--part sensors|phat|all]``.
-With ``--whole`` it then runs the whole ``analyze`` twice more, with the NumPy functions and
-with both kernels in their place, and prints the CPU seconds of each and whether the two
-answers' JSON is the same.
+With ``--whole`` it then runs the whole ``analyze`` four more times, alternating the NumPy
+functions and both kernels in their place, and prints the CPU seconds of each run and whether
+every answer's JSON is the same.
 """
 
 from __future__ import annotations
@@ -87,8 +87,8 @@ def record(calls: int) -> tuple[tuple[int, tuple[int, ...]], list, list]:
     return group[0], lex, res
 
 
-def whole(lex_nb, res_nb, inverses) -> None:  # type: ignore[no-untyped-def]
-    """``analyze`` of the period-84 case with the NumPy functions, then with the kernels in their place."""
+def whole(lex_nb, res_nb, inverses, rounds: int) -> None:  # type: ignore[no-untyped-def]
+    """``analyze`` of the period-84 case with the NumPy functions and with the kernels in their place, alternating."""
     from kfio import analyze, load_request
     from kfio._budget import Budget
     from kfio.model._limits import DEFAULT_LIMITS
@@ -100,19 +100,23 @@ def whole(lex_nb, res_nb, inverses) -> None:  # type: ignore[no-untyped-def]
     def lex_compiled(self, masks, cores):  # type: ignore[no-untyped-def]
         return lex_nb(masks, cores, inverses, self.n_phases, self.prefix)
 
-    answers = []
-    for name, lex, res in (("NumPy", lex_np, res_np), ("compiled", lex_compiled, res_nb)):
-        _affine.Affine.lex_first_possible = lex  # type: ignore[method-assign]
-        _blind_batch._real_line_residuals = res
-        try:
-            t = time.process_time()
-            report = analyze(load_request(body, DEFAULT_LIMITS.for_command("analyze")), budget=Budget(seconds=600))
-            print(f"analyze, period 84, {name}: {time.process_time() - t:.1f} s CPU, {report.verdict}")
-            answers.append(json.dumps(report.to_dict(), sort_keys=True))
-        finally:
-            _affine.Affine.lex_first_possible = lex_np  # type: ignore[method-assign]
-            _blind_batch._real_line_residuals = res_np
-    print(f"  same JSON: {answers[0] == answers[1]}")
+    answers: dict[str, set[str]] = {"NumPy": set(), "compiled": set()}
+    times: dict[str, list[float]] = {"NumPy": [], "compiled": []}
+    for _ in range(rounds):
+        for name, lex, res in (("NumPy", lex_np, res_np), ("compiled", lex_compiled, res_nb)):
+            _affine.Affine.lex_first_possible = lex  # type: ignore[method-assign]
+            _blind_batch._real_line_residuals = res
+            try:
+                t = time.process_time()
+                report = analyze(load_request(body, DEFAULT_LIMITS.for_command("analyze")), budget=Budget(seconds=600))
+                times[name].append(time.process_time() - t)
+                answers[name].add(json.dumps(report.to_dict(), sort_keys=True))
+            finally:
+                _affine.Affine.lex_first_possible = lex_np  # type: ignore[method-assign]
+                _blind_batch._real_line_residuals = res_np
+    for name, ts in times.items():
+        print(f"analyze, period 84, {name}: {' / '.join(f'{t:.1f}' for t in ts)} s CPU (alternating)")
+    print(f"  same JSON: {len(answers['NumPy'] | answers['compiled']) == 1}")
 
 
 def compiled(numba):  # type: ignore[no-untyped-def]
@@ -233,7 +237,7 @@ def sensors(args: argparse.Namespace, numba) -> None:  # type: ignore[no-untyped
     print(f"  largest difference {worst:.1e} of the largest entry, {flips} residuals change side at 1e-10..1e-8")
     if args.whole:
         del lex, res
-        whole(lex_nb, res_nb, inverses)
+        whole(lex_nb, res_nb, inverses, min(args.rounds, 2))
 
 
 def phat(numba, rounds: int) -> None:  # type: ignore[no-untyped-def]
