@@ -6,7 +6,8 @@ dependency is made on numbers.  It runs ``analyze`` on the two dense sensors of 
 (``bench_sensors.py``'s case) in this process, records the first calls of
 :meth:`kfio.search._affine.Affine.lex_first_possible` and of
 ``kfio.search._blind_batch._real_line_residuals`` (their inputs and answers), then times the
-NumPy functions against Numba versions on the same inputs, alternating, CPU seconds:
+NumPy functions against Numba versions on the same inputs (CPU seconds, the best of
+``--rounds`` passes over the calls on each side):
 
 * the lex-first test decided per flat with an early exit: only the maps ``a (n - b)`` with
   ``b`` in the flat can put a phase at 0, and a map is dropped at the first phase where its
@@ -36,6 +37,7 @@ every answer's JSON is the same.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import math
 import sys
@@ -49,11 +51,33 @@ from bench_sensors import cases
 EXAMPLE = Path(__file__).resolve().parent.parent / "examples" / "bounds_seed004_3x3.json"
 
 
-def record(calls: int) -> tuple[tuple[int, tuple[int, ...]], list, list]:
-    """Run the period-84 case once, keeping the first ``calls`` inputs and answers of both functions."""
+@contextlib.contextmanager
+def patched(lex, res):  # type: ignore[no-untyped-def]
+    """``Affine.lex_first_possible`` and the one-row residuals replaced by ``lex`` and ``res`` for the block."""
+    from kfio.search import _affine, _blind_batch
+
+    lex_np, res_np = _affine.Affine.lex_first_possible, _blind_batch._real_line_residuals
+    _affine.Affine.lex_first_possible = lex  # type: ignore[method-assign]
+    _blind_batch._real_line_residuals = res
+    try:
+        yield
+    finally:
+        _affine.Affine.lex_first_possible = lex_np  # type: ignore[method-assign]
+        _blind_batch._real_line_residuals = res_np
+
+
+def analyze_period_84():  # type: ignore[no-untyped-def]
+    """``analyze`` of ``bench_sensors.py``'s two dense sensors on period 84, in this process."""
     from kfio import analyze, load_request
     from kfio._budget import Budget
     from kfio.model._limits import DEFAULT_LIMITS
+
+    body = dict(cases())["period 84, random dense rows"]
+    return analyze(load_request(body, DEFAULT_LIMITS.for_command("analyze")), budget=Budget(seconds=600))
+
+
+def record(calls: int) -> tuple[tuple[int, tuple[int, ...]], list, list]:
+    """Run the period-84 case once, keeping the first ``calls`` inputs and answers of both functions."""
     from kfio.search import _affine, _blind_batch
 
     lex: list = []
@@ -76,47 +100,34 @@ def record(calls: int) -> tuple[tuple[int, tuple[int, ...]], list, list]:
             res.append((rows.copy(), e.copy(), out.copy()))
         return out
 
-    _affine.Affine.lex_first_possible = lex_hook  # type: ignore[method-assign]
-    _blind_batch._real_line_residuals = res_hook
-    try:
-        body = dict(cases())["period 84, random dense rows"]
-        analyze(load_request(body, DEFAULT_LIMITS.for_command("analyze")), budget=Budget(seconds=600))
-    finally:
-        _affine.Affine.lex_first_possible = lex_np  # type: ignore[method-assign]
-        _blind_batch._real_line_residuals = res_np
+    with patched(lex_hook, res_hook):
+        analyze_period_84()
     return group[0], lex, res
 
 
 def whole(lex_nb, res_nb, inverses, rounds: int) -> None:  # type: ignore[no-untyped-def]
     """``analyze`` of the period-84 case with the NumPy functions and with the kernels in their place, alternating."""
-    from kfio import analyze, load_request
-    from kfio._budget import Budget
-    from kfio.model._limits import DEFAULT_LIMITS
     from kfio.search import _affine, _blind_batch
-
-    body = dict(cases())["period 84, random dense rows"]
-    lex_np, res_np = _affine.Affine.lex_first_possible, _blind_batch._real_line_residuals
 
     def lex_compiled(self, masks, cores):  # type: ignore[no-untyped-def]
         return lex_nb(masks, cores, inverses, self.n_phases, self.prefix)
 
-    answers: dict[str, set[str]] = {"NumPy": set(), "compiled": set()}
-    times: dict[str, list[float]] = {"NumPy": [], "compiled": []}
+    sides = {
+        "NumPy": (_affine.Affine.lex_first_possible, _blind_batch._real_line_residuals),
+        "compiled": (lex_compiled, res_nb),
+    }
+    answers: set[str] = set()
+    times: dict[str, list[float]] = {name: [] for name in sides}
     for _ in range(rounds):
-        for name, lex, res in (("NumPy", lex_np, res_np), ("compiled", lex_compiled, res_nb)):
-            _affine.Affine.lex_first_possible = lex  # type: ignore[method-assign]
-            _blind_batch._real_line_residuals = res
-            try:
+        for name, (lex, res) in sides.items():
+            with patched(lex, res):
                 t = time.process_time()
-                report = analyze(load_request(body, DEFAULT_LIMITS.for_command("analyze")), budget=Budget(seconds=600))
+                report = analyze_period_84()
                 times[name].append(time.process_time() - t)
-                answers[name].add(json.dumps(report.to_dict(), sort_keys=True))
-            finally:
-                _affine.Affine.lex_first_possible = lex_np  # type: ignore[method-assign]
-                _blind_batch._real_line_residuals = res_np
+            answers.add(json.dumps(report.to_dict(), sort_keys=True))
     for name, ts in times.items():
         print(f"analyze, period 84, {name}: {' / '.join(f'{t:.1f}' for t in ts)} s CPU (alternating)")
-    print(f"  same JSON: {len(answers['NumPy'] | answers['compiled']) == 1}")
+    print(f"  same JSON: {len(answers) == 1}")
 
 
 def compiled(numba):  # type: ignore[no-untyped-def]
@@ -246,8 +257,10 @@ def phat(numba, rounds: int) -> None:  # type: ignore[no-untyped-def]
     from kfio.riccati_bounds import _phat
     from kfio.riccati_bounds._vech import vech
 
-    A = np.array([[1.25, 1.0, 0.0], [0.0, 0.9, 7.0], [0.0, 0.0, 0.6]])
-    C, Q, R, lam = np.array([[1.0, 0.0, 2.0]]), 20.0 * np.eye(3), np.array([[2.5]]), 0.4
+    text = EXAMPLE.read_text()
+    example = json.loads(text)
+    A, C, Q, R = (np.array(example["system"][k], dtype=float) for k in ("A", "C", "Q", "R"))
+    lam = float(example["channel"]["arrival_probability"])
     op = _phat.BatchedMare(A, C, Q, R, lam)
     start = vech(_phat.p_hat_sequence(A, C, Q, R, lam, [1])[1].matrix)
 
@@ -286,56 +299,50 @@ def phat(numba, rounds: int) -> None:  # type: ignore[no-untyped-def]
                 out[j] += leaves[i] * level[i, j]
         return out
 
-    def leaf_weights(N: int) -> np.ndarray:
-        w = np.ones(1)
-        for _ in range(N):
-            w = np.concatenate([w * (1.0 - lam), w * lam])
-        return w
+    def leaves(N: int) -> np.ndarray:
+        """``P(S)`` of the ``2^N`` arrival sequences, in the order of the last level (from the tree's own weights)."""
+        w = op._tree_weights(N)[-1]
+        return np.concatenate([w * (1.0 - lam), w * lam])
 
-    leaves = {N: leaf_weights(N) for N in (2, 4, 8)}
-    fixed = (op._AXA, op._AXC, op._CXC[:, 0], op._q, float(op._r[0]), op._iu, op._ju)
-    cap = _phat.DIVERGENCE_RATIO * (1.0 + float(np.abs(op._q).max()))
+    class Compiled:
+        """What :func:`_phat._fixed_point` asks of a ``BatchedMare``, with the compiled ``g_N``."""
 
-    def compiled_chain() -> dict[int, tuple[np.ndarray, int]]:
-        out = {1: (start, 0)}
-        for N, d in ((2, 1), (4, 2), (8, 4)):  # each starts at P_hat_d, d the largest proper divisor
-            h, iterations, step = out[d][0], 0, math.inf
-            while step > 1e-11 and iterations < 20_000:
-                nxt = g_n(h, N, *fixed, leaves[N])
-                top = float(np.abs(nxt).max())
-                if not top <= cap:
-                    sys.exit(f"the compiled g_{N} diverges")
-                step = float(np.abs(nxt - h).max() / max(1e-300, top))
-                h, iterations = nxt, iterations + 1
-            out[N] = (h, iterations)
-        return out
+        n, _q = op.n, op._q
+        weights = {N: leaves(N) for N in (2, 4, 8)}
+        matrices = (op._AXA, op._AXC, op._CXC[:, 0], op._q, float(op._r[0]), op._iu, op._ju)
 
-    def numpy_chain() -> dict[int, _phat.PHat]:
-        out = {1: _phat.PHat(1, None, 0, 0.0, 1)}
-        h = start
-        for N, d in ((2, 1), (4, 2), (8, 4)):
-            out[N] = _phat._fixed_point(op, N, h, d, 1e-11, 20_000, None)
+        def g_n(self, h: np.ndarray, N: int) -> np.ndarray:
+            return g_n(h, N, *self.matrices, self.weights[N])
+
+    def chain(mare) -> dict[int, _phat.PHat]:  # type: ignore[no-untyped-def]
+        """``P_hat_2, _4, _8`` by :func:`_phat._fixed_point`, each started at ``P_hat_d`` as ``p_hat_sequence`` does."""
+        out, h = {}, start
+        for N, d in ((2, 1), (4, 2), (8, 4)):  # d: the largest proper divisor of N
+            out[N] = _phat._fixed_point(mare, N, h, d, 1e-11, 20_000, None)
             h = vech(out[N].matrix)
         return out
 
+    compiled = Compiled()
     t = time.process_time()
-    compiled_chain()
+    chain(compiled)
     print(f"compile of g_N: {time.process_time() - t:.2f} s CPU")
     t_np, t_nb = math.inf, math.inf
     for _ in range(rounds):
         t = time.process_time()
-        want = numpy_chain()
+        want = chain(op)
         t_np = min(t_np, time.process_time() - t)
         t = time.process_time()
-        got = compiled_chain()
+        got = chain(compiled)
         t_nb = min(t_nb, time.process_time() - t)
     print(f"P_hat_2, _4, _8 of the 3x3 seed system: NumPy {1000 * t_np:.1f} ms, Numba {1000 * t_nb:.2f} ms, ", end="")
     print(f"{t_np / t_nb:.1f}x")
     for N in (2, 4, 8):
-        M = vech(want[N].matrix)
-        diff = float(np.abs(got[N][0] - M).max() / np.abs(M).max())
-        print(f"  N = {N}: iterations {got[N][1]} (NumPy {want[N].iterations}), largest relative difference {diff:.1e}")
-    request = load_request(EXAMPLE.read_text())
+        M = want[N].matrix
+        diff = float(np.abs(got[N].matrix - M).max() / np.abs(M).max())
+        print(
+            f"  N = {N}: iterations {got[N].iterations} (NumPy {want[N].iterations}), largest relative difference {diff:.1e}"
+        )
+    request = load_request(text)
     times = []
     for _ in range(20):
         t = time.process_time()
