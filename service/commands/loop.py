@@ -38,9 +38,10 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _probability(value: float | None, exact: str | None) -> str:
-    """``0.5625`` or ``0.372842 (exact: 15625.../41908...)``: the decimal first, the exact text beside it when it differs."""
-    text = f"{value:.6g}"
-    return text if exact is None or exact == text else f"{text} (exact: {exact})"
+    """``0.5625 = 9/16`` or ``0.237112 (algebraic, degree 3)``: kfio's one number format (:func:`kfio._numbers.number_text`)."""
+    from kfio._numbers import number_text
+
+    return number_text(exact, value)
 
 
 def summary(report: dict) -> str:
