@@ -1,0 +1,215 @@
+"""One number format on every surface people and pipelines read (kfio._numbers).
+
+The reader of kfio's exact texts is checked against SymPy's own parser (tests may use it; the
+library may not), the format's rules on hand-made cases, and every surface is rendered for float
+plants (a ``control.c2d`` pendulum, a float loop): no ``CRootOf``, no run of 40 digits, no line
+wider than the cap.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import shutil
+from fractions import Fraction
+from pathlib import Path
+
+import pytest
+import sympy
+
+from kfio._numbers import EXACT_CAP, clip, exact_value, looks_like_float_data, number_text, readable_measure, show
+from kfio.service.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+PENDULUM = ROOT / "examples" / "pendulum_c2d.json"
+LINE_CAP = 160
+LONG_DIGITS = re.compile(r"\d{40}")
+
+#: A loop whose plant and weights are float data (two states, a sampled pendulum's first block).
+FLOAT_LOOP = {
+    "system": {
+        "A": [[1.0004897194771216, 0.009976507175556216], [0.09786953539220648, 0.995451876726684]],
+        "B": [[0.00004958916265954385], [0.00987732885023713]],
+        "C": [[1, 0]],
+        "Q": [[1, 0], [0, 1]],
+        "R": [[0.01]],
+    },
+    "channel": {"model": "bernoulli", "arrival_probability": 0.8},
+    "actuator_channel": {"model": "bernoulli", "arrival_probability": 0.9},
+    "controller": {"lqg": {"W": [[1, 0], [0, 1]], "U": [[0.5]]}},
+    "cost": {"W": [[1, 0], [0, 1]], "U": [[0.5]]},
+    "options": {"loop": {"protocol": "tcp", "on_loss": "zero"}},
+}
+
+
+# ---------------------------------------------------------------- the reader against SymPy
+
+
+TEXTS = [
+    "9/16",
+    "-75/152",
+    "1 - 1/sqrt(2)",
+    "7/8 - sqrt(7009)/200",
+    "(3 + sqrt(5))/2",
+    "2**(-1/3)",
+    "1 - 1/CRootOf(x**3 - 3*x - 1, 2)**2",
+    "1 - 1/CRootOf(15625*x**3 - 31311*x + 1, 1)",
+    "-CRootOf(x**4 - 10*x**2 + 1, 0) + 1/2",
+    "log(2)/log(9/4)",
+    "log(2)/(3*log(5/4))",
+    "1/2 + sqrt(3)*I/2",
+    "0.25 + 1/8",
+]
+
+
+@pytest.mark.parametrize("text", TEXTS)
+def test_reader_agrees_with_sympy(text: str) -> None:
+    expected = sympy.sympify(text, rational=True)  # the oracle: SymPy's parser, never used by kfio itself
+    got = exact_value(text)
+    assert complex(got.value) == pytest.approx(complex(sympy.N(expected, 20)), rel=1e-12, abs=1e-15)
+    if expected.has(sympy.log):
+        assert got.degree is None
+    else:
+        x = sympy.Symbol("x")
+        assert got.degree == sympy.minimal_polynomial(expected, x, polys=True).degree()
+
+
+def test_reader_on_a_float_plants_own_texts() -> None:
+    """The critical probability and tail exponent kfio writes for the pendulum: read and evaluated alike."""
+    import kfio
+
+    report = kfio.analyze(kfio.load_request(PENDULUM.read_text())).to_dict()
+    text = report["critical_arrival_probability_exact"]
+    assert "CRootOf" in text and len(text) > 200
+    parsed = exact_value(text)
+    assert parsed.value == pytest.approx(report["critical_arrival_probability"], rel=1e-12)
+    assert parsed.value == pytest.approx(float(sympy.N(sympy.sympify(text), 20)), rel=1e-13)
+    assert parsed.degree == 3
+    kappa = report["tail"]["kappa_exact"]
+    assert exact_value(kappa).value == pytest.approx(report["tail"]["kappa"], rel=1e-10)
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        "__import__('os')",
+        "x + 1",
+        "sqrt(x)",
+        "CRootOf(x**2 - 2, 0, 1)",
+        "1 +",
+        "2**99999",
+        "a.b",
+        "CRootOf(sqrt(x), 0)",
+    ],
+)
+def test_reader_refuses_what_is_not_an_exact_number(text: str) -> None:
+    with pytest.raises((ValueError, TypeError)):
+        exact_value(text)
+    assert show(text, 0.5).decimal == "0.5"  # the format still shows the decimal it was given
+
+
+# ---------------------------------------------------------------- the format's rules
+
+
+def test_short_exact_forms_stand_beside_the_decimal() -> None:
+    assert number_text("9/16") == "0.5625 = 9/16"
+    assert number_text("75/152", 75 / 152) == "0.493421 = 75/152"
+    assert number_text("12") == "12"
+    assert number_text(None, 0.123456789) == "0.123457"
+    assert number_text("7/8 - sqrt(7009)/200") == "0.456401 = 7/8 - sqrt(7009)/200"
+
+
+def test_long_forms_say_what_they_are() -> None:
+    r = sympy.CRootOf(sympy.Symbol("x") ** 3 - 3 * sympy.Symbol("x") - 1, 2)
+    text = str(1 - 1 / r**2 + 1 / r + sympy.Rational(1, 7))
+    assert len(text) > EXACT_CAP
+    assert number_text(text) == f"{float(1 - 1 / r**2 + 1 / r + sympy.Rational(1, 7)):.6g} (algebraic, degree 3)"
+    big = "12345678901234567890123456789/98765432109876543210987654321"
+    assert number_text(big) == f"{float(Fraction(big)):.6g} (29-digit fraction)"
+    floaty = "70400000000000000000000000000/230395516585597167079575641111"
+    assert looks_like_float_data(floaty) and not looks_like_float_data(big)
+    assert number_text(floaty) == "0.305562 (from float data)"
+    assert number_text(big, from_float=True) == f"{float(Fraction(big)):.6g} (from float data)"
+    assert show(floaty).exact_column == "from float data" and show("9/16").exact_column == "9/16"
+
+
+def test_measured_texts_of_check_and_clip() -> None:
+    assert readable_measure("worst rate 9/16") == "worst rate 0.5625 = 9/16"
+    assert readable_measure("<= 2/5") == "<= 0.4 = 2/5"
+    assert readable_measure("unstable") == "unstable"
+    assert readable_measure("0.02 (95% CI [0.01, 0.03], 4000 samples)") == "0.02 (95% CI [0.01, 0.03], 4000 samples)"
+    assert clip("abcdefghij", 10) == "abcdefghij" and clip("abcdefghijk", 10) == "abcdefg..."
+
+
+# ---------------------------------------------------------------- every surface, float plants
+
+
+def _clean(text: str, cap: int | None = LINE_CAP) -> None:
+    assert "CRootOf" not in text
+    assert not LONG_DIGITS.search(text), LONG_DIGITS.search(text)
+    wide = [line for line in text.splitlines() if cap is not None and len(line) > cap]
+    assert wide == [], wide
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("command", ["analyze", "bounds"])
+def test_cli_summaries_of_a_float_plant(command: str, capsys: pytest.CaptureFixture[str]) -> None:
+    code = main([command, str(PENDULUM)])
+    out, err = capsys.readouterr()
+    assert code == 0, err
+    assert "0.0544" in out  # the critical arrival probability's decimal is there
+    _clean(out + err)
+
+
+@pytest.mark.slow
+def test_loop_summary_of_a_float_loop(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    path = tmp_path / "loop.json"
+    path.write_text(json.dumps(FLOAT_LOOP))
+    code = main(["loop", str(path)])
+    out, err = capsys.readouterr()
+    assert code == 0, err
+    _clean(out + err)
+    main(["loop", "--json", str(path)])
+    report = json.loads(capsys.readouterr().out)
+    for key in ("sensor", "actuator"):
+        exact = report[f"critical_{key}_arrival_probability_exact"]
+        assert len(exact) > 200  # long in the JSON, whole
+        line = next(x for x in out.splitlines() if x.startswith(f"critical {key} arrival probability: "))
+        assert line.endswith(number_text(exact, report[f"critical_{key}_arrival_probability"]))
+        decimal = line.split(": ", 1)[1].split(" ")[0]
+        assert float(decimal) == pytest.approx(float(sympy.N(sympy.sympify(exact), 20)), rel=1e-5)
+
+
+@pytest.mark.slow
+def test_check_table_markdown_and_junit_of_a_float_plant(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    shutil.copy(PENDULUM, tmp_path / "pendulum.json")
+    check = {
+        "checks": [
+            {
+                "name": "a pendulum sampled by control.c2d with a long descriptive entry name",
+                "plant": "pendulum.json",
+                "requirements": {
+                    "verdict": "stable",
+                    "margin": "1/100",
+                    "critical_arrival_probability_at_most": 0.05,
+                    "trace_V_bar_at_most": 1000,
+                    "tail_exponent_above": 1,
+                },
+            }
+        ]
+    }
+    (tmp_path / "check.json").write_text(json.dumps(check))
+    md, xml = tmp_path / "summary.md", tmp_path / "report.xml"
+    code = main(["check", str(tmp_path / "check.json"), "--workers", "1", "--markdown", str(md), "--junit", str(xml)])
+    out, err = capsys.readouterr()
+    assert code == 1, err  # 0.0544 > 0.05: the critical probability fails, and says so readably
+    _clean(out)
+    _clean(md.read_text(), cap=200)  # Markdown rows carry their pipes and backticks
+    _clean(xml.read_text(), cap=None)  # XML attributes are one line per element: no width to keep
+    row = next(line for line in out.splitlines() if "critical_arrival_probability_at_most" in line)
+    assert row.startswith("FAIL") and "0.0544201" in row and "<= 0.05 = 1/20" in row
+    assert "failure" in xml.read_text() and "measured 0.0544201" in xml.read_text()
+    main(["check", str(tmp_path / "check.json"), "--workers", "1", "--json"])
+    data = json.loads(capsys.readouterr().out)
+    whole = [o["measured"] for o in data["outcomes"] if o["requirement"] == "critical_arrival_probability_at_most"]
+    assert "CRootOf" in whole[0]  # the pipeline's JSON keeps the exact text
