@@ -48,3 +48,25 @@ class _CallableModule(types.ModuleType):
 
 
 sys.modules[__name__].__class__ = _CallableModule
+
+
+def _call_section() -> str:
+    """What ``help(kfio.loop)`` shows first: the call's signature (read from :func:`loop`) and an example."""
+    import inspect
+
+    example = """
+    >>> import kfio
+    >>> request = {"system": {"A": [[1.25]], "B": [[1]], "C": [[1]], "Q": [[1]], "R": [[0.5]]},
+    ...            "channel": {"model": "bernoulli", "arrival_probability": 0.8},
+    ...            "actuator_channel": {"model": "bernoulli", "arrival_probability": 0.9},
+    ...            "controller": {"lqg": {"W": [[1]], "U": [[0.5]]}}, "cost": {"W": [[1]], "U": [[0.5]]}}
+    >>> str(kfio.loop.analyze_loop(kfio.loop.parse_loop_request(request)).verdict)
+    'stable'
+"""
+    return (
+        f"\n\nCalling the package calls :func:`loop`:\n\n    kfio.loop{inspect.signature(loop)}\n\n"
+        f"{inspect.getdoc(loop) or ''}\n\nA loop request (the JSON of ``kfio loop``), from Python::\n{example}"
+    )
+
+
+__doc__ = (__doc__ or "") + _call_section()

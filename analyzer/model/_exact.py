@@ -226,6 +226,11 @@ def load_json(text: str | bytes) -> Any:
     ------
     InvalidInput
         Text that is not JSON, with the line and column of the problem.
+
+    Examples
+    --------
+    >>> load_json('{"A": [[1.1]]}')
+    {'A': [[Decimal('1.1')]]}
     """
     if isinstance(text, bytes):
         try:

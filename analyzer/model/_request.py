@@ -369,6 +369,12 @@ def parse_request(obj: Any, limits: Limits = DEFAULT_LIMITS, *, system: System |
     ``system``: :func:`parse_system` of ``obj["system"]`` with ``limits``, when
     the caller already has it (a sweep whose points share one plant); the
     rest of the request is validated as always.
+
+    Examples
+    --------
+    >>> request = parse_request({"system": {"A": [[1.1]], "C": [[1]]}, "channel": {"model": "bernoulli", "arrival_probability": "1/2"}})
+    >>> request.system.A, request.channel.model
+    (((Fraction(11, 10),),), 'bernoulli')
     """
     obj = check_keys(obj, "", _TOP_KEYS, {"system", "channel"})
     if system is None:
@@ -413,7 +419,13 @@ def option_group(request: Request, group: str, allowed: Iterable[str]) -> Mappin
 
 
 def load_request(text: str | bytes, limits: Limits = DEFAULT_LIMITS) -> Request:
-    """Parse and validate request JSON text in one step."""
+    """Parse and validate request JSON text in one step (:func:`load_json`, then :func:`parse_request`).
+
+    Examples
+    --------
+    >>> load_request('{"system": {"A": [[1.1]], "C": [[1]]}, "channel": {"model": "bernoulli", "arrival_probability": 0.5}}').system.A
+    ((Fraction(11, 10),),)
+    """
     return parse_request(load_json(text), limits)
 
 
