@@ -68,6 +68,12 @@ from ._step_stats import TraceRecorder
 #: Seconds the simulation may spend on Theorem 1's report (tail exponent, growth rate) before going without it.
 EXACT_ANALYSIS_S = 5.0
 
+#: A step's band has zero width when its standard error is at most this fraction of the value: every
+#: trajectory had the same ``P_t`` and what is left is the rounding of the sums over trajectories.
+DETERMINISTIC_SEM = 1e-12
+#: At such a step the Monte Carlo mean equals the exact value when within this relative distance.
+DETERMINISTIC_TOL = 1e-9
+
 #: Two-sided 95% quantile of the standard normal distribution.
 
 
@@ -162,7 +168,14 @@ class SimulationReport(Report):
         """How the Monte Carlo mean compares with the exact ``E[P_t]``.
 
         ``z_t = (mean_t - E_t) / sem_t`` over the common, finite steps; about
-        95% of them should lie within the band if both routes are right.
+        95% of them should lie within the band if both routes are right.  A step
+        whose band has zero width (every trajectory has the same ``P_t``, as at
+        ``t = 0`` from a given ``P0``: the standard error is float rounding, at
+        most :data:`DETERMINISTIC_SEM` of the value) has no band to be inside:
+        it is counted in ``deterministic_steps`` instead, and in
+        ``deterministic_equal`` when the mean equals the exact value to
+        :data:`DETERMINISTIC_TOL` relative (rounding of the sums); ``within_ci95``
+        and ``max_abs_z`` are over the other steps.
         """
         if self.exact is None:
             return None
@@ -171,13 +184,16 @@ class SimulationReport(Report):
         mean, sem = self.stats.mean[: k + 1], self.stats.sem[: k + 1]
         ok = np.isfinite(exact) & np.isfinite(mean)
         diff = np.abs(mean - exact)
-        tol = 1e-9 * np.maximum(np.abs(exact), 1.0)
-        z = np.where(sem > 0, diff / np.where(sem > 0, sem, 1.0), np.where(diff <= tol, 0.0, np.inf))
-        z = z[ok]
+        scale = np.maximum(np.abs(exact), np.abs(mean))
+        fixed = ok & (sem <= DETERMINISTIC_SEM * scale)
+        random = ok & ~fixed
+        z = diff[random] / sem[random]
         return {
             "steps_compared": int(ok.sum()),
             "within_ci95": int((z <= Z95).sum()),
             "max_abs_z": json_float(z.max()) if z.size else None,
+            "deterministic_steps": int(fixed.sum()),
+            "deterministic_equal": int((fixed & (diff <= DETERMINISTIC_TOL * scale)).sum()),
         }
 
     def headline(self) -> tuple[str, str]:
@@ -227,11 +243,7 @@ class SimulationReport(Report):
             )
         agree = self.exact_agreement()
         if agree is not None and self.exact is not None:
-            max_z = agree["max_abs_z"]
-            lines.append(
-                f"exact E[P_t] (t <= {self.exact.steps}): inside the 95% band at {agree['within_ci95']} of "
-                f"{agree['steps_compared']} steps (max |z| = {'n/a' if max_z is None else f'{max_z:.3g}'})"
-            )
+            lines.append(agreement_line(agree, self.exact.steps))
         if self.filtered_stats is not None:
             f = self.filtered_stats
             lines.append(
@@ -243,6 +255,34 @@ class SimulationReport(Report):
         if self.outage_target is not None:
             lines.extend(self.outage_target.summary_lines())
         return "\n".join(lines)
+
+
+def agreement_line(agree: dict[str, Any], exact_steps: int) -> str:
+    """The summary line of :meth:`SimulationReport.exact_agreement`: steps inside the band, zero-width ones apart.
+
+    Examples
+    --------
+    >>> agreement_line({"steps_compared": 17, "within_ci95": 16, "max_abs_z": 1.9,
+    ...                 "deterministic_steps": 1, "deterministic_equal": 1}, 16)
+    'exact E[P_t] (t <= 16): inside the 95% band at 16 of 16 random steps (max |z| = 1.9); 1 step with a zero-width band (every trajectory alike) skipped: equal to the exact value'
+    """
+    fixed = agree.get("deterministic_steps", 0)
+    random = agree["steps_compared"] - fixed
+    max_z = agree["max_abs_z"]
+    line = (
+        f"exact E[P_t] (t <= {exact_steps}): inside the 95% band at {agree['within_ci95']} of {random} "
+        f"{'random ' if fixed else ''}steps (max |z| = {'n/a' if max_z is None else f'{max_z:.3g}'})"
+    )
+    if fixed:
+        equal = agree.get("deterministic_equal", 0)
+        verdict = (
+            "equal to the exact value"
+            if equal == fixed
+            else f"{fixed - equal} of them NOT equal to the exact value (relative difference above 1e-9)"
+        )
+        steps = "1 step" if fixed == 1 else f"{fixed} steps"
+        line += f"; {steps} with a zero-width band (every trajectory alike) skipped: {verdict}"
+    return line
 
 
 def _first(flags: np.ndarray) -> int | None:
