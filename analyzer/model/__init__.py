@@ -12,6 +12,8 @@ from ._coerce import Route, json_ready, python_tree, renamed
 from ._exact import (
     DECIMAL_PATTERN,
     NUMBER_SPACE,
+    capped_fraction_text,
+    decimal_enclosure,
     escaped,
     fraction_text,
     load_json,
@@ -71,6 +73,8 @@ __all__ = [
     "check_keys",
     "check_symmetric",
     "escaped",
+    "capped_fraction_text",
+    "decimal_enclosure",
     "fraction_text",
     "gilbert_elliott",
     "is_psd",
