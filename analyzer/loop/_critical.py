@@ -339,14 +339,17 @@ def certified_bracket(
     if verdict(Fraction(0)) == "stable":
         hi = Fraction(0)
     while hi - lo > BRACKET_WIDTH:
-        mid = (lo + hi) / 2
-        v = verdict(mid)
+        step = (hi - lo) / 8
+        for mid in ((lo + hi) / 2, (lo + hi) / 2 - step, (lo + hi) / 2 + step):
+            v = verdict(mid)  # a point within rounding of rho = 1 (a dyadic critical value) decides nothing
+            if v is not None:
+                break
         if v == "stable":
             hi = mid
         elif v == "unstable":
             lo, seen_unstable = mid, True
         else:
-            break  # within rounding of rho = 1: the bracket stays proved
+            break  # three points near rho = 1: the bracket stays as proved
     lower = f"unstable at {float(lo):.6g}" if seen_unstable else f"not proved unstable above {float(lo):.6g}"
     note = (
         f"{route}: the loop is proved mean-square stable at {float(hi):.6g} and {lower}; the critical value "
