@@ -36,8 +36,7 @@ import flint
 
 from .._budget import Budget
 from ..errors import NumericalFailure
-from ..model import MarkovChannel, fraction_text
-from ..model._exact import MAX_EXACT_DIGITS, fraction_digits
+from ..model import MAX_EXACT_DIGITS, MarkovChannel, fraction_digits, fraction_text
 from ._algebraic import root_text
 from ._certify import certify
 from ._mjls import Branch, Mjls
@@ -50,8 +49,11 @@ MAX_CRITICAL_SIZE = 200
 #: Operator sizes whose exact critical value is computed whatever the data (about a second for data
 #: read from floats, ``bench/bench_loop_certify.py``); beyond, only for short data (:data:`SHORT_DATA_BITS`).
 EXACT_CRITICAL_SIZE = 40
-#: Width at which the certified bisection stops.
+#: Width at which the certified bisection stops (each step is one dense float solve and its proof).
 BRACKET_WIDTH = Fraction(1, 256)
+#: Operator size above which the bisection stops at :data:`WIDE_BRACKET_WIDTH` instead.
+WIDE_BRACKET_SIZE = 1000
+WIDE_BRACKET_WIDTH = Fraction(1, 32)
 
 
 @dataclass(frozen=True)
@@ -335,10 +337,12 @@ def certified_bracket(
         why = "the loop is proved unstable at 1" if top == "unstable" else "the verdict at 1 is not certified"
         return Critical(label, parameter, None, None, (), f"{route}: {why}, so no value near 1 makes it stable")
     lo, hi = Fraction(0), Fraction(1)
+    one = system(Fraction(1))
+    width = WIDE_BRACKET_WIDTH if one.modes * one.d * (one.d + 1) // 2 > WIDE_BRACKET_SIZE else BRACKET_WIDTH
     seen_unstable = False
     if verdict(Fraction(0)) == "stable":
         hi = Fraction(0)
-    while hi - lo > BRACKET_WIDTH:
+    while hi - lo > width:
         step = (hi - lo) / 8
         for mid in ((lo + hi) / 2, (lo + hi) / 2 - step, (lo + hi) / 2 + step):
             v = verdict(mid)  # a point within rounding of rho = 1 (a dyadic critical value) decides nothing

@@ -15,7 +15,15 @@ from typing import Any, Callable, Mapping
 from .._budget import Budget
 from .._reporting import Report
 from ..errors import BudgetExceeded
-from ..model import MarkovChannel, PerSensorChannel, Request, capped_fraction_text, decimal_enclosure, fraction_text
+from ..model import (
+    MAX_EXACT_DIGITS,
+    MarkovChannel,
+    PerSensorChannel,
+    Request,
+    capped_fraction_text,
+    decimal_enclosure,
+    fraction_text,
+)
 from ._cost import stationary_cost
 from ._critical import Critical, critical_value, parameter_of
 from ._mjls import Mjls, estimator_mjls, loop_mjls, sensor_links
@@ -199,7 +207,14 @@ def _optimal_filter_critical(req: LoopRequest) -> tuple[float | None, str | None
         rep = analyze(Request(system=req.system, channel=req.channel))
     except AnalyzerError as exc:
         return None, None, str(exc)
-    return rep.critical_arrival_probability, rep.critical_arrival_probability_exact, None
+    return rep.critical_arrival_probability, _capped_text(rep.critical_arrival_probability_exact), None
+
+
+def _capped_text(text: str | None) -> str | None:
+    """An exact (algebraic) text, or ``None`` when it holds more than :data:`kfio.model.MAX_EXACT_DIGITS` digits."""
+    if text is None or sum(ch.isdigit() for ch in text) > MAX_EXACT_DIGITS:
+        return None
+    return text
 
 
 def _estimator_alone(req: LoopRequest, with_critical: bool, budget: Budget | None = None) -> dict[str, Any]:
