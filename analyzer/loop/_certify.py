@@ -54,8 +54,8 @@ from ._operator import float_operator, noise_vector, to_numpy, vech_index
 
 #: Relative steps around the float ``rho`` at which the Perron candidates are tried.
 TAUS = (1e-12, 1e-9, 1e-6, 1e-4, 1e-2, 1e-1)
-#: Largest operator size whose upper bound of ``rho`` is tightened by extra resolvent solves.
-RESOLVENT_SIZE = 800
+#: Largest operator size whose upper bound of ``rho`` is tightened by extra resolvent solves (one dense solve each).
+RESOLVENT_SIZE = 3000
 
 #: Operator sizes up to this use numpy's dense eigenvalues for the float radius; above, ARPACK.
 DENSE_EIGEN_SIZE = 400
