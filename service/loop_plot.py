@@ -85,7 +85,7 @@ def loop_region_data(req: Any, points: int) -> dict[str, Any]:
         for x in along:
             sys = loop_mjls(req, {axis.pointer: axis.at(x)})
             dec = decide(sys)
-            row.append(None if dec.moments is None else float(stationary_cost(sys, dec.moments)))
+            row.append(dec.cost if dec.moments is None else float(stationary_cost(sys, dec.moments)))
         costs[axis.label] = row
     return {
         "report": report,
@@ -120,6 +120,18 @@ def _num(value: float | None, exact: str | None) -> str:
     return exact if exact is not None and len(exact) <= 12 else f"{value:.4g}"
 
 
+def _missing(report: Mapping[str, Any], label: str) -> str:
+    """Why a link has no critical value: a certified bracket, or a link with no effect on the loop."""
+    for c in report.get("critical_values") or []:
+        if c["link"] == label or (label == "sensor" and c["link"] != "actuator"):
+            if c.get("value_bracket"):
+                lo, hi = c["value_bracket"]
+                return f"in [{lo:.4g}, {hi:.4g}] (certified bracket)"
+            if "no effect" in (c.get("note") or ""):
+                return "none (the link has no effect)"
+    return "none"
+
+
 def headline_text(report: Mapping[str, Any], sx: _Axis, ax: _Axis) -> str:
     """The exact verdict at the request's point first, then the cost and the critical values."""
     cost = report.get("cost")
@@ -129,8 +141,10 @@ def headline_text(report: Mapping[str, Any], sx: _Axis, ax: _Axis) -> str:
     return (
         f"{report['verdict'].upper()} ({THEOREM_TEXT}) at the request (star): "
         f"sensor {_short(sx.parameter)} {float(sx.value):.4g}, actuator {_short(ax.parameter)} {float(ax.value):.4g}\n"
-        f"stationary cost {cost_text}; critical sensor {_short(sx.parameter)} {_num(s_val, s_exact)}, "
-        f"critical actuator {_short(ax.parameter)} {_num(a_val, a_exact)}"
+        f"stationary cost {cost_text}; critical sensor {_short(sx.parameter)} "
+        f"{_num(s_val, s_exact) if s_val is not None else _missing(report, 'sensor')}, "
+        f"critical actuator {_short(ax.parameter)} "
+        f"{_num(a_val, a_exact) if a_val is not None else _missing(report, 'actuator')}"
     )
 
 

@@ -7,6 +7,9 @@ from fractions import Fraction
 
 import flint
 
+#: Coefficients longer than this (about 200 decimal digits) give no exact text.
+MAX_TEXT_BITS = 664
+
 
 def _fraction_text(x: Fraction) -> str:
     return str(x.numerator) if x.denominator == 1 else f"{x.numerator}/{x.denominator}"
@@ -28,6 +31,9 @@ def _square_part(d: int, trial: int = 1000) -> tuple[int, int]:
 def root_text(f: flint.fmpz_poly | None, near: float) -> str | None:
     """The root of ``f`` (degree 1 or 2, integer coefficients) nearest ``near``, exactly; ``None`` otherwise.
 
+    ``None`` also when a coefficient has more than :data:`MAX_TEXT_BITS` bits: such a text has hundreds
+    of digits, past what a report shows (the minimal polynomial and an enclosure describe the root).
+
     A quadratic ``a x^2 + b x + c`` has roots ``(-b +- sqrt(b^2 - 4 a c)) / (2 a)``.
 
     Examples
@@ -38,6 +44,8 @@ def root_text(f: flint.fmpz_poly | None, near: float) -> str | None:
     if f is None:
         return None
     c = [int(x) for x in f.coeffs()]
+    if any(x.bit_length() > MAX_TEXT_BITS for x in c):
+        return None  # the text would pass the report's cap of 200 digits
     if len(c) == 2:
         return _fraction_text(Fraction(-c[0], c[1]))
     if len(c) != 3:

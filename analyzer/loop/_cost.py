@@ -44,12 +44,4 @@ def stationary_cost(sys: Mjls, moments: Sequence[flint.fmpq_mat]) -> Fraction:
     return Fraction(int(total.p), int(total.q))
 
 
-def stationary_covariance(sys: Mjls, moments: Sequence[flint.fmpq_mat]) -> flint.fmpq_mat:
-    """``lim E[z z'] = sum_i Y_i``."""
-    acc = flint.fmpq_mat(sys.d, sys.d)
-    for Y in moments:
-        acc += Y
-    return acc
-
-
-__all__ = ["stationary_cost", "stationary_covariance"]
+__all__ = ["stationary_cost"]

@@ -13,6 +13,14 @@ on each interval between consecutive roots is decided exactly at a rational
 point (:func:`kfio.loop._verdict.decide`).  The critical value is the left
 end of the stable interval that reaches 1.
 
+Where the exact route is slow (large operators of long data, :func:`exact_critical`),
+the answer is a certified bracket instead: bisection on verdicts each proved
+by the float certificates of :mod:`kfio.loop._certify` (stable at the upper
+end, unstable at the lower one), labelled as a bracket.  A link that does not
+enter the operator at all (``T(x)`` constant, e.g. ``C = 0`` for the sensor or
+``L = 0`` for the actuator) has no critical value: the verdict is the same at
+every value, and the note says so.
+
 This is a computation on the given design (fixed gains), not a theorem about
 the optimal design (Schenato, Sinopoli, Franceschetti, Poolla and Sastry
 2007, Sec. V, give the latter for TCP-like LQG).
@@ -28,15 +36,24 @@ import flint
 
 from .._budget import Budget
 from ..errors import NumericalFailure
-from ..model import MarkovChannel
+from ..model import MAX_EXACT_DIGITS, MarkovChannel, fraction_digits, fraction_text
 from ._algebraic import root_text
-from ._mjls import Mjls
+from ._certify import certify
+from ._mjls import Branch, Mjls
 from ._operator import operator_matrix
 from ._pencil import det_polynomial_of
-from ._verdict import decide
+from ._verdict import SHORT_DATA_BITS, data_bits, decide
 
 #: Largest operator size for which the exact critical value is computed.
 MAX_CRITICAL_SIZE = 200
+#: Operator sizes whose exact critical value is computed whatever the data (about a second for data
+#: read from floats, ``bench/bench_loop_certify.py``); beyond, only for short data (:data:`SHORT_DATA_BITS`).
+EXACT_CRITICAL_SIZE = 40
+#: Width at which the certified bisection stops (each step is one dense float solve and its proof).
+BRACKET_WIDTH = Fraction(1, 256)
+#: Operator size above which the bisection stops at :data:`WIDE_BRACKET_WIDTH` instead.
+WIDE_BRACKET_SIZE = 1000
+WIDE_BRACKET_WIDTH = Fraction(1, 32)
 
 
 @dataclass(frozen=True)
@@ -57,6 +74,9 @@ class Critical:
     note: str
     polynomial: tuple[str, ...] | None = None
     enclosure: tuple[float, float] | None = None
+    degree: int | None = None
+    coefficient_digits: int | None = None
+    bracket: tuple[Fraction, Fraction] | None = None
 
     def as_dict(self) -> dict[str, object]:
         return {
@@ -65,7 +85,11 @@ class Critical:
             "value": self.value,
             "value_exact": self.exact,
             "value_minimal_polynomial": list(self.polynomial) if self.polynomial is not None else None,
+            "value_minimal_polynomial_degree": self.degree,
+            "value_minimal_polynomial_digits": self.coefficient_digits,
             "value_enclosure": list(self.enclosure) if self.enclosure is not None else None,
+            "value_bracket": [float(x) for x in self.bracket] if self.bracket is not None else None,
+            "value_bracket_exact": [fraction_text(x) for x in self.bracket] if self.bracket is not None else None,
             "intervals": [{"from": a, "to": b, "verdict": v} for a, b, v in self.intervals],
             "note": self.note,
         }
@@ -193,19 +217,31 @@ def critical_value(
     def system(x: Fraction) -> Mjls:
         return build(at(x))
 
-    size = operator_matrix(system(Fraction(1, 2))).nrows()
-    if size > MAX_CRITICAL_SIZE:
+    half = system(Fraction(1, 2))
+    if not _link_enters(system):
+        verdict = decide(half, budget).verdict
+        return Critical(
+            label,
+            parameter,
+            None,
+            None,
+            ((0.0, 1.0, verdict),),
+            f"the link has no effect on the loop (its packets change no mode map): the verdict is {verdict} "
+            "at every value, so no critical value exists",
+        )
+    if not exact_critical(half):
+        return certified_bracket(label, parameter, system, budget)
+    poly = det_polynomial(system, budget)
+    if poly is None:
         return Critical(
             label,
             parameter,
             None,
             None,
             (),
-            f"not computed: the operator has size {size} > {MAX_CRITICAL_SIZE}, the limit for exact critical values",
+            "1 is an eigenvalue of T(x) at every value (det(I - T(x)) = 0 identically), so rho(T(x)) >= 1 and "
+            "no value makes the loop mean-square stable",
         )
-    poly = det_polynomial(system, budget)
-    if poly is None:
-        return Critical(label, parameter, None, None, (), "not computed: I - T(x) is singular at every base point")
     roots = roots_in_unit(poly)
     edges: list[tuple[flint.fmpz_poly | None, float, str | None, flint.arb | None]] = [(None, 0.0, "0", None)]
     for r, f in roots:
@@ -232,15 +268,107 @@ def critical_value(
         k -= 1
     left = edges[k]
     note = "exact: a root of det(I - T(x)), the stable side decided exactly"
-    minimal = tuple(str(int(c)) for c in left[0].coeffs()) if left[0] is not None else None
+    minimal, degree, digits = _minimal(left[0])
     ball = left[3]
     box = (float(_exact(ball.lower())), float(_exact(ball.upper()))) if ball is not None else None
-    return Critical(label, parameter, left[1], left[2], intervals, note, minimal, box)
+    return Critical(label, parameter, left[1], left[2], intervals, note, minimal, box, degree, digits)
+
+
+def _minimal(f: flint.fmpz_poly | None) -> tuple[tuple[str, ...] | None, int | None, int | None]:
+    """The coefficient texts (``None`` when one passes the report's 200-digit cap), degree and longest digits."""
+    if f is None:
+        return None, None, None
+    coeffs = [int(c) for c in f.coeffs()]
+    digits = max(fraction_digits(Fraction(c)) for c in coeffs)
+    texts = tuple(str(c) for c in coeffs) if digits <= MAX_EXACT_DIGITS else None
+    return texts, f.degree(), digits
+
+
+def _link_enters(system: Callable[[Fraction], Mjls]) -> bool:
+    """Whether the operator may depend on the link's parameter (``T`` is affine in it).
+
+    ``False`` only when, at ``1/3`` and ``2/3``, the transition laws agree and every mode has the same
+    maps with the same total weight each: then ``T(1/3) = T(2/3)`` and ``T`` is constant.
+    """
+    a, b = system(Fraction(1, 3)), system(Fraction(2, 3))
+    if a.P != b.P:
+        return True
+
+    def grouped(branches: tuple[Branch, ...]) -> list[tuple[flint.fmpq_mat, Fraction]]:
+        out: list[tuple[flint.fmpq_mat, Fraction]] = []
+        for br in branches:
+            for k, (M, w) in enumerate(out):
+                if M == br.M:
+                    out[k] = (M, w + br.weight)
+                    break
+            else:
+                out.append((br.M, br.weight))
+        return out
+
+    for ra, rb in zip(a.branches, b.branches):
+        ga, gb = grouped(ra), grouped(rb)
+        if len(ga) != len(gb) or any(not any(M == N and w == v for N, v in gb) for M, w in ga):
+            return True
+    return False
+
+
+def exact_critical(sys: Mjls) -> bool:
+    """Whether the exact critical value is fast here: a small operator, or short data (:data:`EXACT_CRITICAL_SIZE`)."""
+    size = sys.modes * sys.d * (sys.d + 1) // 2
+    return size <= EXACT_CRITICAL_SIZE or (size <= MAX_CRITICAL_SIZE and data_bits(sys) <= SHORT_DATA_BITS)
+
+
+def certified_bracket(
+    label: str, parameter: str, system: Callable[[Fraction], Mjls], budget: Budget | None = None
+) -> Critical:
+    """A bracket ``[lo, hi]`` of the critical value by bisection on verdicts proved in floats (module docstring).
+
+    ``hi`` is proved stable and ``lo`` unstable (or ``lo = 0``): under the assumption that the stable
+    set is the interval from the critical value to 1, the critical value lies in ``[lo, hi]``.
+    """
+    route = "certified bracket (verified float certificates, Rump 2006)"
+
+    def verdict(x: Fraction) -> str | None:
+        _tick(budget, "critical value: certified bisection")
+        return certify(system(x), enclose=False).verdict
+
+    top = verdict(Fraction(1))
+    if top != "stable":
+        why = "the loop is proved unstable at 1" if top == "unstable" else "the verdict at 1 is not certified"
+        return Critical(label, parameter, None, None, (), f"{route}: {why}, so no value near 1 makes it stable")
+    lo, hi = Fraction(0), Fraction(1)
+    one = system(Fraction(1))
+    width = WIDE_BRACKET_WIDTH if one.modes * one.d * (one.d + 1) // 2 > WIDE_BRACKET_SIZE else BRACKET_WIDTH
+    seen_unstable = False
+    if verdict(Fraction(0)) == "stable":
+        hi = Fraction(0)
+    while hi - lo > width:
+        step = (hi - lo) / 8
+        for mid in ((lo + hi) / 2, (lo + hi) / 2 - step, (lo + hi) / 2 + step):
+            v = verdict(mid)  # a point within rounding of rho = 1 (a dyadic critical value) decides nothing
+            if v is not None:
+                break
+        if v == "stable":
+            hi = mid
+        elif v == "unstable":
+            lo, seen_unstable = mid, True
+        else:
+            break  # three points near rho = 1: the bracket stays as proved
+    lower = f"unstable at {float(lo):.6g}" if seen_unstable else f"not proved unstable above {float(lo):.6g}"
+    note = (
+        f"{route}: the loop is proved mean-square stable at {float(hi):.6g} and {lower}; the critical value "
+        f"lies in [{float(lo):.6g}, {float(hi):.6g}] if the stable set is one interval reaching 1 (the exact "
+        "value is computed for operators of size at most "
+        f"{EXACT_CRITICAL_SIZE}, or {MAX_CRITICAL_SIZE} with short data)"
+    )
+    return Critical(label, parameter, None, None, (), note, bracket=(lo, hi))
 
 
 __all__ = [
     "Critical",
     "MAX_CRITICAL_SIZE",
+    "certified_bracket",
+    "exact_critical",
     "critical_value",
     "det_polynomial",
     "det_polynomial_rational",

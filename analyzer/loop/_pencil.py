@@ -101,8 +101,16 @@ def det_pencil(P: flint.fmpz_mat, Q: flint.fmpz_mat, budget: Budget | None = Non
                 return None
             continue
         det = int(Pp.det())
-        if det == 0:  # P invertible mod p (the solve succeeded): cannot happen
-            _fail()
+        if det == 0:
+            if r:
+                # cannot happen: nmod_mat.solve raises ZeroDivisionError for a matrix singular mod p, so
+                # a solve that returned proves det(P) != 0 mod p (tests/loop/test_loop_degenerate.py)
+                _fail()
+            # r = 0 (the link does not enter the operator): no solve ran, so this is the singularity test
+            singular += 1
+            if singular == MAX_SINGULAR_PRIMES and P.rank() < s:
+                return None
+            continue
         if M is not None:
             N = flint.nmod_mat(r, r, [int(M[i, k]) for i in cols for k in range(r)], p)
             cp = [int(c) for c in N.charpoly().coeffs()]

@@ -15,7 +15,15 @@ from typing import Any, Callable, Mapping
 from .._budget import Budget
 from .._reporting import Report
 from ..errors import BudgetExceeded
-from ..model import MarkovChannel, PerSensorChannel, Request, fraction_text
+from ..model import (
+    MAX_EXACT_DIGITS,
+    MarkovChannel,
+    PerSensorChannel,
+    Request,
+    capped_fraction_text,
+    decimal_enclosure,
+    fraction_text,
+)
 from ._cost import stationary_cost
 from ._critical import Critical, critical_value, parameter_of
 from ._mjls import Mjls, estimator_mjls, loop_mjls, sensor_links
@@ -23,18 +31,17 @@ from ._model import LoopRequest
 from ._region import region
 from ._verdict import decide
 
-#: Exact fraction texts longer than this are left out of the report (the float stays).
-MAX_EXACT_TEXT = 2000
-
 THEOREM = "Costa, Fragoso and Marques 2005, Theorem 3.9 (mean-square stability of Markov jump linear systems)"
 MODEL = "Schenato, Sinopoli, Franceschetti, Poolla and Sastry 2007, Sec. II (sensor and actuator packet losses)"
 
 
 def _text(x: Fraction | None) -> str | None:
-    if x is None:
-        return None
-    t = fraction_text(x)
-    return t if len(t) <= MAX_EXACT_TEXT else None
+    """The exact text, or ``None`` past :data:`kfio.model.MAX_EXACT_DIGITS` digits (never a 4300-digit crash)."""
+    return capped_fraction_text(x)[0]
+
+
+def _enclosure(box: tuple[Fraction, Fraction] | None) -> list[str] | None:
+    return None if box is None else list(decimal_enclosure(*box))
 
 
 def _matrix(m: Any) -> list[list[str]]:
@@ -91,18 +98,39 @@ class LoopReport(Report):
     notes: tuple[str, ...] = field(default=())
     udp_region_bounds: dict[str, Any] | None = None
     partial: bool = False
+    spectral_radius_enclosure: tuple[Fraction, Fraction] | None = None
+    certified_cost: float | None = None
+    certified_cost_enclosure: tuple[Fraction, Fraction] | None = None
 
     _repr_fields = ("verdict", "spectral_radius", "cost")
 
     @property
     def cost(self) -> float | None:
-        """The stationary cost in float64 (``None`` when unbounded); exactly: :attr:`stationary_cost`."""
-        return None if self.stationary_cost is None else float(self.stationary_cost)
+        """The stationary cost in float64 (``None`` when unbounded); exactly: :attr:`stationary_cost`.
+
+        On the certified route (no exact moments) the float cost of the float moments, inside :attr:`cost_enclosure`.
+        """
+        if self.stationary_cost is None:
+            return self.certified_cost
+        return float(self.stationary_cost)
 
     @property
     def cost_exact(self) -> str | None:
-        """The stationary cost as exact fraction text (``None`` when unbounded or longer than 2000 characters)."""
+        """The stationary cost as exact fraction text; ``None`` when unbounded, not computed, or over 200 digits."""
         return _text(self.stationary_cost)
+
+    @property
+    def cost_exact_digits(self) -> int | None:
+        """Digits of the exact cost's text (``None`` when it was not computed)."""
+        return capped_fraction_text(self.stationary_cost)[1]
+
+    @property
+    def cost_enclosure(self) -> list[str] | None:
+        """Decimal texts ``[lo, hi]`` proved to enclose the cost: when the exact text is capped, or on the certified route."""
+        if self.stationary_cost is not None:
+            box = capped_fraction_text(self.stationary_cost)[2]
+            return list(box) if box is not None else None
+        return _enclosure(self.certified_cost_enclosure)
 
     @property
     def critical_sensor_arrival_probability(self) -> float | None:
@@ -136,10 +164,13 @@ def loop_report_view(r: LoopReport) -> dict[str, Any]:
         "partial": r.partial,
         "spectral_radius": r.spectral_radius,
         "spectral_radius_exact": r.spectral_radius_exact,
+        "spectral_radius_enclosure": _enclosure(r.spectral_radius_enclosure),
         "operator_size": r.operator_size,
         "modes": r.modes,
         "cost": r.cost,
         "cost_exact": r.cost_exact,
+        "cost_exact_digits": r.cost_exact_digits,
+        "cost_enclosure": r.cost_enclosure,
         "critical_sensor_arrival_probability": r.critical_sensor_arrival_probability,
         "critical_sensor_arrival_probability_exact": r.critical_sensor_arrival_probability_exact,
         "critical_actuator_arrival_probability": r.critical_actuator_arrival_probability,
@@ -176,13 +207,21 @@ def _optimal_filter_critical(req: LoopRequest) -> tuple[float | None, str | None
         rep = analyze(Request(system=req.system, channel=req.channel))
     except AnalyzerError as exc:
         return None, None, str(exc)
-    return rep.critical_arrival_probability, rep.critical_arrival_probability_exact, None
+    return rep.critical_arrival_probability, _capped_text(rep.critical_arrival_probability_exact), None
+
+
+def _capped_text(text: str | None) -> str | None:
+    """An exact (algebraic) text, or ``None`` when it holds more than :data:`kfio.model.MAX_EXACT_DIGITS` digits."""
+    if text is None or sum(ch.isdigit() for ch in text) > MAX_EXACT_DIGITS:
+        return None
+    return text
 
 
 def _estimator_alone(req: LoopRequest, with_critical: bool, budget: Budget | None = None) -> dict[str, Any]:
     sys = estimator_mjls(req)
     dec = decide(sys, budget)
     trace = stationary_cost(sys, dec.moments) if dec.moments is not None else None
+    trace_float = float(trace) if trace is not None else dec.cost
     crit = None
     links = sensor_links(req)
     if with_critical and len(links) == 1:
@@ -208,7 +247,7 @@ def _estimator_alone(req: LoopRequest, with_critical: bool, budget: Budget | Non
         "verdict": dec.verdict,
         "spectral_radius": dec.spectral_radius,
         "spectral_radius_exact": dec.spectral_radius_exact,
-        "stationary_error_trace": None if trace is None else float(trace),
+        "stationary_error_trace": trace_float,
         "stationary_error_trace_exact": _text(trace),
         "critical_sensor_arrival_probability": crit.value
         if crit and crit.parameter.endswith("arrival_probability")
@@ -356,6 +395,9 @@ def analyze_loop(req: LoopRequest, *, critical: bool = True, budget: Budget | No
         notes=tuple(notes),
         udp_region_bounds=udp_bounds,
         partial=bool(skipped),
+        spectral_radius_enclosure=dec.radius_enclosure,
+        certified_cost=dec.cost,
+        certified_cost_enclosure=dec.cost_enclosure,
     )
 
 

@@ -15,10 +15,15 @@ Fragoso and Marques 2005, Ch. 3 and Thm 3.9) and:
   real root above 1 (isolated with certified Arb balls) iff ``rho > 1``;
   otherwise ``rho = 1``, the boundary.
 
-Above :data:`MAX_EXACT_SIZE` the exact solve is not attempted: a float
-solution of ``Y - T(Y) = I`` is rounded to rationals and ``Y > 0``,
-``Y - T(Y) > 0`` are verified exactly (the cheap certificate); when it does
-not verify the report says the verdict is not certified.
+The exact route is taken where it is fast (:func:`exact_route`: small
+operators, or data of small height); elsewhere the verdict is proved from
+floats with interval arithmetic (:mod:`kfio.loop._certify`: a verified
+Lyapunov certificate for ``stable``, a verified Perron certificate for
+``unstable``), as surely as the exact route, with certified enclosures of
+``rho(T)`` and of the cost.  Only when neither float certificate verifies
+(``rho`` at or within rounding of 1) does the exact route run at any size up
+to :data:`MAX_EXACT_SIZE`; above it the verdict is the float one and the
+report says it is not certified.
 """
 
 from __future__ import annotations
@@ -34,13 +39,13 @@ from .._budget import Budget
 from ..errors import NumericalFailure
 from ..model import is_psd
 from ._algebraic import root_text
+from ._certify import certify
 from ._mjls import Mjls
 from ._operator import (
     apply_exact,
     float_operator,
     noise_vector,
     operator_matrix,
-    to_numpy,
     unvech,
     vech,
     vech_index,
@@ -48,6 +53,12 @@ from ._operator import (
 
 #: Largest operator size (``modes * d (d + 1) / 2``) solved exactly over Q.
 MAX_EXACT_SIZE = 1200
+#: Operator sizes decided exactly whatever the data (about 0.2 s for data read from floats,
+#: ``bench/bench_loop_certify.py``); beyond, exactly only when the data are short (:data:`SHORT_DATA_BITS`).
+EXACT_ROUTE_SIZE = 80
+#: Largest bit length of a numerator or denominator of the loop's maps for which the exact route
+#: runs at any size up to :data:`MAX_EXACT_SIZE` (decimal data of a few digits; a float's text has about 56).
+SHORT_DATA_BITS = 40
 #: Largest operator size whose exact spectral radius (rational or quadratic) is reported.
 MAX_EXACT_RADIUS_SIZE = 24
 
@@ -64,6 +75,9 @@ class Decision:
     spectral_radius_exact: str | None
     size: int
     moments: tuple[flint.fmpq_mat, ...] | None
+    radius_enclosure: tuple[Fraction, Fraction] | None = None
+    cost: float | None = None
+    cost_enclosure: tuple[Fraction, Fraction] | None = None
 
 
 def _fraction(x: flint.fmpq) -> Fraction:
@@ -171,20 +185,61 @@ def _tick(budget: Budget | None, what: str) -> None:
         budget.tick(what)
 
 
-def decide(sys: Mjls, budget: Budget | None = None) -> Decision:
-    """The exact verdict (see the module docstring) and the stationary second moments when stable.
+def data_bits(sys: Mjls) -> int:
+    """The largest bit length of a numerator or denominator in the loop's maps and transition law."""
+    bits = 0
+    for branches in sys.branches:
+        for br in branches:
+            for i in range(br.M.nrows()):
+                for j in range(br.M.ncols()):
+                    x = br.M[i, j]
+                    bits = max(bits, int(x.p).bit_length(), int(x.q).bit_length())
+            bits = max(bits, br.weight.numerator.bit_length(), br.weight.denominator.bit_length())
+    for row in sys.P:
+        for p in row:
+            bits = max(bits, p.numerator.bit_length(), p.denominator.bit_length())
+    return bits
 
+
+def exact_route(sys: Mjls) -> bool:
+    """Whether the exact route is fast for this system: small, or short data (:data:`EXACT_ROUTE_SIZE`)."""
+    size = sys.modes * len(vech_index(sys.d))
+    return size <= EXACT_ROUTE_SIZE or (size <= MAX_EXACT_SIZE and data_bits(sys) <= SHORT_DATA_BITS)
+
+
+def decide(sys: Mjls, budget: Budget | None = None, *, route: str = "auto") -> Decision:
+    """The verdict (see the module docstring) and the stationary second moments when decided exactly.
+
+    ``route`` is ``"auto"`` (:func:`exact_route` chooses), ``"exact"`` or ``"certified"`` (the float
+    certificates of :mod:`kfio.loop._certify`, the exact route only when they cannot decide).
     ``budget`` (:class:`kfio.Budget`) is checked between the steps of the exact work (operator,
     solve, characteristic polynomial); :class:`kfio.errors.BudgetExceeded` when it is spent.
     """
+    if route == "certified" or (route == "auto" and not exact_route(sys)):
+        _tick(budget, "loop verdict: verified float certificate")
+        cert = certify(sys)
+        size = sys.modes * len(vech_index(sys.d))
+        if cert.verdict is not None:
+            return Decision(
+                cert.verdict,
+                False,
+                True,
+                cert.certificate,
+                cert.radius,
+                None,
+                size,
+                None,
+                cert.radius_enclosure,
+                cert.cost,
+                cert.cost_enclosure,
+            )
+        if size > MAX_EXACT_SIZE:
+            verdict = "unstable" if cert.radius >= 1 else "stable"
+            return Decision(verdict, False, False, "none", cert.radius, None, size, None, cert.radius_enclosure)
     _tick(budget, "loop verdict: float operator")
     Tf = float_operator(sys)
     size = Tf.shape[0]
     rho = float(np.max(np.abs(np.linalg.eigvals(Tf)))) if size else 0.0
-    if size > MAX_EXACT_SIZE:
-        ok = rounded_certificate(sys)
-        verdict = "stable" if ok else ("unstable" if rho > 1 else "stable")
-        return Decision(verdict, False, ok, "rounded Lyapunov certificate" if ok else "none", rho, None, size, None)
     _tick(budget, "loop verdict: exact operator")
     T = operator_matrix(sys)
     _tick(budget, "loop verdict: exact Lyapunov solve")
@@ -222,19 +277,13 @@ def decide(sys: Mjls, budget: Budget | None = None) -> Decision:
     )
 
 
-def float_moments(sys: Mjls) -> list[np.ndarray]:
-    """Stationary second moments in float64 (for checks and the rounded route)."""
-    Tf = float_operator(sys)
-    noise = noise_vector(sys)
-    y = np.linalg.solve(np.eye(Tf.shape[0]) - Tf, to_numpy(noise)[:, 0])
-    s = len(vech_index(sys.d))
-    out = []
-    for j in range(sys.modes):
-        X = np.zeros((sys.d, sys.d))
-        for r, (a, b) in enumerate(vech_index(sys.d)):
-            X[a, b] = X[b, a] = y[j * s + r]
-        out.append(X)
-    return out
-
-
-__all__ = ["Decision", "decide", "exact_radius", "float_moments", "positive_definite", "rounded_certificate", "vech"]
+__all__ = [
+    "Decision",
+    "data_bits",
+    "decide",
+    "exact_radius",
+    "exact_route",
+    "positive_definite",
+    "rounded_certificate",
+    "vech",
+]

@@ -11,8 +11,12 @@ from ._channels import bernoulli, channel_tree, gilbert_elliott, markov, per_sen
 from ._coerce import Route, json_ready, python_tree, renamed
 from ._exact import (
     DECIMAL_PATTERN,
+    MAX_EXACT_DIGITS,
     NUMBER_SPACE,
+    capped_fraction_text,
+    decimal_enclosure,
     escaped,
+    fraction_digits,
     fraction_text,
     load_json,
     parse_integer,
@@ -71,6 +75,10 @@ __all__ = [
     "check_keys",
     "check_symmetric",
     "escaped",
+    "MAX_EXACT_DIGITS",
+    "capped_fraction_text",
+    "decimal_enclosure",
+    "fraction_digits",
     "fraction_text",
     "gilbert_elliott",
     "is_psd",

@@ -339,3 +339,66 @@ def _path_pointer(path: tuple[str, ...]) -> str:
 def fraction_text(x: Fraction) -> str:
     """Canonical text of a rational: ``"9/25"``, ``"-3"``."""
     return str(x.numerator) if x.denominator == 1 else f"{x.numerator}/{x.denominator}"
+
+
+#: Exact texts of computed values with more digits than this are reported as null with a
+#: digit count and a decimal enclosure (the same cap as the digits of an input number).
+MAX_EXACT_DIGITS = 200
+
+
+def _digits(k: int) -> int:
+    """Decimal digits of ``|k|`` without converting it to text (Python refuses texts over 4300 digits)."""
+    k = abs(k)
+    if k < 10:
+        return 1
+    guess = int(k.bit_length() * 0.30102999566398120)  # log10(2): the true count is guess or guess + 1
+    return guess + 1 if k >= 10**guess else guess
+
+
+def fraction_digits(x: Fraction) -> int:
+    """Digits of :func:`fraction_text` of ``x`` (numerator, and denominator when not 1)."""
+    return _digits(x.numerator) + (0 if x.denominator == 1 else _digits(x.denominator))
+
+
+def decimal_enclosure(lo: Fraction, hi: Fraction, digits: int = 17) -> tuple[str, str]:
+    """Decimal texts ``(a, b)`` with ``a <= lo`` and ``hi <= b``, ``digits`` significant digits, rounded outward."""
+
+    def text(x: Fraction, up: bool) -> str:
+        if x == 0:
+            return "0"
+        e = _digits(x.numerator) - _digits(x.denominator) - digits  # 10^e: a step of about `digits` digits
+        step = Fraction(10) ** e
+        q, r = divmod(x.numerator * step.denominator, x.denominator * step.numerator)
+        k = q + (1 if up and r else 0)
+        mant = str(abs(k))
+        sign = "-" if k < 0 else ""
+        power = len(mant) - 1 + e  # x is about mant[0].mant[1:] * 10^power
+        if abs(power) > 20:
+            tail = mant[1:].rstrip("0")
+            return f"{sign}{mant[0]}{'.' + tail if tail else ''}e{power}"
+        if e >= 0:
+            return sign + mant + "0" * e
+        point = len(mant) + e
+        body = mant[:point] + "." + mant[point:] if point > 0 else "0." + "0" * (-point) + mant
+        return sign + body.rstrip("0").rstrip(".")
+
+    return text(lo, False), text(hi, True)
+
+
+def capped_fraction_text(
+    x: Fraction | None, cap: int = MAX_EXACT_DIGITS
+) -> tuple[str | None, int | None, tuple[str, str] | None]:
+    """``(text, digits, enclosure)`` of an exact value: the text when it has at most ``cap`` digits, else
+    ``None`` with its digit count and a 17-digit decimal enclosure (:func:`decimal_enclosure`).
+
+    >>> capped_fraction_text(Fraction(9, 25))
+    ('9/25', 3, None)
+    >>> capped_fraction_text(Fraction(1, 3**500))
+    (None, 240, ('2.750252956203138e-239', '2.7502529562031381e-239'))
+    """
+    if x is None:
+        return None, None, None
+    n = fraction_digits(x)
+    if n <= cap:
+        return fraction_text(x), n, None
+    return None, n, decimal_enclosure(x, x)
