@@ -150,6 +150,9 @@ def actuator_above(nu: Fraction, crit: ActuatorCritical) -> bool | None:
         return False
     if crit.exact_value is not None:
         return nu > crit.exact_value
+    if crit.enclosure is not None:  # an algebraic nu_c: irrational, so a fine enough enclosure excludes nu
+        lo, hi = crit.enclosure
+        return True if nu > hi else False if nu < lo else None
     if crit.lower is not None and nu <= Fraction(crit.lower):
         return False
     if crit.upper is not None and nu >= Fraction(crit.upper):

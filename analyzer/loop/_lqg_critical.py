@@ -24,6 +24,7 @@ the circle) gives an algebraic product, reported as a certified decimal only.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any, Sequence
@@ -64,6 +65,7 @@ class ActuatorCritical:
     source: str
     stabilizable: bool = True
     exact_value: Fraction | None = None
+    enclosure: tuple[Fraction, Fraction] | None = None
 
 
 def qmat(m: Sequence[Sequence[Fraction]]) -> flint.fmpq_mat:
@@ -148,40 +150,61 @@ def _modulus_balls(f: flint.fmpz_poly) -> list[flint.arb]:
         flint.ctx.prec = old
 
 
-def unstable_modulus_product(A: Matrix) -> tuple[Fraction | None, float | None]:
-    """``prod |theta_i|^2`` over the eigenvalues with ``|theta_i| > 1``: exact when rational, and its float.
+def unstable_modulus_product(A: Matrix) -> tuple[Fraction | None, flint.arb | None, list[tuple[int, ...]]]:
+    """``prod |theta_i|^2`` over the eigenvalues with ``|theta_i| > 1``.
 
-    ``(None, None)`` when a root cannot be told from the unit circle; ``(None, x)``
-    when the product is algebraic (a factor with roots on both sides of the circle).
+    Returns the product exactly when rational, its certified enclosure (Arb), and the
+    integer coefficients (lowest first) of the irreducible factors with roots on both
+    sides of the circle, whose contribution is algebraic.  ``(None, None, [])`` when a
+    root cannot be told from the unit circle.
     """
-    exact: Fraction | None = Fraction(1)
-    approx = 1.0
-    for f, mult in _factors(A):
-        c = [Fraction(int(x)) for x in f.coeffs()]
-        if len(c) == 2:  # a rational root: on, inside or outside the circle, decided exactly
-            r2 = (c[0] / c[1]) ** 2
-            if r2 > 1:
-                approx *= float(r2) ** mult
-                exact = None if exact is None else exact * r2**mult
-            continue
-        if schur_stable(c):
-            continue
-        if schur_stable(c[::-1]) and c[0] != 0:  # every root outside: their product is f(0) / lead(f)
-            part = (c[0] / c[-1]) ** (2 * mult)
-            approx *= float(part)
-            if exact is not None:
-                exact *= part
-            continue
-        exact = None
-        one = flint.arb(1)
-        prod = flint.arb(1)
-        for b in _modulus_balls(f):
-            if b > one:
-                prod *= b
-            elif not b < one:
-                return None, None
-        approx *= float(prod.mid()) ** mult
-    return exact, approx
+    exact = Fraction(1)
+    mixed: list[tuple[int, ...]] = []
+    old = flint.ctx.prec
+    flint.ctx.prec = ARB_PRECISION
+    try:
+        ball = flint.arb(1)
+        for f, mult in _factors(A):
+            c = [Fraction(int(x)) for x in f.coeffs()]
+            if len(c) == 2:  # a rational root: on, inside or outside the circle, decided exactly
+                r2 = (c[0] / c[1]) ** 2
+                if r2 > 1:
+                    exact *= r2**mult
+                continue
+            if schur_stable(c):
+                continue
+            if schur_stable(c[::-1]):  # every root outside: their product is f(0) / lead(f)
+                exact *= (c[0] / c[-1]) ** (2 * mult)
+                continue
+            one = flint.arb(1)
+            for b in _modulus_balls(f):
+                if b > one:
+                    ball *= b
+                elif not b < one:
+                    return None, None, []
+            mixed += [tuple(int(x) for x in f.coeffs())] * mult
+        ball *= flint.arb(flint.fmpq(exact.numerator, exact.denominator))
+    finally:
+        flint.ctx.prec = old
+    return (exact if not mixed else None), ball, mixed
+
+
+def _quadratic_text(rational: Fraction, quadratic: tuple[int, ...], near: float) -> str | None:
+    """``nu_c = 1 - 1/(E x^2)`` exactly, ``x`` the outside root of ``c0 + c1 x + c2 x^2``, ``E`` rational.
+
+    The roots squared solve ``(c2 z + c0)^2 - c1^2 z = 0`` (Graeffe); with
+    ``z = 1/(E (1 - y))`` this is ``(c2 + c0 E (1 - y))^2 - c1^2 E (1 - y) = 0``, a quadratic in ``y``.
+    """
+    from ._algebraic import root_text
+
+    c0, c1, c2 = (Fraction(x) for x in quadratic)
+    E = rational
+    # (c2 + c0 E - c0 E y)^2 - c1^2 E + c1^2 E y, coefficients in y, lowest first
+    a0, a1 = c2 + c0 * E, -c0 * E
+    poly = [a0 * a0 - c1 * c1 * E, 2 * a0 * a1 + c1 * c1 * E, a1 * a1]
+    den = math.lcm(*(x.denominator for x in poly))
+    ints = [int(x * den) for x in poly]
+    return root_text(flint.fmpz_poly(ints), near)
 
 
 def _largest_modulus(A: Matrix) -> tuple[Fraction | None, float | None]:
@@ -216,6 +239,44 @@ def _from_exact(x2: Fraction, source: str) -> ActuatorCritical:
     return ActuatorCritical(float(x), fraction_text(x), float(x), float(x), True, source, exact_value=x)
 
 
+def _algebraic(ball: flint.arb, mixed: list[tuple[int, ...]], A: Matrix, source: str) -> ActuatorCritical:
+    """``nu_c = 1 - 1/M`` for an algebraic ``M`` (its certified enclosure): a decimal, a rational enclosure, exact text when quadratic."""
+    old = flint.ctx.prec
+    flint.ctx.prec = ARB_PRECISION
+    try:
+        nu = 1 - 1 / ball
+        lo, hi = _fraction(nu.lower()), _fraction(nu.upper())
+    finally:
+        flint.ctx.prec = old
+    value = float((lo + hi) / 2)
+    text = None
+    if len(mixed) == 1 and len(mixed[0]) == 3:  # one quadratic factor with a root on each side: nu_c is quadratic
+        text = _quadratic_text(_rational_part(A, mixed[0]), mixed[0], value)
+    return ActuatorCritical(
+        value, text, float(lo), float(hi), True, source + " (algebraic: a certified enclosure)", enclosure=(lo, hi)
+    )
+
+
+def _fraction(x: flint.arb) -> Fraction:
+    man, exp = x.mid().man_exp()
+    return Fraction(int(man)) * Fraction(2) ** int(exp)
+
+
+def _rational_part(A: Matrix, skip: tuple[int, ...]) -> Fraction:
+    """The product of ``|theta|^2 > 1`` over every factor but ``skip`` (all of them rational contributions)."""
+    exact = Fraction(1)
+    for f, mult in _factors(A):
+        c = [Fraction(int(x)) for x in f.coeffs()]
+        if tuple(int(x) for x in f.coeffs()) == skip:
+            continue
+        if len(c) == 2:
+            r2 = (c[0] / c[1]) ** 2
+            exact *= r2**mult if r2 > 1 else 1
+        elif not schur_stable(c):
+            exact *= (c[0] / c[-1]) ** (2 * mult)
+    return exact
+
+
 def known_critical(A: Matrix, B: Matrix) -> ActuatorCritical | None:
     """``nu_c`` where a closed form holds (module docstring), else ``None`` (the caller brackets it)."""
     if not reaches_every_unstable_mode(A, B):
@@ -231,12 +292,11 @@ def known_critical(A: Matrix, B: Matrix) -> ActuatorCritical | None:
         )
     n, m = len(A), len(B[0])
     if m == 1:
-        prod, _ = unstable_modulus_product(A)
-        return (
-            None
-            if prod is None
-            else _from_exact(prod, "1 - 1/prod|unstable eigenvalues of A|^2, one input (Elia 2005)")
-        )
+        source = "1 - 1/prod|unstable eigenvalues of A|^2, one input (Elia 2005)"
+        prod, ball, mixed = unstable_modulus_product(A)
+        if prod is not None:
+            return _from_exact(prod, source)
+        return None if ball is None else _algebraic(ball, mixed, A, source)
     if m == n and qmat(B).det() != 0:
         rho2, _ = _largest_modulus(A)
         return None if rho2 is None else _from_exact(rho2, "1 - 1/rho(A)^2, B square and invertible")
