@@ -35,6 +35,7 @@ import numpy as np
 
 from ..errors import InvalidInput, NumericalFailure
 from ..model import Matrix, PerSensorChannel, Request, fraction_text, to_float
+from ._lqg_bounds import lqg_cost_bounds, lqg_floats, unavailable
 from ._lqg_critical import ActuatorCritical, known_critical, reaches_every_unstable_mode
 from ._lqg_types import LqgCostBounds, LqgOptimal, LqgPart, RiccatiSolve
 
@@ -44,11 +45,6 @@ THEOREM_1 = "Rohr, Marelli and Fu 2014, Theorem 1"
 
 def _exact(m: np.ndarray) -> tuple[tuple[Fraction, ...], ...]:
     return tuple(tuple(Fraction(Decimal(repr(float(x)))) for x in row) for row in m)
-
-
-def lqg_floats(req: Any) -> tuple[np.ndarray, ...]:
-    """``A, B, C, Q, R, W, U`` of an LQG loop request as float64 arrays (the data both MAREs read)."""
-    return tuple(to_float(m) for m in (req.system.A, req.B, req.system.C, req.system.Q, req.system.R, req.W, req.U))
 
 
 def check_lqg_links(req: Any) -> None:
@@ -254,8 +250,6 @@ def with_lqg_gains(req: Any) -> Any:
 
 def lqg_part(req: Any, budget: Any = None, with_bounds: bool = True) -> LqgPart:
     """The ``lqg`` block: the optimal controller's verdict, critical values and cost bounds, and the Riccati solves."""
-    from ._lqg_bounds import lqg_cost_bounds, unavailable
-
     crit = actuator_critical(req)
     reasons = optimal_reasons(req, crit)
     _, lam_c, lam_exact, note = optimal_sensor(req.system, req.channel)

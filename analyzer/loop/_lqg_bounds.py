@@ -43,11 +43,16 @@ from typing import Any
 
 import numpy as np
 
-from ..model import PerSensorChannel, Request
+from ..model import PerSensorChannel, Request, to_float
 from ._lqg_types import LqgCostBounds
 
 #: How the bounds are named in the report.
 PAPER = "Schenato, Sinopoli, Franceschetti, Poolla and Sastry 2007, Sec. V"
+
+
+def lqg_floats(req: Any) -> tuple[np.ndarray, ...]:
+    """``A, B, C, Q, R, W, U`` of an LQG loop request as float64 arrays (the data both MAREs read)."""
+    return tuple(to_float(m) for m in (req.system.A, req.B, req.system.C, req.system.Q, req.system.R, req.W, req.U))
 
 
 def filtered(X: np.ndarray, C: np.ndarray, R: np.ndarray, lam: float) -> np.ndarray:
@@ -81,8 +86,6 @@ def lqg_cost_bounds(req: Any, S: np.ndarray | None, budget: Any = None) -> LqgCo
     Returns the bounds, what each comes from, the paper's ``J_max`` (from
     ``V_bar``) beside the tighter one, and ``S``.
     """
-    from ._lqg import lqg_floats
-
     if req.protocol != "tcp":
         return unavailable("defined for the TCP-like protocol (separation fails for UDP-like)")
     if isinstance(req.channel, PerSensorChannel) or req.channel.model != "bernoulli":
@@ -136,4 +139,4 @@ def lqg_cost_bounds(req: Any, S: np.ndarray | None, budget: Any = None) -> LqgCo
     )
 
 
-__all__ = ["control_weight", "cost_at", "filtered", "lqg_cost_bounds", "unavailable"]
+__all__ = ["control_weight", "cost_at", "filtered", "lqg_cost_bounds", "lqg_floats", "unavailable"]
