@@ -165,10 +165,12 @@ def test_the_example_gains_cost_the_papers_j_max_in_filter_form():
     assert bounds["lower"] <= bounds["upper"] <= rep["cost"] == pytest.approx(bounds["paper_upper"], rel=1e-9)
 
 
-def test_an_uncontrollable_unstable_mode_is_told_that_no_probability_helps():
+@pytest.mark.parametrize("mode", ["2", "1", "-1"])
+def test_an_uncontrollable_unstable_mode_is_told_that_no_probability_helps(mode):
+    # |theta| >= 1 out of B's reach, the unit circle included: that mode evolves as theta whatever the input
     eye = [["1", "0"], ["0", "1"]]
     body = {
-        "system": {"A": [["2", "0"], ["0", "1/2"]], "B": [["0"], ["1"]], "C": [["1", "0"]], "Q": eye, "R": [["1"]]},
+        "system": {"A": [[mode, "0"], ["0", "1/2"]], "B": [["0"], ["1"]], "C": [["1", "0"]], "Q": eye, "R": [["1"]]},
         "channel": {"model": "bernoulli", "arrival_probability": "0.99"},
         "actuator_channel": {"model": "bernoulli", "arrival_probability": "1"},
         "controller": {"lqg": {"W": eye, "U": [["1"]]}},
@@ -178,9 +180,12 @@ def test_an_uncontrollable_unstable_mode_is_told_that_no_probability_helps():
     assert rep["verdict"] == "unstable" and rep["cost"] is None
     assert opt["critical_actuator_arrival_probability"] is None and opt["critical_actuator"]["stabilizable"] is False
     assert any("uncontrollable unstable mode" in r and "no actuator arrival probability" in r for r in opt["reasons"])
-    # the same plant with B reaching the unstable mode: stable, and its critical value is 1 - 1/4
+    # the same plant with B reaching that mode: its critical value is 1 - 1/theta^2
     body["system"]["B"] = [["1"], ["0"]]
-    assert _report(body)["lqg"]["optimal"]["critical_actuator_arrival_probability_exact"] == "3/4"
+    theta = Fraction(mode)
+    expected = max(Fraction(0), 1 - 1 / theta**2)
+    out = _report(body)["lqg"]["optimal"]["critical_actuator_arrival_probability_exact"]
+    assert out == (str(expected) if expected.denominator == 1 else _text(expected))
 
 
 def test_an_unobservable_unstable_mode_is_told_that_no_sensor_probability_helps():
@@ -316,6 +321,9 @@ def test_below_the_critical_value_is_exit_1_and_http_200(client, tmp_path, capsy
     http = r.json()
     assert http["verdict"] == cli["verdict"] == "unstable" and http["cost"] is None
     assert http["lqg"] == cli["lqg"]
+    # there is no loop to draw: the plot names the rule instead of failing
+    plot = client.post("/v1/plots/loop-region?points=3", json=body)
+    assert plot.status_code == 422 and "no stationary LQG gains" in plot.text
     just_above = _scalar("1.2", _text(Fraction(11, 36) + Fraction(1, 1000)), "0.9")
     path.write_text(json.dumps(just_above))
     assert cli_main(["loop", str(path)]) == 0
