@@ -36,7 +36,7 @@ import numpy as np
 from ..errors import InvalidInput, NumericalFailure
 from ..model import Matrix, PerSensorChannel, Request, fraction_text, to_float
 from ._lqg_bounds import lqg_cost_bounds, lqg_floats, unavailable
-from ._lqg_critical import ActuatorCritical, known_critical, reaches_every_unstable_mode
+from ._lqg_critical import ActuatorCritical, known_critical, largest_modulus, reaches_every_unstable_mode
 from ._lqg_types import LqgCostBounds, LqgOptimal, LqgPart, RiccatiSolve
 
 PAPER = "Schenato, Sinopoli, Franceschetti, Poolla and Sastry 2007, Sec. V"
@@ -99,10 +99,21 @@ def _optimal_sensor(system: Any, channel: Any) -> tuple[bool, float | None, str 
     return rep.verdict == "stable", rep.critical_arrival_probability, rep.critical_arrival_probability_exact, note
 
 
+#: The last answers of :func:`actuator_critical` (parsing and the report both ask; a bracket costs an LMI search).
+_ACTUATOR_CACHE: dict[Any, ActuatorCritical] = {}
+
+
 def actuator_critical(req: Any) -> ActuatorCritical:
     """The control MARE's critical actuator probability: exact where known (:func:`known_critical`), else bracketed."""
-    known = known_critical(req.system.A, req.B)
-    return known if known is not None else _nu_c_bracket(req)
+    key = (req.system.A, req.B, req.W, req.U, req.actuator.table)
+    hit = _ACTUATOR_CACHE.get(key)
+    if hit is None:
+        known = known_critical(req.system.A, req.B)
+        hit = known if known is not None else _nu_c_bracket(req)
+        if len(_ACTUATOR_CACHE) >= 8:
+            _ACTUATOR_CACHE.clear()
+        _ACTUATOR_CACHE[key] = hit
+    return hit
 
 
 def _nu_c_bracket(req: Any) -> ActuatorCritical:
@@ -119,8 +130,13 @@ def _nu_c_bracket(req: Any) -> ActuatorCritical:
     from .._system import System
     from ..errors import AnalyzerError
 
-    rho = float(np.max(np.abs(np.linalg.eigvals(to_float(req.system.A)))))
-    lower = max(0.0, 1.0 - 1.0 / rho**2) if rho > 0 else 0.0
+    rho2, approx = largest_modulus(req.system.A)
+    lower_exact = None if rho2 is None else (max(Fraction(0), 1 - 1 / rho2) if rho2 else Fraction(0))
+    if lower_exact is not None:
+        lower = float(lower_exact)
+    else:
+        rho = float(np.max(np.abs(np.linalg.eigvals(to_float(req.system.A)))))
+        lower = max(0.0, 1.0 - 1.0 / rho**2) if rho > 0 else 0.0
     upper: float | None = None
     why = "bracket: 1 - 1/rho(A)^2 below, the certified upper bound of the dual estimation problem (A', B', W, U) above"
     try:
@@ -137,7 +153,7 @@ def _nu_c_bracket(req: Any) -> ActuatorCritical:
             why = f"no certified upper bound: {rep['critical_probability']['upper'].get('reason')}"
     except AnalyzerError as exc:
         why = f"no certified upper bound: {exc}"
-    return ActuatorCritical(None, None, lower, upper, False, why)
+    return ActuatorCritical(None, None, lower, upper, False, why, lower_exact=lower_exact)
 
 
 def actuator_above(nu: Fraction, crit: ActuatorCritical) -> bool | None:
@@ -149,7 +165,9 @@ def actuator_above(nu: Fraction, crit: ActuatorCritical) -> bool | None:
     if crit.enclosure is not None:  # an algebraic nu_c: irrational, so a fine enough enclosure excludes nu
         lo, hi = crit.enclosure
         return True if nu > hi else False if nu < lo else None
-    if crit.lower is not None and nu <= Fraction(crit.lower):
+    if crit.lower_exact is not None and nu <= crit.lower_exact:
+        return False
+    if crit.lower_exact is None and crit.lower is not None and nu <= Fraction(crit.lower):
         return False
     if crit.upper is not None and nu >= Fraction(crit.upper):
         return True

@@ -66,6 +66,7 @@ class ActuatorCritical:
     stabilizable: bool = True
     exact_value: Fraction | None = None
     enclosure: tuple[Fraction, Fraction] | None = None
+    lower_exact: Fraction | None = None
 
 
 def qmat(m: Sequence[Sequence[Fraction]]) -> flint.fmpq_mat:
@@ -207,7 +208,7 @@ def _quadratic_text(rational: Fraction, quadratic: tuple[int, ...], near: float)
     return root_text(flint.fmpz_poly(ints), near)
 
 
-def _largest_modulus(A: Matrix) -> tuple[Fraction | None, float | None]:
+def largest_modulus(A: Matrix) -> tuple[Fraction | None, float | None]:
     """``rho(A)^2`` exactly when the largest ``|theta|^2`` is rational and certified to be the largest."""
     best_ball: flint.arb | None = None
     best_exact: Fraction | None = None
@@ -298,7 +299,7 @@ def known_critical(A: Matrix, B: Matrix) -> ActuatorCritical | None:
             return _from_exact(prod, source)
         return None if ball is None else _algebraic(ball, mixed, A, source)
     if m == n and qmat(B).det() != 0:
-        rho2, _ = _largest_modulus(A)
+        rho2, _ = largest_modulus(A)
         return None if rho2 is None else _from_exact(rho2, "1 - 1/rho(A)^2, B square and invertible")
     return None
 
@@ -306,6 +307,7 @@ def known_critical(A: Matrix, B: Matrix) -> ActuatorCritical | None:
 __all__ = [
     "ActuatorCritical",
     "known_critical",
+    "largest_modulus",
     "reaches_every_unstable_mode",
     "schur_stable",
     "uncontrollable_polynomial",

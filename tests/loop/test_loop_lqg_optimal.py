@@ -276,6 +276,18 @@ def test_elias_formula_agrees_with_a_bisection_on_the_existence_of_a_stabilizing
     assert above.matrix is not None and above.residual < 1e-9 and below.matrix is None
 
 
+def test_the_exact_critical_value_lies_in_kfios_certified_bracket_of_the_dual_problem():
+    # the control MARE on (A, B, W, U) is the estimation MARE of (A', B', W, U): kfio bounds brackets its critical value
+    import kfio
+
+    dual = kfio.System(A=[["5/4", "0"], ["1", "11/10"]], C=[["0", "1"]], Q=[["1", "0"], ["0", "1"]], R=[["1"]])
+    interval = kfio.bounds(dual, kfio.bernoulli("0.9")).to_dict()["critical_probability"]
+    assert interval["lower"]["value"] <= 57 / 121 <= interval["upper"]["value"]
+    # and above the bracket's upper end the LQG request has a fixed point and gains
+    nu = Fraction(interval["upper"]["value"]).limit_denominator(10**6) + Fraction(1, 10**6)
+    assert _report(_two("0.9", _text(nu)))["lqg"]["stationary_gains"]["exist"]
+
+
 def test_schur_cohn_and_the_unstable_product_against_numpy():
     rng = np.random.default_rng(7)
     for _ in range(40):
