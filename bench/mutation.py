@@ -123,6 +123,30 @@ MUTANTS: tuple[Mutant, ...] = (
         ("tests/model/test_exact_edges.py",),
         "the exponent limit accepts one past its edge: 0e801 and 0e-801 must be refused",
     ),
+    Mutant(
+        "elia-first-unstable-only",
+        "analyzer/loop/_lqg_critical.py",
+        "                if r2 > 1:\n                    exact *= r2**mult\n",
+        "                if r2 > 1 and exact == 1:\n                    exact *= r2**mult\n",
+        ("tests/loop/test_loop_lqg_optimal.py",),
+        "Elia's product over the unstable eigenvalues stops at the first one: 57/121 becomes 9/25",
+    ),
+    Mutant(
+        "schur-cohn-circle-inside",
+        "analyzer/loop/_lqg_critical.py",
+        "        if abs(a0) >= abs(ad):\n",
+        "        if abs(a0) > abs(ad):\n",
+        ("tests/loop/test_loop_lqg_optimal.py",),
+        "a root on the unit circle counted as stable: an uncontrollable mode at 1 or -1 would be stabilizable",
+    ),
+    Mutant(
+        "lqg-filter-gain-in-predictor-form",
+        "analyzer/loop/_lqg.py",
+        '    K = K_f if req.form == "filter" else A @ K_f\n',
+        "    K = A @ K_f\n",
+        ("tests/loop/test_loop_lqg_optimal.py",),
+        "the stationary LQG estimator gain always in predictor form: the filter-form cost is no longer J_max",
+    ),
 )
 
 

@@ -71,6 +71,12 @@ def loop_region_data(req: Any, points: int) -> dict[str, Any]:
     """The values drawn by :func:`loop_region_figure`, all from :mod:`kfio.loop` (module docstring)."""
     from kfio.loop import analyze_loop, decide, loop_mjls, region, stationary_cost
 
+    if not req.K:  # LQG below the optimal TCP-like critical values: the verdict is kfio loop's, there is no loop
+        raise InvalidInput(
+            "/controller/lqg",
+            "no stationary LQG gains exist at this request's link probabilities (below the optimal TCP-like "
+            "critical values), so there is no loop to draw; kfio loop gives the verdict and the critical values",
+        )
     sx, ax = _axes(req)
     report = analyze_loop(req).to_dict()
     centres = [Fraction(2 * i + 1, 2 * points) for i in range(points)]

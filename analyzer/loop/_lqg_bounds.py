@@ -33,7 +33,8 @@ These bounds are for one Bernoulli sensor packet and a Bernoulli actuator
 (the channels for which ``controller.lqg`` computes gains); for other
 channels the report says they are not available and why.  They bound the
 optimal design, not the stationary gains the loop report analyses exactly
-(whose exact cost is at least ``J_inf``).  All of it is float64.
+(whose exact cost is at least ``J_inf``; in filter form, the paper's ``J_max``
+in the scalar checks).  All of it is float64.
 """
 
 from __future__ import annotations
@@ -42,11 +43,16 @@ from typing import Any
 
 import numpy as np
 
-from ..model import PerSensorChannel, Request
-from ._lqg import lqg_floats, mare_fixed_point
+from ..model import PerSensorChannel, Request, to_float
+from ._lqg_types import LqgCostBounds
 
 #: How the bounds are named in the report.
 PAPER = "Schenato, Sinopoli, Franceschetti, Poolla and Sastry 2007, Sec. V"
+
+
+def lqg_floats(req: Any) -> tuple[np.ndarray, ...]:
+    """``A, B, C, Q, R, W, U`` of an LQG loop request as float64 arrays (the data both MAREs read)."""
+    return tuple(to_float(m) for m in (req.system.A, req.B, req.system.C, req.system.Q, req.system.R, req.W, req.U))
 
 
 def filtered(X: np.ndarray, C: np.ndarray, R: np.ndarray, lam: float) -> np.ndarray:
@@ -66,24 +72,19 @@ def cost_at(S: np.ndarray, M: np.ndarray, Q: np.ndarray, P_filtered: np.ndarray)
     return float(np.trace(S @ Q) + np.trace(M @ P_filtered))
 
 
-def unavailable(reason: str) -> dict[str, Any]:
+def unavailable(reason: str) -> LqgCostBounds:
     """The bounds' record when they are not available, with the reason."""
-    return {
-        "lower": None,
-        "upper": None,
-        "lower_from": None,
-        "upper_from": None,
-        "paper_upper": None,
-        "reason": reason,
-    }
+    return LqgCostBounds(None, None, None, None, None, reason)
 
 
-def lqg_cost_bounds(req: Any, budget: Any = None) -> dict[str, Any]:
+def lqg_cost_bounds(req: Any, S: np.ndarray | None, budget: Any = None) -> LqgCostBounds:
     """``J_min <= J_inf <= J_max`` for the optimal TCP-like controller of ``req`` (module docstring).
 
-    ``req`` is a :class:`kfio.loop.LoopRequest` with ``controller.lqg``.
+    ``req`` is a :class:`kfio.loop.LoopRequest` with ``controller.lqg``; ``S`` the
+    control MARE's fixed point at its actuator probability
+    (:func:`kfio.loop._lqg.control_fixed_point`), ``None`` when it has none.
     Returns the bounds, what each comes from, the paper's ``J_max`` (from
-    ``V_bar``) beside the tighter one, and the control MARE's ``S``.
+    ``V_bar``) beside the tighter one, and ``S``.
     """
     if req.protocol != "tcp":
         return unavailable("defined for the TCP-like protocol (separation fails for UDP-like)")
@@ -91,11 +92,12 @@ def lqg_cost_bounds(req: Any, budget: Any = None) -> dict[str, Any]:
         return unavailable("kfio's covariance bounds need one Bernoulli sensor packet here")
     if req.actuator.model != "bernoulli":
         return unavailable("the control modified Riccati equation needs a Bernoulli actuator link")
+    if S is None:
+        return unavailable(
+            "the control modified Riccati equation has no fixed point: nu is not above its critical value"
+        )
     A, B, C, Q, R, W, U = lqg_floats(req)
     lam, nu = float(req.channel.table[0]), float(req.actuator.table[0])
-    S = mare_fixed_point(A, B, W, U, nu)
-    if S is None:
-        return unavailable("the control modified Riccati equation diverges: nu is below its critical value")
     M = control_weight(A, B, W, U, S, nu)
     from .._api import bounds
 
@@ -125,21 +127,16 @@ def lqg_cost_bounds(req: Any, budget: Any = None) -> dict[str, Any]:
         reason = "S_bar does not exist: (1 - lambda) rho(A)^2 >= 1, the optimal cost is unbounded"
     elif upper is None:
         reason = "no upper bound: V_bar does not exist at this sensor arrival probability"
-    return {
-        "lower": lower,
-        "upper": upper,
-        "lower_from": lower_from,
-        "upper_from": upper_from,
-        "paper_upper": paper_upper,
-        "formula": "J_inf = tr(S Q) + tr((A'SA + W - S) E[P(t|t)]), S the control MARE's fixed point",
-        "covariance": "filtered P(t|t) of the optimal time-varying Kalman filter (time average of its expectation)",
-        "tr_S_Q": base,
-        "S": S.tolist(),
-        "applies_to": "the optimal TCP-like controller (time-varying Kalman filter, stationary L); "
-        "the exact `cost` above is that of the stationary gains, at least J_inf",
-        "reference": PAPER,
-        "reason": reason,
-    }
+    return LqgCostBounds(
+        lower=lower,
+        upper=upper,
+        lower_from=lower_from,
+        upper_from=upper_from,
+        paper_upper=paper_upper,
+        reason=reason,
+        tr_S_Q=base,
+        S=tuple(tuple(float(x) for x in row) for row in S),
+    )
 
 
-__all__ = ["control_weight", "cost_at", "filtered", "lqg_cost_bounds", "unavailable"]
+__all__ = ["control_weight", "cost_at", "filtered", "lqg_cost_bounds", "lqg_floats", "unavailable"]

@@ -155,13 +155,16 @@ def parse_loop_request(obj: Any, limits: Limits = DEFAULT_LIMITS) -> LoopRequest
     if not isinstance(ctrl, dict):
         raise InvalidInput("/controller", "expected a JSON object")
     if "lqg" in ctrl:
-        check_keys(ctrl, "/controller", {"lqg"}, set())
+        check_keys(ctrl, "/controller", {"lqg", "form"}, set())
         W, U = _weights(ctrl["lqg"], "/controller/lqg", n, m, limits)
         if "U" not in ctrl["lqg"] or not is_psd(U, strict=True, where="/controller/lqg/U"):
             raise InvalidInput("/controller/lqg/U", "U is required and must be positive definite for LQG gains")
         source = "lqg"
         K = L = None
-        form = "predictor"
+        # filter form by default: the optimal TCP-like controller applies u = -L x_hat[t|t]
+        form = ctrl.get("form", "filter")
+        if form not in FORMS:
+            raise InvalidInput("/controller/form", f"form must be one of {', '.join(FORMS)}; got {form!r}")
     else:
         check_keys(ctrl, "/controller", {"gains", "form"}, {"gains"})
         gains = check_keys(ctrl["gains"], "/controller/gains", {"K", "L"}, {"K", "L"})

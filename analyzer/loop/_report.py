@@ -26,11 +26,14 @@ from ..model import (
 )
 from ._cost import stationary_cost
 from ._critical import Critical, critical_value, parameter_of
+from ._lqg_critical import ActuatorCritical
+from ._lqg_types import LqgCostBounds, LqgOptimal, LqgPart, RiccatiSolve
 from ._mjls import Mjls, estimator_mjls, loop_mjls, sensor_links
 from ._model import LoopRequest
 from ._region import region
 from ._verdict import decide
 
+LQG_PAPER = "Schenato, Sinopoli, Franceschetti, Poolla and Sastry 2007, Sec. V"
 THEOREM = "Costa, Fragoso and Marques 2005, Theorem 3.9 (mean-square stability of Markov jump linear systems)"
 MODEL = "Schenato, Sinopoli, Franceschetti, Poolla and Sastry 2007, Sec. II (sensor and actuator packet losses)"
 
@@ -66,9 +69,12 @@ class LoopReport(Report):
     estimator_alone:
         The fixed estimator gain without control, beside the optimal filter's critical value.
     lqg:
-        With ``controller.lqg``: the control MARE's critical actuator probability ``nu_c`` (exact for
-        square invertible ``B`` and scalar plants, else a bracket) and ``cost_bounds``, the bounds
-        ``J_min <= J_inf <= J_max`` on the optimal TCP-like cost (:mod:`kfio.loop._lqg_bounds`).
+        With ``controller.lqg`` (:class:`kfio.loop._lqg_types.LqgPart`): the optimal TCP-like
+        controller's verdict, critical sensor and actuator probabilities (the control MARE's exact for
+        one input, square invertible ``B`` and scalar plants, Elia 2005, else a bracket) and the bounds
+        ``J_min <= J_inf <= J_max`` on its cost (:mod:`kfio.loop._lqg_bounds`); the top level is the
+        exact analysis of the stationary gains, or, below the optimal critical values, ``unstable``
+        without gains (Schenato, Sinopoli, Franceschetti, Poolla and Sastry 2007, Sec. V).
     partial:
         ``True`` when the time budget ran out after the verdict and cost: the notes name what is missing.
     udp_region_bounds:
@@ -83,7 +89,7 @@ class LoopReport(Report):
     exact: bool
     certified: bool
     certificate: str
-    spectral_radius: float
+    spectral_radius: float | None
     spectral_radius_exact: str | None
     operator_size: int
     modes: int
@@ -91,10 +97,10 @@ class LoopReport(Report):
     critical: tuple[Critical, ...]
     sensor_critical: Critical | None
     actuator_critical: Critical | None
-    estimator_alone: dict[str, Any]
+    estimator_alone: dict[str, Any] | None
     request: LoopRequest
     region: dict[str, Any] | None
-    lqg: dict[str, Any] | None = None
+    lqg: LqgPart | None = None
     notes: tuple[str, ...] = field(default=())
     udp_region_bounds: dict[str, Any] | None = None
     partial: bool = False
@@ -178,17 +184,94 @@ def loop_report_view(r: LoopReport) -> dict[str, Any]:
         "critical_values": [c.as_dict() for c in r.critical],
         "estimator_alone": r.estimator_alone,
         "region": r.region,
-        "lqg": r.lqg,
+        "lqg": None if r.lqg is None else _lqg_view(r.lqg),
         "udp_region_bounds": r.udp_region_bounds,
         "loop": {
             "protocol": req.protocol,
             "on_loss": req.on_loss,
             "form": req.form,
             "controller": req.controller,
-            "K": _matrix(req.K),
-            "L": _matrix(req.L),
+            "K": _matrix(req.K) if req.K else None,
+            "L": _matrix(req.L) if req.L else None,
         },
         "notes": list(r.notes),
+    }
+
+
+def _cost_bounds_view(b: LqgCostBounds) -> dict[str, Any]:
+    out: dict[str, Any] = {
+        "lower": b.lower,
+        "upper": b.upper,
+        "lower_from": b.lower_from,
+        "upper_from": b.upper_from,
+        "paper_upper": b.paper_upper,
+        "reason": b.reason,
+    }
+    if b.S is not None:
+        out.update(
+            formula="J_inf = tr(S Q) + tr((A'SA + W - S) E[P(t|t)]), S the control MARE's fixed point",
+            covariance="filtered P(t|t) of the optimal time-varying Kalman filter (time average of its expectation)",
+            tr_S_Q=b.tr_S_Q,
+            S=b.S,
+            applies_to="the optimal TCP-like controller (time-varying Kalman filter, stationary L); "
+            "the exact `cost` above is that of the stationary gains, at least J_inf",
+            reference=LQG_PAPER,
+        )
+    return out
+
+
+def _actuator_view(a: ActuatorCritical) -> dict[str, Any]:
+    return {
+        "lower": a.lower,
+        "upper": a.upper,
+        "is_exact": a.is_exact,
+        "from": a.source,
+        "stabilizable": a.stabilizable,
+    }
+
+
+def _riccati_view(r: RiccatiSolve | None) -> dict[str, Any] | None:
+    if r is None:
+        return None
+    return {
+        "equation": r.equation,
+        "method": "Newton's method (policy iteration) from stabilizing gains, continued from probability 1",
+        "relative_residual": r.residual,
+        "newton_steps": r.newton_steps,
+        "continuation_points": r.continuation_points,
+        "trace": r.trace,
+    }
+
+
+def _optimal_view(o: LqgOptimal) -> dict[str, Any]:
+    a = o.actuator
+    return {
+        "verdict": o.verdict,
+        "reasons": list(o.reasons),
+        "critical_sensor_arrival_probability": o.critical_sensor,
+        "critical_sensor_arrival_probability_exact": o.critical_sensor_exact,
+        "critical_sensor_from": "the optimal time-varying filter (kfio analyze, Rohr, Marelli and Fu 2014, Theorem 1)",
+        "critical_sensor_note": o.sensor_note,
+        "critical_actuator_arrival_probability": a.value,
+        "critical_actuator_arrival_probability_exact": a.exact,
+        "critical_actuator": _actuator_view(a),
+        "cost_bounds": _cost_bounds_view(o.cost_bounds),
+        "statement": o.statement,
+        "reference": LQG_PAPER,
+    }
+
+
+def _lqg_view(p: LqgPart) -> dict[str, Any]:
+    """The ``lqg`` block: ``optimal`` (the optimal TCP-like controller) and the stationary gains' derivation."""
+    return {
+        "optimal": _optimal_view(p.optimal),
+        "stationary_gains": {
+            "exist": p.gains,
+            "form": p.form,
+            "applies_to": "the top level: the exact analysis of these stationary gains",
+            "control_riccati": _riccati_view(p.control_riccati),
+            "estimation_riccati": _riccati_view(p.estimation_riccati),
+        },
     }
 
 
@@ -268,16 +351,49 @@ def _estimator_alone(req: LoopRequest, with_critical: bool, budget: Budget | Non
 MAX_OPERATOR_SIZE = 3000
 
 
-def _lqg_part(req: LoopRequest, budget: Budget | None, with_bounds: bool = True) -> dict[str, Any] | None:
-    """For LQG gains: the control MARE's critical actuator probability and the optimal cost's bounds (Schenato, Sinopoli, Franceschetti, Poolla and Sastry 2007, Sec. V)."""
+def _lqg_part(req: LoopRequest, budget: Budget | None, with_bounds: bool = True) -> LqgPart | None:
+    """For LQG gains: the optimal TCP-like controller beside the stationary gains (Schenato, Sinopoli, Franceschetti, Poolla and Sastry 2007, Sec. V)."""
     if req.controller != "lqg":
         return None
-    from ._lqg import control_critical
-    from ._lqg_bounds import lqg_cost_bounds, unavailable
+    from ._lqg import lqg_part
 
-    if not with_bounds:
-        return {**control_critical(req), "cost_bounds": unavailable("not computed: the time budget ran out")}
-    return {**control_critical(req), "cost_bounds": lqg_cost_bounds(req, budget)}
+    return lqg_part(req, budget, with_bounds)
+
+
+def _without_gains(req: LoopRequest) -> LoopReport:
+    """The report below the optimal TCP-like critical values: ``unstable``, no gains, no cost, the reasons in the notes.
+
+    No TCP-like controller, optimal or stationary, has a bounded cost there
+    (Schenato, Sinopoli, Franceschetti, Poolla and Sastry 2007, Sec. V), so there is no loop to analyze.
+    """
+    from ._lqg import with_statement
+
+    part = _lqg_part(req, None)
+    assert part is not None
+    part = with_statement(part, (None, None), (None, None))
+    notes = (
+        "no stationary TCP-like gains exist: " + "; ".join(part.optimal.reasons),
+        f"the verdict is that of the optimal TCP-like controller ({LQG_PAPER}); lqg.optimal gives its critical values",
+    )
+    return LoopReport(
+        verdict="unstable",
+        exact=True,
+        certified=True,
+        certificate="below the optimal TCP-like critical values (" + LQG_PAPER + ")",
+        spectral_radius=None,
+        spectral_radius_exact=None,
+        operator_size=0,
+        modes=0,
+        stationary_cost=None,
+        critical=(),
+        sensor_critical=None,
+        actuator_critical=None,
+        estimator_alone=None,
+        request=req,
+        region=None,
+        lqg=part,
+        notes=notes,
+    )
 
 
 def _udp_part(req: LoopRequest, verdict: str) -> dict[str, Any]:
@@ -307,6 +423,8 @@ def analyze_loop(req: LoopRequest, *, critical: bool = True, budget: Budget | No
     from ..errors import LimitExceeded
     from ._mjls import loop_state_size, sensor_links
 
+    if req.controller == "lqg" and not req.K:
+        return _without_gains(req)
     d = loop_state_size(req)
     modes = 1
     for lk in [lk for lk, _ in sensor_links(req)] + [None]:
@@ -373,6 +491,14 @@ def analyze_loop(req: LoopRequest, *, critical: bool = True, budget: Budget | No
     if req.region is not None:
         reg = attempt("region", lambda: region(req, req.region or 0, work), lambda: None)
     lqg = attempt("LQG cost bounds", lambda: _lqg_part(req, work), lambda: _lqg_part(req, None, with_bounds=False))
+    if lqg is not None:
+        from ._lqg import with_statement
+
+        lqg = with_statement(
+            lqg,
+            (sensor_c.value, sensor_c.exact) if sensor_c else (None, None),
+            (actuator_c.value, actuator_c.exact) if actuator_c else (None, None),
+        )
     if skipped:
         notes.append("partial: the time budget ran out; not computed: " + "; ".join(skipped))
     return LoopReport(

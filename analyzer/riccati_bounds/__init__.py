@@ -7,6 +7,7 @@ Sinopoli et al. (2004), Liu and Goldsmith (2004) and Rohr, Marelli and Fu
 
 from ._certificate import StabilityCertificate
 from ._compute import compute_bounds
+from ._continuation import FixedPoint, mare_fixed_point
 from ._filtered import FilteredBounds
 from ._options import parse_bounds_options
 from ._report import BoundsReport, CovarianceBounds, CriticalInterval, PHatBounds, RegionMap
@@ -18,11 +19,13 @@ __all__ = [
     "CovarianceBounds",
     "CriticalInterval",
     "FilteredBounds",
+    "FixedPoint",
     "PHatBounds",
     "RegionMap",
     "StabilityCertificate",
     "TraceTarget",
     "bound_traces",
     "compute_bounds",
+    "mare_fixed_point",
     "parse_bounds_options",
 ]

@@ -80,7 +80,14 @@ LOOP_COMPONENTS: dict[str, dict[str, Any]] = {
                     },
                     {
                         "type": "object",
-                        "properties": {"lqg": _WEIGHTS},
+                        "properties": {
+                            "lqg": _WEIGHTS,
+                            "form": {
+                                "enum": ["filter", "predictor"],
+                                "description": "estimator form of the stationary LQG gains; filter (default) is the "
+                                "optimal TCP-like controller's structure, u = -L x_hat[t|t]",
+                            },
+                        },
                         "required": ["lqg"],
                         "additionalProperties": False,
                     },
@@ -141,15 +148,58 @@ LOOP_COMPONENTS: dict[str, dict[str, Any]] = {
             "critical_actuator_arrival_probability": {"type": ["number", "null"]},
             "critical_actuator_arrival_probability_exact": {"type": ["string", "null"]},
             "critical_values": {"type": "array", "items": {"type": "object"}},
-            "estimator_alone": {"type": "object"},
+            "estimator_alone": {
+                "type": ["object", "null"],
+                "description": "null when there are no gains (LQG below the optimal critical values)",
+            },
             "region": {"type": ["object", "null"]},
             "lqg": {
                 "type": ["object", "null"],
-                "description": "with controller.lqg: the control MARE's critical actuator probability, at least "
-                "1 - 1/rho(A)^2 and equal to it for square invertible B or a scalar plant (nu_c: exact or a "
-                "bracket), and cost_bounds: lower <= J_inf <= upper for the optimal TCP-like controller "
-                "(Schenato, Sinopoli, Franceschetti, Poolla and Sastry 2007, Sec. V), with what each bound comes "
-                "from, or a reason when not available",
+                "description": "with controller.lqg: optimal, the optimal TCP-like controller (Schenato, Sinopoli, "
+                "Franceschetti, Poolla and Sastry 2007, Sec. V): its verdict and reasons, the critical sensor "
+                "arrival probability of the optimal filter (Rohr, Marelli and Fu 2014, Theorem 1), the control "
+                "MARE's critical actuator arrival probability (exact for one input, Elia 2005, and square "
+                "invertible B; else a certified bracket), cost_bounds (lower <= J_inf <= upper) and a statement "
+                "beside the stationary gains' critical values; and stationary_gains, how the gains the top level "
+                "analyzes were derived (exist: false below the optimal critical values, where the top level is "
+                "unstable without gains or cost)",
+                "properties": {
+                    "optimal": {
+                        "type": "object",
+                        "properties": {
+                            "verdict": {"enum": ["stable", "unstable"]},
+                            "reasons": {"type": "array", "items": {"type": "string"}},
+                            "critical_sensor_arrival_probability": {"type": ["number", "null"]},
+                            "critical_sensor_arrival_probability_exact": {"type": ["string", "null"]},
+                            "critical_actuator_arrival_probability": {"type": ["number", "null"]},
+                            "critical_actuator_arrival_probability_exact": {"type": ["string", "null"]},
+                            "critical_actuator": {
+                                "type": "object",
+                                "properties": {
+                                    "lower": {"type": ["number", "null"]},
+                                    "upper": {"type": ["number", "null"]},
+                                    "is_exact": {"type": "boolean"},
+                                    "from": {"type": "string"},
+                                    "stabilizable": {"type": "boolean"},
+                                },
+                            },
+                            "cost_bounds": {"type": "object"},
+                            "statement": {"type": ["string", "null"]},
+                        },
+                        "required": ["verdict", "reasons", "critical_actuator", "cost_bounds"],
+                    },
+                    "stationary_gains": {
+                        "type": "object",
+                        "properties": {
+                            "exist": {"type": "boolean"},
+                            "form": {"enum": ["filter", "predictor"]},
+                            "control_riccati": {"type": ["object", "null"]},
+                            "estimation_riccati": {"type": ["object", "null"]},
+                        },
+                        "required": ["exist", "form"],
+                    },
+                },
+                "required": ["optimal", "stationary_gains"],
             },
             "udp_region_bounds": {
                 "type": ["object", "null"],

@@ -50,6 +50,9 @@ def summary(report: dict) -> str:
     Every number is read from ``report`` (the JSON of ``--json``); a test compares them.
     """
     verdict = report["verdict"]
+    lqg = report.get("lqg") or {}
+    if lqg and not lqg["stationary_gains"]["exist"]:
+        return _lqg_without_gains(report)
     lines = [
         f"verdict: {verdict.upper()}  (exact mean-square verdict, Costa, Fragoso and Marques 2005, Thm 3.9; "
         f"spectral radius {report['spectral_radius']:.6g})"
@@ -64,23 +67,8 @@ def summary(report: dict) -> str:
     statement = report["estimator_alone"]["statement"]
     if statement:
         lines.append(f"estimator alone: {statement}")
-    lqg = report.get("lqg") or {}
-    nu_c = lqg.get("nu_c")
-    if nu_c:
-        if nu_c.get("is_exact"):
-            lines.append(
-                f"control equation converges iff actuator arrival probability > {_probability(nu_c['lower'], nu_c['exact'])}"
-            )
-        elif nu_c.get("upper") is not None:
-            lines.append(
-                f"control equation's critical actuator probability: in [{nu_c['lower']:.6g}, {nu_c['upper']:.6g}]"
-            )
-    bounds = lqg.get("cost_bounds") or {}
-    if bounds.get("lower") is not None and bounds.get("upper") is not None:
-        lines.append(
-            f"optimal TCP-like LQG cost: between {bounds['lower']:.6g} and {bounds['upper']:.6g} (bounds, "
-            "Schenato, Sinopoli, Franceschetti, Poolla and Sastry 2007, Sec. V)"
-        )
+    if lqg:
+        lines += _lqg_lines(report)
     udp = report.get("udp_region_bounds") or {}
     outer = udp.get("outer") or {}
     if outer.get("sensor_arrival_probability_above") is not None:
@@ -94,6 +82,64 @@ def summary(report: dict) -> str:
         lines.append(f"optimal UDP-like controller needs (bound): {', '.join(parts)}")
     if report.get("partial"):
         lines += [n for n in report["notes"] if n.startswith("partial:")]
+    return "\n".join(lines)
+
+
+def _optimal_actuator(optimal: dict) -> str:
+    """The optimal TCP-like controller's critical actuator probability: exact, bracketed, or none."""
+    crit = optimal["critical_actuator"]
+    if optimal["critical_actuator_arrival_probability"] is not None:
+        value = optimal["critical_actuator_arrival_probability"]
+        return "> " + _probability(value, optimal["critical_actuator_arrival_probability_exact"])
+    if crit["lower"] is not None and crit["upper"] is not None:
+        return f"> a value in [{crit['lower']:.6g}, {crit['upper']:.6g}]"
+    return "no probability suffices" if not crit["stabilizable"] else "unknown"
+
+
+def _optimal_sensor(optimal: dict) -> str:
+    value = optimal["critical_sensor_arrival_probability"]
+    if value is None:
+        return "no probability suffices"
+    return "> " + _probability(value, optimal["critical_sensor_arrival_probability_exact"])
+
+
+def _lqg_lines(report: dict) -> list[str]:
+    """LQG: the optimal TCP-like controller's critical values beside those of the stationary gains, and its cost bounds."""
+    lqg = report["lqg"]
+    optimal = lqg["optimal"]
+    form = lqg["stationary_gains"]["form"]
+
+    def stationary(key: str) -> str:
+        value = report[f"critical_{key}_arrival_probability"]
+        return "n/a" if value is None else f"{value:.6g}"
+
+    lines = [
+        f"LQG (TCP-like; Schenato, Sinopoli, Franceschetti, Poolla and Sastry 2007, Sec. V): critical arrival "
+        f"probabilities, optimal controller | these stationary gains ({form} form)",
+        f"  sensor:   optimal {_optimal_sensor(optimal)} | stationary {stationary('sensor')}",
+        f"  actuator: optimal {_optimal_actuator(optimal)} | stationary {stationary('actuator')}",
+    ]
+    bounds = optimal["cost_bounds"]
+    if bounds.get("lower") is not None and bounds.get("upper") is not None:
+        lines.append(
+            f"optimal TCP-like LQG cost: between {bounds['lower']:.6g} and {bounds['upper']:.6g} (bounds, "
+            "Schenato, Sinopoli, Franceschetti, Poolla and Sastry 2007, Sec. V)"
+        )
+    return lines
+
+
+def _lqg_without_gains(report: dict) -> str:
+    """LQG below the optimal critical values: the verdict, why, and what the optimal controller needs."""
+    optimal = report["lqg"]["optimal"]
+    lines = [
+        f"verdict: {report['verdict'].upper()}  (no TCP-like controller has a bounded cost here; Schenato, Sinopoli, "
+        "Franceschetti, Poolla and Sastry 2007, Sec. V)",
+        "stationary cost: unbounded (no stationary LQG gains exist)",
+    ]
+    lines += [f"why: {reason}" for reason in optimal["reasons"]]
+    lines.append(
+        f"the optimal TCP-like LQG needs: sensor {_optimal_sensor(optimal)}; actuator {_optimal_actuator(optimal)}"
+    )
     return "\n".join(lines)
 
 

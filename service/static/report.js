@@ -455,24 +455,31 @@ function renderLoop(r) {
   return out;
 }
 
-/** The optimal TCP-like LQG part of a loop report: the control equation's critical value and the cost bounds. */
+/** The optimal TCP-like LQG part of a loop report: its verdict and critical values beside the stationary gains', and the cost bounds. */
 function renderLqg(lqg) {
-  const nu = lqg.nu_c || {};
-  const b = lqg.cost_bounds || {};
-  const nuText = nu.is_exact ? num(nu.exact, nu.lower)
-    : nu.upper !== null && nu.upper !== undefined ? `between ${dec(nu.lower)} and ${dec(nu.upper)} (bracket)` : "not available";
+  const o = lqg.optimal || {};
+  const nu = o.critical_actuator || {};
+  const b = o.cost_bounds || {};
+  const nuText = o.critical_actuator_arrival_probability !== null && o.critical_actuator_arrival_probability !== undefined
+    ? num(o.critical_actuator_arrival_probability_exact, o.critical_actuator_arrival_probability)
+    : nu.upper !== null && nu.upper !== undefined ? `between ${dec(nu.lower)} and ${dec(nu.upper)} (bracket)` : (nu.from || "not available");
+  const lamText = o.critical_sensor_arrival_probability !== null && o.critical_sensor_arrival_probability !== undefined
+    ? num(o.critical_sensor_arrival_probability_exact, o.critical_sensor_arrival_probability) : "no sensor arrival probability suffices";
   const bounds = b.lower !== null && b.lower !== undefined && b.upper !== null && b.upper !== undefined
     ? `between ${dec(b.lower)} and ${dec(b.upper)}` : `not available${b.reason ? `: ${b.reason}` : ""}`;
   const d = facts([
+    ["verdict of the optimal TCP-like controller", o.verdict],
+    ["the optimal filter needs a sensor arrival probability above (Rohr, Marelli and Fu 2014)", lamText],
     ["the control equation converges iff the actuator arrival probability exceeds", nuText],
     ["optimal TCP-like LQG cost J (bounds, Schenato, Sinopoli, Franceschetti, Poolla and Sastry 2007, Sec. V)", bounds],
     ["lower bound from", b.lower_from],
     ["upper bound from", b.upper_from],
     ["the paper's upper bound", b.paper_upper === null || b.paper_upper === undefined ? undefined : dec(b.paper_upper)],
+    ["stationary gains analyzed above", lqg.stationary_gains ? (lqg.stationary_gains.exist ? `${lqg.stationary_gains.form} form` : "none exist here") : undefined],
   ]);
   d.id = "loop-lqg";
-  const src = el("p", [b.formula, b.applies_to].filter(Boolean).map(capitalized).join(". ") + ".", "note");
-  return [el("h3", "Optimal LQG over the lossy links (TCP-like): bounds beside the exact analysis of the gains"), d, src];
+  const src = el("p", [o.statement, ...(o.reasons || []), b.formula, b.applies_to].filter(Boolean).map(capitalized).join(". ") + ".", "note");
+  return [el("h3", "Optimal LQG over the lossy links (TCP-like) beside the exact analysis of the stationary gains"), d, src];
 }
 
 /** Bounds on the optimal UDP-like controller's critical region (labelled as bounds). */

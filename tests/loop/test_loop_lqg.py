@@ -38,13 +38,13 @@ def test_control_mare_fixed_point_and_gain_in_closed_form():
 
 @pytest.mark.parametrize("nu,converges", [("0.76", True), ("0.74", False)])
 def test_control_mare_converges_iff_nu_exceeds_one_minus_inverse_a_squared(nu, converges):
-    # a = 2: nu_c = 1 - 1/4 = 3/4
-    if converges:
-        assert parse_loop_request(_body(nu)).L
-    else:
-        with pytest.raises(InvalidInput) as err:
-            parse_loop_request(_body(nu))
-        assert err.value.field == "/actuator_channel/arrival_probability"
+    # a = 2: nu_c = 1 - 1/4 = 3/4; below it the answer is a verdict without gains, not invalid input
+    req = parse_loop_request(_body(nu))
+    assert bool(req.L) is converges
+    rep = analyze_loop(req).to_dict()
+    assert rep["lqg"]["optimal"]["verdict"] == ("stable" if converges else "unstable")
+    if not converges:
+        assert rep["verdict"] == "unstable" and rep["cost"] is None and rep["loop"]["L"] is None
 
 
 def test_lqg_needs_tcp_and_bernoulli_links():
@@ -59,6 +59,6 @@ def test_lqg_needs_tcp_and_bernoulli_links():
 @pytest.mark.parametrize("a,expected", [("2", "3/4"), ("-1.25", "9/25"), ("0.5", "0")])
 def test_lqg_report_gives_the_scalar_critical_value_one_minus_inverse_a_squared(a, expected):
     body = _body("0.95", a)
-    out = analyze_loop(parse_loop_request(body)).to_dict()["lqg"]
-    assert out["critical_actuator_arrival_probability_lower_bound_exact"] == expected
-    assert out["bound_is_the_critical_value"] is True
+    out = analyze_loop(parse_loop_request(body)).to_dict()["lqg"]["optimal"]
+    assert out["critical_actuator_arrival_probability_exact"] == expected
+    assert out["critical_actuator"]["is_exact"] is True

@@ -54,7 +54,7 @@ def _closed_forms(a, b, c, q, r, w, u, lam, nu):
 )
 def test_scalar_bounds_are_the_papers_closed_forms(a, b, c, q, r, w, u, lam, nu):
     rep = analyze_loop(parse_loop_request(_body(a, lam, nu, b, c, q, r, w, u)))
-    out = rep.to_dict()["lqg"]["cost_bounds"]
+    out = rep.to_dict()["lqg"]["optimal"]["cost_bounds"]
     s, j_min, j_max = _closed_forms(*(float(x) for x in (a, b, c, q, r, w, u, lam, nu)))
     assert out["S"][0][0] == pytest.approx(s, rel=1e-9)
     assert out["lower"] == pytest.approx(j_min, rel=1e-8)
@@ -93,7 +93,7 @@ def _optimal_tcp_loop(a, b, c, q, r, w, u, lam, nu, rng, trajectories=4000, step
 def test_monte_carlo_of_the_optimal_tcp_loop_lies_within_the_bounds_and_obeys_the_formula():
     # lam = 0.7 > 1 - 1/a^4 = 0.59: P(t) has a finite variance, so the confidence interval means something
     a, b, c, q, r, w, u, lam, nu = 1.25, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 0.7, 0.6
-    out = analyze_loop(parse_loop_request(_body("1.25", "0.7", "0.6"))).to_dict()["lqg"]["cost_bounds"]
+    out = analyze_loop(parse_loop_request(_body("1.25", "0.7", "0.6"))).to_dict()["lqg"]["optimal"]["cost_bounds"]
     s, cost, p_filtered, p_predicted = _optimal_tcp_loop(a, b, c, q, r, w, u, lam, nu, np.random.default_rng(11))
     m = a * a * s + w - s
     mean, se = cost.mean(), cost.std(ddof=1) / math.sqrt(cost.size)
@@ -117,28 +117,41 @@ def test_bounds_not_available_name_the_reason():
     from kfio.model import MarkovChannel
 
     ge = MarkovChannel("gilbert_elliott", 1, (0.5, 0.9), {"failure_rate": 0.1, "recovery_rate": 0.5})
-    out = lqg_cost_bounds(dataclasses.replace(req, channel=ge))
-    assert out["lower"] is None and out["upper"] is None and "Bernoulli" in out["reason"]
-    out = lqg_cost_bounds(dataclasses.replace(req, protocol="udp"))
-    assert out["lower"] is None and "TCP" in out["reason"]
+    S = np.array([[1.0]])
+    out = lqg_cost_bounds(dataclasses.replace(req, channel=ge), S)
+    assert out.lower is None and out.upper is None and out.reason is not None and "Bernoulli" in out.reason
+    out = lqg_cost_bounds(dataclasses.replace(req, protocol="udp"), S)
+    assert out.lower is None and out.reason is not None and "TCP" in out.reason
 
 
-def test_nu_c_bracket_exact_for_square_b_and_bracketed_otherwise():
-    rep = analyze_loop(parse_loop_request(_body("2", "0.9", "0.9"))).to_dict()["lqg"]["nu_c"]
-    assert rep["is_exact"] and rep["exact"] == "3/4" and rep["lower"] == rep["upper"] == 0.75
-    body = {
-        "system": {
-            "A": [["1.2", "1"], ["0", "1.1"]],
-            "B": [["0"], ["1"]],
-            "C": [["1", "0"]],
-            "Q": [["1", "0"], ["0", "1"]],
-            "R": [["1"]],
-        },
-        "channel": {"model": "bernoulli", "arrival_probability": "0.95"},
-        "actuator_channel": {"model": "bernoulli", "arrival_probability": "0.95"},
-        "controller": {"lqg": {"W": [["1", "0"], ["0", "1"]], "U": [["1"]]}},
-    }
-    nu_c = analyze_loop(parse_loop_request(body)).to_dict()["lqg"]["nu_c"]
-    assert not nu_c["is_exact"] and nu_c["exact"] is None
-    assert nu_c["lower"] == pytest.approx(1 - 1 / 1.2**2)
-    assert nu_c["upper"] is not None and nu_c["lower"] <= nu_c["upper"] < 0.95
+def test_nu_c_exact_for_square_b_and_one_input_and_bracketed_otherwise():
+    rep = analyze_loop(parse_loop_request(_body("2", "0.9", "0.9"))).to_dict()["lqg"]["optimal"]
+    assert rep["critical_actuator"]["is_exact"] and rep["critical_actuator_arrival_probability_exact"] == "3/4"
+    assert rep["critical_actuator"]["lower"] == rep["critical_actuator"]["upper"] == 0.75
+
+    def body(B):
+        return {
+            "system": {
+                "A": [["1.2", "1"], ["0", "1.1"]],
+                "B": B,
+                "C": [["1", "0"]],
+                "Q": [["1", "0"], ["0", "1"]],
+                "R": [["1"]],
+            },
+            "channel": {"model": "bernoulli", "arrival_probability": "0.95"},
+            "actuator_channel": {"model": "bernoulli", "arrival_probability": "0.95"},
+        }
+
+    # one input: Elia's 1 - 1/(1.44 * 1.21) = 464/1089, above the lower bound 1 - 1/rho(A)^2 = 11/36
+    one = body([["1"], ["1"]])
+    one["controller"] = {"lqg": {"W": [["1", "0"], ["0", "1"]], "U": [["1"]]}}
+    out = analyze_loop(parse_loop_request(one)).to_dict()["lqg"]["optimal"]
+    assert out["critical_actuator_arrival_probability_exact"] == "464/1089"
+    # the same input twice (B square, singular): no closed form here, a certified bracket around 464/1089
+    two = body([["1", "1"], ["1", "1"]])
+    two["controller"] = {"lqg": {"W": [["1", "0"], ["0", "1"]], "U": [["1", "0"], ["0", "1"]]}}
+    out = analyze_loop(parse_loop_request(two)).to_dict()["lqg"]["optimal"]
+    crit = out["critical_actuator"]
+    assert not crit["is_exact"] and out["critical_actuator_arrival_probability_exact"] is None
+    assert crit["lower"] == pytest.approx(1 - 1 / 1.2**2)
+    assert crit["upper"] is not None and crit["lower"] <= 464 / 1089 <= crit["upper"] < 0.95

@@ -54,15 +54,18 @@ def test_summary_numbers_are_the_reports(capsys, tmp_path: Path, controller: dic
         if exact is None:  # the decimal is the exact value itself
             assert f"{value:.6g}" == report[f"critical_{key}_arrival_probability_exact"]
     if "lqg" in controller:
-        bounds = report["lqg"]["cost_bounds"]
+        optimal = report["lqg"]["optimal"]
+        bounds = optimal["cost_bounds"]
         m = re.fullmatch(r"between (\S+) and (\S+) \(bounds, .*\)", _line(lines, "optimal TCP-like LQG cost: "))
         assert m and float(m.group(1)) == pytest.approx(bounds["lower"], rel=1e-5)
         assert float(m.group(2)) == pytest.approx(bounds["upper"], rel=1e-5)
-        nu_c = report["lqg"]["nu_c"]
-        value, exact = _decimal_and_exact(
-            _line(lines, "control equation converges iff actuator arrival probability > ")
-        )
-        assert exact == nu_c["exact"] == "9/25" and value == pytest.approx(0.36)  # 1 - 1/a^2, a = 5/4
+        for key, prefix in (("sensor", "  sensor:   optimal > "), ("actuator", "  actuator: optimal > ")):
+            m = re.fullmatch(r"(.+) \| stationary (\S+)", _line(lines, prefix))
+            assert m, lines
+            value, exact = _decimal_and_exact(m.group(1))
+            assert exact == optimal[f"critical_{key}_arrival_probability_exact"] == "9/25"  # 1 - 1/a^2, a = 5/4
+            assert value == pytest.approx(0.36)
+            assert float(m.group(2)) == pytest.approx(report[f"critical_{key}_arrival_probability"], rel=1e-5)
     else:
         assert not any(line.startswith("optimal TCP-like") for line in lines)
     if protocol == "udp":

@@ -76,9 +76,11 @@ def test_lqg_and_udp_bounds_are_shown_as_the_report_has_them(
     assert verdict == word == report["verdict"]  # the exact verdict first, the bounds below it
     if example == "loop-lqg":
         facts = page.locator("#loop-lqg").inner_text()
-        bounds, nu_c = report["lqg"]["cost_bounds"], report["lqg"]["nu_c"]
+        optimal = report["lqg"]["optimal"]
+        bounds = optimal["cost_bounds"]
         assert f"between {dec(bounds['lower'])} and {dec(bounds['upper'])}" in facts
-        assert nu_c["exact"] == "9/25" and f"9/25 = {dec(nu_c['lower'])}" in facts
+        value = optimal["critical_actuator_arrival_probability"]
+        assert optimal["critical_actuator_arrival_probability_exact"] == "9/25" and f"9/25 = {dec(value)}" in facts
         assert page.locator("#loop-udp").count() == 0
     else:
         outer = report["udp_region_bounds"]["outer"]
