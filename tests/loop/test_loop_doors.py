@@ -72,7 +72,8 @@ def _cli(capsys, tmp_path: Path, body: dict, *flags: str) -> tuple[int, str, str
 def test_python_control_gains_give_one_report_through_every_door(plant_request, client, capsys, tmp_path):
     report, body = plant_request
     assert report.verdict == "stable" and report.exact and report.certified
-    assert report.cost is not None and report.to_dict()["cost_exact"] is not None
+    exact = report.to_dict()
+    assert report.cost is not None and (exact["cost_exact"] is not None or exact["cost_exact_digits"] > 200)
     code, out, _ = _cli(capsys, tmp_path, body, "--json")
     assert code == 0
     assert out.rstrip("\n") == report.to_json()
