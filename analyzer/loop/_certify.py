@@ -58,9 +58,14 @@ TAUS = (1e-12, 1e-9, 1e-6, 1e-4, 1e-2, 1e-1)
 RESOLVENT_SIZE = 3000
 
 #: Operator sizes up to this use numpy's dense eigenvalues for the float radius; above, ARPACK.
-DENSE_EIGEN_SIZE = 400
+DENSE_EIGEN_SIZE = 100
 
 STABLE_CERTIFICATE = "verified float Lyapunov certificate (interval arithmetic, Rump 2006)"
+INDEFINITE_CERTIFICATE = (
+    "verified float Lyapunov solution not positive definite: rho(T) > 1 (interval arithmetic, Rump 2006)"
+)
+#: ``rho(T) >= 1 + 2^-40`` is what the indefinite-solution certificate proves (the float solve of ``T`` reused).
+INDEFINITE_SCALE = 1 + Fraction(1, 2**40)
 UNSTABLE_CERTIFICATE = "verified float Perron certificate T(Z) >= r Z, r > 1 (interval arithmetic, Rump 2006)"
 
 
@@ -227,6 +232,35 @@ def verify_stable(balls: _Balls, Y: Sequence[np.ndarray], scale: Fraction = Frac
     if not all(definite(Ri - _eye(d, c)) for Ri in R):
         return None
     return c
+
+
+def verify_indefinite(balls: _Balls, Y: Sequence[np.ndarray], s: Fraction) -> bool:
+    """``rho(T) >= s`` proved from a float solution ``Y`` of ``Y - T(Y) / s = I`` that is not positive definite.
+
+    Were ``rho(T / s) < 1``, the exact solution ``Y* = sum_k (T / s)^k (I)`` would be ``>= I`` and
+    ``(I - T / s)^-1`` a positive map.  With ``E = Y - T(Y) / s - I`` enclosed and ``-e I <= E <= e I``
+    (``e >= max_i ||E_i||_F``), ``Y = Y* + (I - T / s)^-1 (E) >= (1 - e) Y* >= (1 - e) I``.  So ``e < 1`` and
+    one ``x' Y_i x < (1 - e) x' x`` (checked in balls, ``x`` the float eigenvector of ``Y_i``'s least
+    eigenvalue) prove ``rho(T / s) >= 1``.
+    """
+    d = balls.sys.d
+    if not Y or not d:
+        return False
+    Yb = _balls(Y)
+    inv = _arb(1 / s)
+    E = [X - inv * TX - _eye(d) for X, TX in zip(Yb, balls.apply(Yb))]
+    e = flint.arb(0)
+    for Ei in E:
+        e = e.max(_frobenius_upper(Ei))
+    if not e < 1:
+        return False
+    for X, Xb in zip(Y, Yb):
+        _, vecs = np.linalg.eigh((X + X.T) / 2)
+        x = flint.arb_mat([[float(v)] for v in vecs[:, 0]])
+        q = (x.transpose() * Xb * x)[0, 0] - (1 - e) * (x.transpose() * x)[0, 0]
+        if q < 0:
+            return True
+    return False
 
 
 def verify_growth(balls: _Balls, Z: Sequence[np.ndarray], r: Fraction, adjoint: bool = False) -> bool:
@@ -534,13 +568,42 @@ def certify(sys: Mjls, *, enclose: bool = True) -> Certified:
             hi = _resolvent_upper(balls, Tf, fl, rho, hi)
         cost, box = _cost_enclosure(balls, Y, c, list(fl.mats(sol[:, 1])), noise)
         return Certified("stable", STABLE_CERTIFICATE, rho, (lo, hi), cost, box)
+    indefinite = sol is not None and np.all(np.isfinite(sol[:, 0]))
+    indefinite = bool(indefinite) and verify_indefinite(balls, list(fl.mats(sol[:, 0])), INDEFINITE_SCALE)
+    if not enclose:
+        if indefinite:
+            return Certified("unstable", INDEFINITE_CERTIFICATE, float("nan"), None, None, None)
+        return _unstable_only(balls, fl)
     rho, cands = _candidates(fl)
     ceil = _upper_from_identity(balls)
-    if rho > 1:
-        lo, hi = _radius_bounds(balls, rho, cands, Fraction(0), ceil)
-        if lo > 1:
-            return Certified("unstable", UNSTABLE_CERTIFICATE, rho, (lo, hi) if enclose else None, None, None)
+    floor = INDEFINITE_SCALE if indefinite else Fraction(0)
+    lo, hi = _radius_bounds(balls, rho, cands, floor, ceil) if rho > 1 else (floor, ceil)
+    if lo > 1:
+        return Certified(
+            "unstable", UNSTABLE_CERTIFICATE if lo > floor else INDEFINITE_CERTIFICATE, rho, (lo, hi), None, None
+        )
     return Certified(None, "none", rho, (Fraction(0), ceil), None, None)
 
 
-__all__ = ["Certified", "certify", "definite", "verify_decay", "verify_growth", "verify_stable"]
+def _unstable_only(balls: _Balls, fl: _Floats) -> Certified:
+    """The instability proof alone (no enclosure): ``T(Z) >= r Z`` for some ``1 < r < rho``, ``T`` first, then ``T*``."""
+    rho = float("nan")
+    for adjoint in (False, True):
+        rho_side, v = _perron(fl, adjoint)
+        rho = rho_side if np.isfinite(rho_side) else rho
+        Z = _perron_matrices(fl, v)
+        if Z is None or not Z[0].size or not rho_side > 1:
+            continue
+        low = min(float(np.linalg.eigvalsh(X)[0]) for X in Z)
+        if low <= -1e-8:
+            continue
+        Z = [X + (max(0.0, -2 * low) + 1e-12) * np.eye(X.shape[0]) for X in Z]
+        w = _whitened(balls, Z, adjoint)
+        for part in (Fraction(1, 2), Fraction(1, 8), Fraction(1, 64)):  # any r > 1 proves instability
+            r = 1 + part * (_fraction(rho_side) - 1)
+            if verify_growth(balls, Z, r, adjoint) or (w is not None and verify_growth(w[0], w[1], r, adjoint)):
+                return Certified("unstable", UNSTABLE_CERTIFICATE, rho_side, None, None, None)
+    return Certified(None, "none", rho, None, None, None)
+
+
+__all__ = ["Certified", "certify", "definite", "verify_decay", "verify_growth", "verify_indefinite", "verify_stable"]
