@@ -44,7 +44,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Sequence
+from typing import Callable, Sequence
 
 import flint
 import numpy as np
@@ -57,8 +57,12 @@ TAUS = (1e-12, 1e-9, 1e-6, 1e-4, 1e-2, 1e-1)
 #: Largest operator size whose upper bound of ``rho`` is tightened by extra resolvent solves (one dense solve each).
 RESOLVENT_SIZE = 3000
 
+#: Bits of the Arb balls of the cost enclosure: the data rounded at 53 bits would make the enclosure's
+#: width that rounding times ``||X|| l(Y)``, far above the refined float solution's own error.
+COST_PRECISION = 120
+
 #: Operator sizes up to this use numpy's dense eigenvalues for the float radius; above, ARPACK.
-DENSE_EIGEN_SIZE = 100
+DENSE_EIGEN_SIZE = 300
 
 STABLE_CERTIFICATE = "verified float Lyapunov certificate (interval arithmetic, Rump 2006)"
 INDEFINITE_CERTIFICATE = (
@@ -347,9 +351,11 @@ def _perron(fl: _Floats, adjoint: bool) -> tuple[float, np.ndarray | None]:
 
     op = LinearOperator((size, size), matvec=lambda y: fl.apply(np.asarray(y).reshape(-1), adjoint), dtype=float)
     try:
-        vals, vecs = eigs(op, k=4, which="LM", tol=1e-14, maxiter=50 * size)
-    except ArpackNoConvergence:
-        return float("nan"), None
+        vals, vecs = eigs(op, k=4, which="LM", tol=1e-13, ncv=min(size - 1, 40), maxiter=300)
+    except ArpackNoConvergence as exc:  # clustered dominant eigenvalues: keep what converged, if anything
+        vals, vecs = exc.eigenvalues, exc.eigenvectors
+        if len(vals) == 0:
+            return float("nan"), None
     k = int(np.argmax(vals.real))
     return float(np.max(np.abs(vals))), np.real(vecs[:, k])
 
@@ -435,7 +441,7 @@ def _resolvent_upper(balls: _Balls, Tf: np.ndarray, fl: _Floats, rho: float, hi:
     """
     size = Tf.shape[0]
     ident = np.tile([1.0 if a == b else 0.0 for a, b in vech_index(fl.d)], fl.sys.modes)
-    for frac in (1e-3, 1e-1):
+    for frac in (1e-3, 1e-2, 1e-1, 0.5):
         t = _fraction(rho + frac * (float(hi) - rho))
         if not rho < t < hi:
             continue
@@ -516,11 +522,26 @@ def _noise_balls(sys: Mjls, noise: flint.fmpq_mat) -> list[flint.arb_mat]:
 
 
 def _cost_enclosure(
-    balls: _Balls, Y: list[np.ndarray], c: flint.arb, X: list[np.ndarray], noise: flint.fmpq_mat
+    balls: _Balls,
+    Y: list[np.ndarray],
+    c: flint.arb,
+    X: list[np.ndarray],
+    noise: flint.fmpq_mat,
+    refine: Callable[[np.ndarray], np.ndarray] | None = None,
 ) -> tuple[float, tuple[Fraction, Fraction]]:
     """The float cost of ``X`` and its proved enclosure ``J(X_hat) +- e l(Y)`` (module docstring)."""
     Yb, Xb = _balls(Y), _balls(X)
-    E = [Xi - TX - Nj for Xi, TX, Nj in zip(Xb, balls.apply(Xb), _noise_balls(balls.sys, noise))]
+    N = _noise_balls(balls.sys, noise)
+    E = [Xi - TX - Nj for Xi, TX, Nj in zip(Xb, balls.apply(Xb), N)]
+    if refine is not None:
+        # one step of iterative refinement: the residual is exact to the last bit, so the corrected
+        # X_hat's residual (and the enclosure's width) shrinks by about the float solve's accuracy
+        fl = _Floats(balls.sys)
+        dx = refine(fl.vec(np.stack([_mid(Ei) for Ei in E])))
+        if np.all(np.isfinite(dx)):
+            X = [Xi - Di for Xi, Di in zip(X, fl.mats(dx))]
+            Xb = _balls(X)
+            E = [Xi - TX - Nj for Xi, TX, Nj in zip(Xb, balls.apply(Xb), N)]
     e = flint.arb(0)
     for Ei in E:
         e = e.max(_frobenius_upper(Ei) / c)
@@ -546,9 +567,16 @@ def certify(sys: Mjls, *, enclose: bool = True) -> Certified:
     Tf = float_operator(sys)
     ident = np.tile([1.0 if a == b else 0.0 for a, b in vech_index(sys.d)], sys.modes)
     nvec = np.array([float(noise[i, 0]) for i in range(size)])
+    lu = None
     try:
-        sol = np.linalg.solve(np.eye(size) - Tf, np.column_stack([ident, nvec])) if size else np.zeros((0, 2))
-    except np.linalg.LinAlgError:
+        if size:
+            from scipy.linalg import lu_factor, lu_solve
+
+            lu = lu_factor(np.eye(size) - Tf, check_finite=False)
+            sol = lu_solve(lu, np.column_stack([ident, nvec]), check_finite=False)
+        else:
+            sol = np.zeros((0, 2))
+    except (np.linalg.LinAlgError, ValueError):
         sol = None
     c = None
     if sol is not None and np.all(np.isfinite(sol)):
@@ -566,10 +594,24 @@ def certify(sys: Mjls, *, enclose: bool = True) -> Certified:
         lo, hi = _radius_bounds(balls, rho, cands, Fraction(0), ceil)
         if size <= RESOLVENT_SIZE and np.isfinite(rho) and hi > _fraction(rho) * (1 + Fraction(1, 10**9)):
             hi = _resolvent_upper(balls, Tf, fl, rho, hi)
-        cost, box = _cost_enclosure(balls, Y, c, list(fl.mats(sol[:, 1])), noise)
+        refine = None
+        if lu is not None:
+            from scipy.linalg import lu_solve
+
+            factors = lu
+
+            def refine(r: np.ndarray) -> np.ndarray:
+                return np.asarray(lu_solve(factors, r, check_finite=False))
+
+        old_prec = flint.ctx.prec
+        flint.ctx.prec = COST_PRECISION
+        try:
+            cost, box = _cost_enclosure(_Balls(sys), Y, c, list(fl.mats(sol[:, 1])), noise, refine)
+        finally:
+            flint.ctx.prec = old_prec
         return Certified("stable", STABLE_CERTIFICATE, rho, (lo, hi), cost, box)
-    indefinite = sol is not None and np.all(np.isfinite(sol[:, 0]))
-    indefinite = bool(indefinite) and verify_indefinite(balls, list(fl.mats(sol[:, 0])), INDEFINITE_SCALE)
+    finite = sol is not None and bool(np.all(np.isfinite(sol[:, 0])))
+    indefinite = finite and sol is not None and verify_indefinite(balls, list(fl.mats(sol[:, 0])), INDEFINITE_SCALE)
     if not enclose:
         if indefinite:
             return Certified("unstable", INDEFINITE_CERTIFICATE, float("nan"), None, None, None)
