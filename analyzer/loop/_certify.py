@@ -53,7 +53,7 @@ from ._mjls import Mjls
 from ._operator import float_operator, noise_vector, to_numpy, vech_index
 
 #: Relative steps around the float ``rho`` at which the Perron candidates are tried.
-TAUS = (1e-12, 1e-9, 1e-6, 1e-4, 1e-2, 1e-1)
+TAUS = (1e-9, 1e-6, 1e-3, 1e-2, 1e-1)
 #: Largest operator size whose upper bound of ``rho`` is tightened by extra resolvent solves (one dense solve each).
 RESOLVENT_SIZE = 3000
 
@@ -405,31 +405,40 @@ def _whitened(balls: _Balls, Z: Sequence[np.ndarray], adjoint: bool) -> tuple[_B
 
 
 def _radius_bounds(
-    balls: _Balls, rho: float, cands: Sequence[tuple[list[np.ndarray], bool]], floor: Fraction, ceil: Fraction
+    balls: _Balls,
+    rho: float,
+    cands: Sequence[tuple[list[np.ndarray], bool]],
+    floor: Fraction,
+    ceil: Fraction,
+    upper: bool = False,
 ) -> tuple[Fraction, Fraction]:
-    """Tighten ``[floor, ceil]`` around ``rho`` with Perron candidates of ``T`` or ``T*`` (each side proved)."""
+    """Tighten ``[floor, ceil]`` around ``rho`` with Perron candidates of ``T`` or ``T*`` (each side proved).
+
+    The lower end always; the upper end only with ``upper`` (else the resolvent, :func:`_resolvent_upper`).
+    """
     lo, hi = floor, ceil
-    tries: list[tuple[_Balls, list[np.ndarray], bool]] = []
     for Z, adjoint in cands:
-        tries.append((balls, Z, adjoint))
+        tries = [(balls, Z)]
         w = _whitened(balls, Z, adjoint)
         if w is not None:
-            tries.append((w[0], w[1], adjoint))
-    for b, Z, adjoint in tries:
-        for tau in TAUS:
-            r = _fraction(rho * (1 - tau))
-            if r <= lo:
-                break
-            if verify_growth(b, Z, r, adjoint):
-                lo = r
-                break
-        for tau in TAUS:
-            t = _fraction(rho * (1 + tau))
-            if t >= hi:
-                break
-            if verify_decay(b, Z, t, adjoint):
-                hi = t
-                break
+            tries.append(w)
+        for b, X in tries:
+            for tau in TAUS:
+                r = _fraction(rho * (1 - tau))
+                if r <= lo:
+                    break
+                if verify_growth(b, X, r, adjoint):
+                    lo = r
+                    break
+            for tau in TAUS if upper else ():
+                t = _fraction(rho * (1 + tau))
+                if t >= hi:
+                    break
+                if verify_decay(b, X, t, adjoint):
+                    hi = t
+                    break
+        if lo > floor:
+            break
     return lo, hi
 
 
@@ -467,7 +476,9 @@ def _perron_matrices(fl: _Floats, v: np.ndarray | None) -> list[np.ndarray] | No
     return [X / scale for X in Z]
 
 
-def _candidates(fl: _Floats) -> tuple[float, list[tuple[list[np.ndarray], bool]]]:
+def _candidates(
+    fl: _Floats, sides: tuple[bool, ...] = (False, True)
+) -> tuple[float, list[tuple[list[np.ndarray], bool]]]:
     """The float ``rho`` and the Perron eigen-matrices of ``T`` and of ``T*`` that are positive definite in floats.
 
     One of the two is often singular: in the coordinates ``(x, x - x_hat)`` of a TCP-like loop the
@@ -475,7 +486,7 @@ def _candidates(fl: _Floats) -> tuple[float, list[tuple[list[np.ndarray], bool]]
     """
     out = []
     rhos = []
-    for adjoint in (False, True):
+    for adjoint in sides:
         rho, v = _perron(fl, adjoint)
         rhos.append(rho)
         Z = _perron_matrices(fl, v)
@@ -585,13 +596,15 @@ def certify(sys: Mjls, *, enclose: bool = True) -> Certified:
     if c is not None and sol is not None:
         if not enclose:
             return Certified("stable", STABLE_CERTIFICATE, float("nan"), None, None, None)
-        rho, cands = _candidates(fl)
+        rho, cands = _candidates(fl, (False,))
         # rho <= 1 - c / max ||Y_i||: T(Y) = Y - R <= Y - c I and I >= Y / ||Y_i||
         norms = [_frobenius_upper(X) for X in _balls(Y)]
         ymax = max(norms, key=float) if norms else flint.arb(1)
         lyap = _exact((1 - c / ymax).upper()) if ymax > 0 else Fraction(1)
         ceil = min(_upper_from_identity(balls), lyap)
-        lo, hi = _radius_bounds(balls, rho, cands, Fraction(0), ceil)
+        lo, hi = _radius_bounds(balls, rho, cands, Fraction(0), ceil, upper=size > RESOLVENT_SIZE)
+        if lo == 0:
+            lo, hi = _radius_bounds(balls, rho, _candidates(fl, (True,))[1], lo, hi, upper=size > RESOLVENT_SIZE)
         if size <= RESOLVENT_SIZE and np.isfinite(rho) and hi > _fraction(rho) * (1 + Fraction(1, 10**9)):
             hi = _resolvent_upper(balls, Tf, fl, rho, hi)
         refine = None
@@ -619,7 +632,7 @@ def certify(sys: Mjls, *, enclose: bool = True) -> Certified:
     rho, cands = _candidates(fl)
     ceil = _upper_from_identity(balls)
     floor = INDEFINITE_SCALE if indefinite else Fraction(0)
-    lo, hi = _radius_bounds(balls, rho, cands, floor, ceil) if rho > 1 else (floor, ceil)
+    lo, hi = _radius_bounds(balls, rho, cands, floor, ceil, upper=True) if rho > 1 else (floor, ceil)
     if lo > 1:
         return Certified(
             "unstable", UNSTABLE_CERTIFICATE if lo > floor else INDEFINITE_CERTIFICATE, rho, (lo, hi), None, None
