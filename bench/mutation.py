@@ -147,6 +147,22 @@ MUTANTS: tuple[Mutant, ...] = (
         ("tests/loop/test_loop_lqg_optimal.py",),
         "the stationary LQG estimator gain always in predictor form: the filter-form cost is no longer J_max",
     ),
+    Mutant(
+        "certify-definite-uncertain",
+        "analyzer/loop/_certify.py",
+        "        if not s > zero:\n",
+        "        if s < zero:\n",
+        ("tests/loop/test_loop_certified.py",),
+        "the definiteness proof accepts a row whose Gershgorin margin is only possibly positive (a ball around 0)",
+    ),
+    Mutant(
+        "certify-cost-width-dropped",
+        "analyzer/loop/_certify.py",
+        "    width = e.upper() * lin_y.upper()\n",
+        "    width = 0 * lin_y.upper()\n",
+        ("tests/loop/test_loop_certified.py",),
+        "the cost enclosure forgets the float solve's error: only the rounding of J(X_hat) is enclosed",
+    ),
 )
 
 

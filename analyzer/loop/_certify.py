@@ -44,7 +44,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Sequence
+from typing import Callable, Sequence
 
 import flint
 import numpy as np
@@ -53,14 +53,23 @@ from ._mjls import Mjls
 from ._operator import float_operator, noise_vector, to_numpy, vech_index
 
 #: Relative steps around the float ``rho`` at which the Perron candidates are tried.
-TAUS = (1e-12, 1e-9, 1e-6, 1e-4, 1e-2, 1e-1)
+TAUS = (1e-9, 1e-6, 1e-3, 1e-2, 1e-1)
 #: Largest operator size whose upper bound of ``rho`` is tightened by extra resolvent solves (one dense solve each).
 RESOLVENT_SIZE = 3000
 
+#: Bits of the Arb balls of the cost enclosure: the data rounded at 53 bits would make the enclosure's
+#: width that rounding times ``||X|| l(Y)``, far above the refined float solution's own error.
+COST_PRECISION = 120
+
 #: Operator sizes up to this use numpy's dense eigenvalues for the float radius; above, ARPACK.
-DENSE_EIGEN_SIZE = 400
+DENSE_EIGEN_SIZE = 300
 
 STABLE_CERTIFICATE = "verified float Lyapunov certificate (interval arithmetic, Rump 2006)"
+INDEFINITE_CERTIFICATE = (
+    "verified float Lyapunov solution not positive definite: rho(T) > 1 (interval arithmetic, Rump 2006)"
+)
+#: ``rho(T) >= 1 + 2^-40`` is what the indefinite-solution certificate proves (the float solve of ``T`` reused).
+INDEFINITE_SCALE = 1 + Fraction(1, 2**40)
 UNSTABLE_CERTIFICATE = "verified float Perron certificate T(Z) >= r Z, r > 1 (interval arithmetic, Rump 2006)"
 
 
@@ -229,6 +238,35 @@ def verify_stable(balls: _Balls, Y: Sequence[np.ndarray], scale: Fraction = Frac
     return c
 
 
+def verify_indefinite(balls: _Balls, Y: Sequence[np.ndarray], s: Fraction) -> bool:
+    """``rho(T) >= s`` proved from a float solution ``Y`` of ``Y - T(Y) / s = I`` that is not positive definite.
+
+    Were ``rho(T / s) < 1``, the exact solution ``Y* = sum_k (T / s)^k (I)`` would be ``>= I`` and
+    ``(I - T / s)^-1`` a positive map.  With ``E = Y - T(Y) / s - I`` enclosed and ``-e I <= E <= e I``
+    (``e >= max_i ||E_i||_F``), ``Y = Y* + (I - T / s)^-1 (E) >= (1 - e) Y* >= (1 - e) I``.  So ``e < 1`` and
+    one ``x' Y_i x < (1 - e) x' x`` (checked in balls, ``x`` the float eigenvector of ``Y_i``'s least
+    eigenvalue) prove ``rho(T / s) >= 1``.
+    """
+    d = balls.sys.d
+    if not Y or not d:
+        return False
+    Yb = _balls(Y)
+    inv = _arb(1 / s)
+    E = [X - inv * TX - _eye(d) for X, TX in zip(Yb, balls.apply(Yb))]
+    e = flint.arb(0)
+    for Ei in E:
+        e = e.max(_frobenius_upper(Ei))
+    if not e < 1:
+        return False
+    for X, Xb in zip(Y, Yb):
+        _, vecs = np.linalg.eigh((X + X.T) / 2)
+        x = flint.arb_mat([[float(v)] for v in vecs[:, 0]])
+        q = (x.transpose() * Xb * x)[0, 0] - (1 - e) * (x.transpose() * x)[0, 0]
+        if q < 0:
+            return True
+    return False
+
+
 def verify_growth(balls: _Balls, Z: Sequence[np.ndarray], r: Fraction, adjoint: bool = False) -> bool:
     """``Z_i > 0`` and ``T(Z)_i - r Z_i > 0`` proved for every mode: ``rho(T) >= r`` (module docstring).
 
@@ -313,9 +351,11 @@ def _perron(fl: _Floats, adjoint: bool) -> tuple[float, np.ndarray | None]:
 
     op = LinearOperator((size, size), matvec=lambda y: fl.apply(np.asarray(y).reshape(-1), adjoint), dtype=float)
     try:
-        vals, vecs = eigs(op, k=4, which="LM", tol=1e-14, maxiter=50 * size)
-    except ArpackNoConvergence:
-        return float("nan"), None
+        vals, vecs = eigs(op, k=4, which="LM", tol=1e-13, ncv=min(size - 1, 40), maxiter=300)
+    except ArpackNoConvergence as exc:  # clustered dominant eigenvalues: keep what converged, if anything
+        vals, vecs = exc.eigenvalues, exc.eigenvectors
+        if len(vals) == 0:
+            return float("nan"), None
     k = int(np.argmax(vals.real))
     return float(np.max(np.abs(vals))), np.real(vecs[:, k])
 
@@ -365,31 +405,40 @@ def _whitened(balls: _Balls, Z: Sequence[np.ndarray], adjoint: bool) -> tuple[_B
 
 
 def _radius_bounds(
-    balls: _Balls, rho: float, cands: Sequence[tuple[list[np.ndarray], bool]], floor: Fraction, ceil: Fraction
+    balls: _Balls,
+    rho: float,
+    cands: Sequence[tuple[list[np.ndarray], bool]],
+    floor: Fraction,
+    ceil: Fraction,
+    upper: bool = False,
 ) -> tuple[Fraction, Fraction]:
-    """Tighten ``[floor, ceil]`` around ``rho`` with Perron candidates of ``T`` or ``T*`` (each side proved)."""
+    """Tighten ``[floor, ceil]`` around ``rho`` with Perron candidates of ``T`` or ``T*`` (each side proved).
+
+    The lower end always; the upper end only with ``upper`` (else the resolvent, :func:`_resolvent_upper`).
+    """
     lo, hi = floor, ceil
-    tries: list[tuple[_Balls, list[np.ndarray], bool]] = []
     for Z, adjoint in cands:
-        tries.append((balls, Z, adjoint))
+        tries = [(balls, Z)]
         w = _whitened(balls, Z, adjoint)
         if w is not None:
-            tries.append((w[0], w[1], adjoint))
-    for b, Z, adjoint in tries:
-        for tau in TAUS:
-            r = _fraction(rho * (1 - tau))
-            if r <= lo:
-                break
-            if verify_growth(b, Z, r, adjoint):
-                lo = r
-                break
-        for tau in TAUS:
-            t = _fraction(rho * (1 + tau))
-            if t >= hi:
-                break
-            if verify_decay(b, Z, t, adjoint):
-                hi = t
-                break
+            tries.append(w)
+        for b, X in tries:
+            for tau in TAUS:
+                r = _fraction(rho * (1 - tau))
+                if r <= lo:
+                    break
+                if verify_growth(b, X, r, adjoint):
+                    lo = r
+                    break
+            for tau in TAUS if upper else ():
+                t = _fraction(rho * (1 + tau))
+                if t >= hi:
+                    break
+                if verify_decay(b, X, t, adjoint):
+                    hi = t
+                    break
+        if lo > floor:
+            break
     return lo, hi
 
 
@@ -401,7 +450,7 @@ def _resolvent_upper(balls: _Balls, Tf: np.ndarray, fl: _Floats, rho: float, hi:
     """
     size = Tf.shape[0]
     ident = np.tile([1.0 if a == b else 0.0 for a, b in vech_index(fl.d)], fl.sys.modes)
-    for frac in (1e-3, 1e-1):
+    for frac in (1e-3, 1e-2, 1e-1, 0.5):
         t = _fraction(rho + frac * (float(hi) - rho))
         if not rho < t < hi:
             continue
@@ -427,7 +476,9 @@ def _perron_matrices(fl: _Floats, v: np.ndarray | None) -> list[np.ndarray] | No
     return [X / scale for X in Z]
 
 
-def _candidates(fl: _Floats) -> tuple[float, list[tuple[list[np.ndarray], bool]]]:
+def _candidates(
+    fl: _Floats, sides: tuple[bool, ...] = (False, True)
+) -> tuple[float, list[tuple[list[np.ndarray], bool]]]:
     """The float ``rho`` and the Perron eigen-matrices of ``T`` and of ``T*`` that are positive definite in floats.
 
     One of the two is often singular: in the coordinates ``(x, x - x_hat)`` of a TCP-like loop the
@@ -435,7 +486,7 @@ def _candidates(fl: _Floats) -> tuple[float, list[tuple[list[np.ndarray], bool]]
     """
     out = []
     rhos = []
-    for adjoint in (False, True):
+    for adjoint in sides:
         rho, v = _perron(fl, adjoint)
         rhos.append(rho)
         Z = _perron_matrices(fl, v)
@@ -482,11 +533,26 @@ def _noise_balls(sys: Mjls, noise: flint.fmpq_mat) -> list[flint.arb_mat]:
 
 
 def _cost_enclosure(
-    balls: _Balls, Y: list[np.ndarray], c: flint.arb, X: list[np.ndarray], noise: flint.fmpq_mat
+    balls: _Balls,
+    Y: list[np.ndarray],
+    c: flint.arb,
+    X: list[np.ndarray],
+    noise: flint.fmpq_mat,
+    refine: Callable[[np.ndarray], np.ndarray] | None = None,
 ) -> tuple[float, tuple[Fraction, Fraction]]:
     """The float cost of ``X`` and its proved enclosure ``J(X_hat) +- e l(Y)`` (module docstring)."""
     Yb, Xb = _balls(Y), _balls(X)
-    E = [Xi - TX - Nj for Xi, TX, Nj in zip(Xb, balls.apply(Xb), _noise_balls(balls.sys, noise))]
+    N = _noise_balls(balls.sys, noise)
+    E = [Xi - TX - Nj for Xi, TX, Nj in zip(Xb, balls.apply(Xb), N)]
+    if refine is not None:
+        # one step of iterative refinement: the residual is exact to the last bit, so the corrected
+        # X_hat's residual (and the enclosure's width) shrinks by about the float solve's accuracy
+        fl = _Floats(balls.sys)
+        dx = refine(fl.vec(np.stack([_mid(Ei) for Ei in E])))
+        if np.all(np.isfinite(dx)):
+            X = [Xi - Di for Xi, Di in zip(X, fl.mats(dx))]
+            Xb = _balls(X)
+            E = [Xi - TX - Nj for Xi, TX, Nj in zip(Xb, balls.apply(Xb), N)]
     e = flint.arb(0)
     for Ei in E:
         e = e.max(_frobenius_upper(Ei) / c)
@@ -512,9 +578,16 @@ def certify(sys: Mjls, *, enclose: bool = True) -> Certified:
     Tf = float_operator(sys)
     ident = np.tile([1.0 if a == b else 0.0 for a, b in vech_index(sys.d)], sys.modes)
     nvec = np.array([float(noise[i, 0]) for i in range(size)])
+    lu = None
     try:
-        sol = np.linalg.solve(np.eye(size) - Tf, np.column_stack([ident, nvec])) if size else np.zeros((0, 2))
-    except np.linalg.LinAlgError:
+        if size:
+            from scipy.linalg import lu_factor, lu_solve
+
+            lu = lu_factor(np.eye(size) - Tf, check_finite=False)
+            sol = lu_solve(lu, np.column_stack([ident, nvec]), check_finite=False)
+        else:
+            sol = np.zeros((0, 2))
+    except (np.linalg.LinAlgError, ValueError):
         sol = None
     c = None
     if sol is not None and np.all(np.isfinite(sol)):
@@ -523,24 +596,69 @@ def certify(sys: Mjls, *, enclose: bool = True) -> Certified:
     if c is not None and sol is not None:
         if not enclose:
             return Certified("stable", STABLE_CERTIFICATE, float("nan"), None, None, None)
-        rho, cands = _candidates(fl)
+        rho, cands = _candidates(fl, (False,))
         # rho <= 1 - c / max ||Y_i||: T(Y) = Y - R <= Y - c I and I >= Y / ||Y_i||
         norms = [_frobenius_upper(X) for X in _balls(Y)]
         ymax = max(norms, key=float) if norms else flint.arb(1)
         lyap = _exact((1 - c / ymax).upper()) if ymax > 0 else Fraction(1)
         ceil = min(_upper_from_identity(balls), lyap)
-        lo, hi = _radius_bounds(balls, rho, cands, Fraction(0), ceil)
+        lo, hi = _radius_bounds(balls, rho, cands, Fraction(0), ceil, upper=size > RESOLVENT_SIZE)
+        if lo == 0:
+            lo, hi = _radius_bounds(balls, rho, _candidates(fl, (True,))[1], lo, hi, upper=size > RESOLVENT_SIZE)
         if size <= RESOLVENT_SIZE and np.isfinite(rho) and hi > _fraction(rho) * (1 + Fraction(1, 10**9)):
             hi = _resolvent_upper(balls, Tf, fl, rho, hi)
-        cost, box = _cost_enclosure(balls, Y, c, list(fl.mats(sol[:, 1])), noise)
+        refine = None
+        if lu is not None:
+            from scipy.linalg import lu_solve
+
+            factors = lu
+
+            def refine(r: np.ndarray) -> np.ndarray:
+                return np.asarray(lu_solve(factors, r, check_finite=False))
+
+        old_prec = flint.ctx.prec
+        flint.ctx.prec = COST_PRECISION
+        try:
+            cost, box = _cost_enclosure(_Balls(sys), Y, c, list(fl.mats(sol[:, 1])), noise, refine)
+        finally:
+            flint.ctx.prec = old_prec
         return Certified("stable", STABLE_CERTIFICATE, rho, (lo, hi), cost, box)
+    finite = sol is not None and bool(np.all(np.isfinite(sol[:, 0])))
+    indefinite = finite and sol is not None and verify_indefinite(balls, list(fl.mats(sol[:, 0])), INDEFINITE_SCALE)
+    if not enclose:
+        if indefinite:
+            return Certified("unstable", INDEFINITE_CERTIFICATE, float("nan"), None, None, None)
+        return _unstable_only(balls, fl)
     rho, cands = _candidates(fl)
     ceil = _upper_from_identity(balls)
-    if rho > 1:
-        lo, hi = _radius_bounds(balls, rho, cands, Fraction(0), ceil)
-        if lo > 1:
-            return Certified("unstable", UNSTABLE_CERTIFICATE, rho, (lo, hi) if enclose else None, None, None)
+    floor = INDEFINITE_SCALE if indefinite else Fraction(0)
+    lo, hi = _radius_bounds(balls, rho, cands, floor, ceil, upper=True) if rho > 1 else (floor, ceil)
+    if lo > 1:
+        return Certified(
+            "unstable", UNSTABLE_CERTIFICATE if lo > floor else INDEFINITE_CERTIFICATE, rho, (lo, hi), None, None
+        )
     return Certified(None, "none", rho, (Fraction(0), ceil), None, None)
 
 
-__all__ = ["Certified", "certify", "definite", "verify_decay", "verify_growth", "verify_stable"]
+def _unstable_only(balls: _Balls, fl: _Floats) -> Certified:
+    """The instability proof alone (no enclosure): ``T(Z) >= r Z`` for some ``1 < r < rho``, ``T`` first, then ``T*``."""
+    rho = float("nan")
+    for adjoint in (False, True):
+        rho_side, v = _perron(fl, adjoint)
+        rho = rho_side if np.isfinite(rho_side) else rho
+        Z = _perron_matrices(fl, v)
+        if Z is None or not Z[0].size or not rho_side > 1:
+            continue
+        low = min(float(np.linalg.eigvalsh(X)[0]) for X in Z)
+        if low <= -1e-8:
+            continue
+        Z = [X + (max(0.0, -2 * low) + 1e-12) * np.eye(X.shape[0]) for X in Z]
+        w = _whitened(balls, Z, adjoint)
+        for part in (Fraction(1, 2), Fraction(1, 8), Fraction(1, 64)):  # any r > 1 proves instability
+            r = 1 + part * (_fraction(rho_side) - 1)
+            if verify_growth(balls, Z, r, adjoint) or (w is not None and verify_growth(w[0], w[1], r, adjoint)):
+                return Certified("unstable", UNSTABLE_CERTIFICATE, rho_side, None, None, None)
+    return Certified(None, "none", rho, None, None, None)
+
+
+__all__ = ["Certified", "certify", "definite", "verify_decay", "verify_growth", "verify_indefinite", "verify_stable"]

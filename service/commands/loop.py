@@ -54,7 +54,8 @@ def summary(report: dict) -> str:
     if lqg and not lqg["stationary_gains"]["exist"]:
         return _lqg_without_gains(report)
     lines = [
-        f"verdict: {verdict.upper()}  (exact mean-square verdict, Costa, Fragoso and Marques 2005, Thm 3.9; "
+        f"verdict: {verdict.upper()}  ({'exact' if report['exact'] else 'certified'} mean-square verdict, "
+        "Costa, Fragoso and Marques 2005, Thm 3.9; "
         f"spectral radius {report['spectral_radius']:.6g})"
     ]
     cost = report["cost"]
