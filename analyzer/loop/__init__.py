@@ -6,21 +6,60 @@ Franceschetti, Poolla and Sastry 2007) is a Markov jump linear system;
 its mean-square stability, stationary cost and the critical reliability of
 each link are decided exactly over Q (Costa, Fragoso and Marques 2005).
 See ``docs/loop.md``.
+
+``kfio.loop`` (the attribute of the package ``kfio``) is the typed function
+:func:`loop`; this subpackage stays importable under the same name
+(``from kfio.loop import analyze_loop``).  Its names load on first use, so
+importing it costs nothing until then: ``kfio`` imports it at start-up to
+keep the function, not the subpackage, as its attribute.
 """
 
 from __future__ import annotations
 
-import sys
-import types
-from typing import Any
+import importlib
+from typing import TYPE_CHECKING, Any
 
-from ._cost import stationary_cost
-from ._critical import parameter_of
-from ._mjls import loop_mjls, sensor_links
-from ._model import LoopRequest, load_loop_request, parse_loop_request
-from ._region import region
-from ._report import LoopReport, analyze_loop, loop, loop_report_view, loop_request
-from ._verdict import decide
+#: Public name -> the private module (relative to this package) that defines it.
+_LAZY = {
+    "LoopReport": "._report",
+    "LoopRequest": "._model",
+    "analyze_loop": "._report",
+    "decide": "._verdict",
+    "load_loop_request": "._model",
+    "loop": "._api",
+    "loop_mjls": "._mjls",
+    "loop_report_view": "._report",
+    "loop_request": "._api",
+    "parameter_of": "._critical",
+    "parse_loop_request": "._model",
+    "region": "._region",
+    "sensor_links": "._mjls",
+    "stationary_cost": "._cost",
+}
+
+if TYPE_CHECKING:
+    from ._api import loop, loop_request
+    from ._cost import stationary_cost
+    from ._critical import parameter_of
+    from ._mjls import loop_mjls, sensor_links
+    from ._model import LoopRequest, load_loop_request, parse_loop_request
+    from ._region import region
+    from ._report import LoopReport, analyze_loop, loop_report_view
+    from ._verdict import decide
+
+
+def __getattr__(name: str) -> Any:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(module, __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))
+
 
 __all__ = [
     "LoopReport",
@@ -38,13 +77,3 @@ __all__ = [
     "sensor_links",
     "stationary_cost",
 ]
-
-
-class _CallableModule(types.ModuleType):
-    """``kfio.loop`` is both this package and the function :func:`loop`: calling the package calls it."""
-
-    def __call__(self, *args: Any, **kwargs: Any) -> LoopReport:
-        return loop(*args, **kwargs)
-
-
-sys.modules[__name__].__class__ = _CallableModule

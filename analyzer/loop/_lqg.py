@@ -92,7 +92,7 @@ def with_lqg_gains(req: Any) -> Any:
         )
     L = np.linalg.solve(B.T @ S @ B + U, B.T @ S @ A)
     K = A @ P @ C.T @ np.linalg.inv(C @ P @ C.T + R)
-    return dataclasses.replace(req, K=_exact(K), L=_exact(L), form="predictor")
+    return dataclasses.replace(req, estimator=_exact(K), feedback=_exact(L), form="predictor")
 
 
 __all__ = ["control_critical", "mare_fixed_point", "with_lqg_gains"]

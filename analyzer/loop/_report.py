@@ -1,6 +1,6 @@
 """``kfio.loop``: the exact verdict, cost and critical link reliabilities of a closed loop.
 
-One code path for the three doors: :func:`loop` (Python), ``kfio loop FILE``
+One code path for the three doors: :func:`kfio.loop` (Python), ``kfio loop FILE``
 and ``POST /v1/loop`` all validate a loop request with
 :func:`kfio.loop._model.parse_loop_request` and call :func:`analyze_loop`.
 """
@@ -10,7 +10,7 @@ from __future__ import annotations
 import functools
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Any, Callable, Mapping
+from typing import Any, Callable
 
 from .._budget import Budget
 from .._reporting import Report
@@ -43,7 +43,7 @@ def _matrix(m: Any) -> list[list[str]]:
 
 @dataclass(frozen=True)
 class LoopReport(Report):
-    """The report of :func:`loop`: ``to_dict()`` is the JSON of ``kfio loop --json`` and ``POST /v1/loop``.
+    """The report of :func:`kfio.loop`: ``to_dict()`` is the JSON of ``kfio loop --json`` and ``POST /v1/loop``.
 
     Attributes
     ----------
@@ -154,8 +154,8 @@ def loop_report_view(r: LoopReport) -> dict[str, Any]:
             "on_loss": req.on_loss,
             "form": req.form,
             "controller": req.controller,
-            "K": _matrix(req.K),
-            "L": _matrix(req.L),
+            "feedback": _matrix(req.feedback),
+            "estimator": _matrix(req.estimator),
         },
         "notes": list(r.notes),
     }
@@ -364,129 +364,4 @@ def _skipped_critical(label: str, pointer: str, ch: MarkovChannel) -> Critical:
     return Critical(label, par[0] if par else pointer, None, None, (), "not computed: the time budget ran out")
 
 
-def loop(
-    system: Any,
-    controller: Mapping[str, Any],
-    channel: Any,
-    actuator_channel: Any,
-    *,
-    B: Any = None,
-    Q: Any = None,
-    R: Any = None,
-    cost: Mapping[str, Any] | None = None,
-    protocol: str = "tcp",
-    on_loss: str = "zero",
-    budget: Any = None,
-) -> LoopReport:
-    """Exact mean-square stability, cost and critical link reliabilities of a loop closed over lossy links.
-
-    The plant ``x[t+1] = A x + B a + w``, ``y = C x + v`` is observed through
-    the sensor packets (``channel``) and actuated through the actuator packets
-    (``actuator_channel``), with fixed gains ``K`` (estimator) and ``L``
-    (``u = -L x_hat``) as python-control's ``dlqe`` and ``dlqr`` return them
-    (Schenato, Sinopoli, Franceschetti, Poolla and Sastry 2007, Sec. II).  The
-    loop is a Markov jump linear system; it is mean-square stable iff the
-    spectral radius of its second-moment operator is below 1 (Costa,
-    Fragoso and Marques 2005, Thm 3.9), decided exactly over Q.
-
-    Parameters
-    ----------
-    system:
-        A :class:`kfio.System` with ``Q`` and ``R`` (then ``B`` is required),
-        or a discrete-time python-control ``StateSpace`` (``A``, ``B``, ``C``
-        from it; ``Q`` and ``R`` as keywords).
-    controller:
-        ``{"K": ..., "L": ..., "form": "predictor" | "filter"}``, or the
-        request's ``{"gains": {"K": ..., "L": ...}, "form": ...}``, or
-        ``{"lqg": {"W": ..., "U": ...}}``.
-    channel, actuator_channel:
-        Channels as for :func:`kfio.analyze` (``kfio.bernoulli(0.9)``, ...);
-        the actuator's is a one-packet channel.
-    cost:
-        ``{"W": ..., "U": ...}`` weighing ``x' W x + a' U a`` (default ``W = I``, ``U = 0``).
-    protocol, on_loss:
-        ``"tcp"`` (acknowledged actuator packets) or ``"udp"``; ``"zero"``
-        (a lost input is zero) or ``"hold"`` (the last input is held).
-    budget:
-        Seconds (as ``options.time_budget_s``, in ``[0.01, 3600]``) or a
-        :class:`kfio.Budget`, as for :func:`kfio.analyze`: the verdict raises
-        :class:`kfio.errors.BudgetExceeded` if it does not fit; later parts
-        are left out of a ``partial`` report.
-
-    Returns
-    -------
-    LoopReport
-        ``to_dict()`` is the JSON of ``kfio loop --json`` for :func:`loop_request` of the same arguments.
-    """
-    from ._model import parse_loop_request
-
-    work = budget if isinstance(budget, Budget) else None
-    tree = loop_request(
-        system,
-        controller,
-        channel,
-        actuator_channel,
-        B=B,
-        Q=Q,
-        R=R,
-        cost=cost,
-        protocol=protocol,
-        on_loss=on_loss,
-        budget=None if work is not None else budget,
-    )
-    return analyze_loop(parse_loop_request(tree), budget=work)
-
-
-def loop_request(
-    system: Any,
-    controller: Mapping[str, Any],
-    channel: Any,
-    actuator_channel: Any,
-    *,
-    B: Any = None,
-    Q: Any = None,
-    R: Any = None,
-    cost: Mapping[str, Any] | None = None,
-    protocol: str = "tcp",
-    on_loss: str = "zero",
-    budget: Any = None,
-) -> dict[str, Any]:
-    """The loop request file (JSON-ready dict) for the arguments of :func:`loop` (``budget`` in seconds)."""
-    from .._system import System
-    from ..errors import InvalidInput
-    from ..model import channel_tree, json_ready, python_tree
-
-    if isinstance(system, System):
-        sys_tree = system.to_dict()
-        if B is None:
-            raise InvalidInput("B", "a loop needs the input matrix B (or pass a python-control StateSpace)")
-        sys_tree["B"] = python_tree(B)
-        for key, val in (("Q", Q), ("R", R)):
-            if val is not None:
-                sys_tree[key] = python_tree(val)
-    elif all(hasattr(system, a) for a in ("A", "B", "C", "dt")):
-        plant = System.from_statespace(system, Q=Q, R=R)
-        sys_tree = plant.to_dict()
-        sys_tree["B"] = python_tree(system.B if B is None else B)
-    else:
-        raise InvalidInput(
-            "system", f"expected a kfio.System or a python-control StateSpace; got a {type(system).__name__}"
-        )
-    ctrl = python_tree(dict(controller))
-    if isinstance(ctrl, dict) and "K" in ctrl and "L" in ctrl:
-        ctrl = {"gains": {"K": ctrl.pop("K"), "L": ctrl.pop("L")}, **ctrl}
-    tree: dict[str, Any] = {
-        "system": sys_tree,
-        "channel": channel_tree(channel, bernoulli_number=True),
-        "actuator_channel": channel_tree(actuator_channel, bernoulli_number=True),
-        "controller": ctrl,
-    }
-    if cost is not None:
-        tree["cost"] = python_tree(dict(cost))
-    tree["options"] = {"loop": {"protocol": protocol, "on_loss": on_loss}}
-    if budget is not None:
-        tree["options"]["time_budget_s"] = python_tree(budget)
-    return json_ready(tree)
-
-
-__all__ = ["LoopReport", "analyze_loop", "loop", "loop_report_view", "loop_request"]
+__all__ = ["LoopReport", "analyze_loop", "loop_report_view"]

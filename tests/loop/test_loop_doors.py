@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 import time
 from collections.abc import Iterator
+from fractions import Fraction
 from pathlib import Path
 
 import control
@@ -18,7 +19,7 @@ import pytest
 from fastapi.testclient import TestClient
 
 import kfio
-from kfio.loop import loop_request
+from kfio.loop import loop_request, parse_loop_request
 from kfio.service.app import create_app
 from kfio.service.cli import main as cli_main
 from kfio.service.settings import Settings
@@ -31,22 +32,26 @@ def _plant():
     sys_c = control.ss([[0, 1], [2, -1]], [[0], [1]], [[1, 0]], [[0]])
     sys_d = control.c2d(sys_c, 0.1)
     Q, R = 0.01 * np.eye(2), np.array([[0.04]])
-    K, _, _ = control.dlqe(sys_d.A, np.eye(2), sys_d.C, Q, R)  # predictor form: A - K C
-    L, _, _ = control.dlqr(sys_d.A, sys_d.B, np.eye(2), np.array([[0.1]]))  # u = -L x
+    # python-control's names: dlqr's K is the feedback (u = -K x), dlqe's L the estimator (eig(A - L C))
+    K, _, _ = control.dlqr(sys_d.A, sys_d.B, np.eye(2), np.array([[0.1]]))
+    L, _, _ = control.dlqe(sys_d.A, np.eye(2), sys_d.C, Q, R)
     return sys_d, Q, R, K, L
 
 
 @pytest.fixture(scope="module")
 def plant_request():
     sys_d, Q, R, K, L = _plant()
-    args = (
-        sys_d,
-        {"K": K, "L": L, "form": "predictor"},
-        kfio.bernoulli(0.9),
-        kfio.gilbert_elliott(failure_rate=0.05, recovery_rate=0.6),
-    )
-    kw = {"Q": Q, "R": R, "cost": {"W": np.eye(2), "U": [[0.1]]}}
-    return kfio.loop(*args, **kw), loop_request(*args, **kw)
+    kw = {
+        "feedback": K,
+        "estimator": L,
+        "form": "predictor",
+        "channel": kfio.bernoulli(0.9),
+        "actuator_channel": kfio.gilbert_elliott(failure_rate=0.05, recovery_rate=0.6),
+        "Q": Q,
+        "R": R,
+        "cost": {"W": np.eye(2), "U": [[0.1]]},
+    }
+    return kfio.loop(sys_d, **kw), loop_request(sys_d, **kw)
 
 
 @pytest.fixture(scope="module")
@@ -91,19 +96,19 @@ def test_python_control_gains_give_one_report_through_every_door(plant_request, 
 
 
 def test_python_control_predictor_gain_is_the_one_dlqe_documents():
-    sys_d, Q, R, K, _ = _plant()
+    sys_d, Q, R, _, L = _plant()
     P = control.dare(sys_d.A.T, sys_d.C.T, Q, R)[0]
     predictor = sys_d.A @ P @ sys_d.C.T @ np.linalg.inv(sys_d.C @ P @ sys_d.C.T + R)
-    assert np.allclose(K, predictor)
+    assert np.allclose(L, predictor)
 
 
 def test_bad_input_is_named_on_every_door(client, capsys, tmp_path):
     body = json.loads((ROOT / "examples" / "loop_scalar.json").read_text())
-    body["controller"]["gains"]["L"] = [[1, 2]]
+    body["controller"]["gains"]["feedback"] = [[1, 2]]
     code, _, err = _cli(capsys, tmp_path, body)
-    assert code == 2 and "/controller/gains/L" in err and "1x1" in err
+    assert code == 2 and "/controller/gains/feedback" in err and "1x1" in err
     r = client.post("/v1/loop", json=body)
-    assert r.status_code == 422 and "/controller/gains/L" in r.text
+    assert r.status_code == 422 and "/controller/gains/feedback" in r.text
     good = json.loads((ROOT / "examples" / "loop_scalar.json").read_text())
     r = client.post("/v1/jobs/loop", json={**good, "options": {"loop": {"protocol": "quic"}}})
     assert r.status_code == 422 and "/options/loop/protocol" in r.text
@@ -127,6 +132,55 @@ def test_the_loop_report_and_request_validate_against_their_published_schemas(ca
 
     body = json.loads((ROOT / "examples" / "loop_scalar.json").read_text())
     assert schema("loop").is_valid(body)
-    assert not schema("loop").is_valid({**body, "controller": {"gains": {"K": [[1]]}}})  # L is required
+    assert not schema("loop").is_valid({**body, "controller": {"gains": {"estimator": [[1]]}}})  # feedback is required
     code, out, _ = _cli(capsys, tmp_path, body, "--json")
     assert code == 0 and list(schema("loop-report").iter_errors(json.loads(out))) == []
+
+
+@pytest.mark.parametrize("letter", ["K", "L"])
+def test_the_letters_K_and_L_are_refused_saying_which_gain_is_which(client, capsys, tmp_path, letter):
+    body = json.loads((ROOT / "examples" / "loop_scalar.json").read_text())
+    gains = body["controller"]["gains"]
+    body["controller"]["gains"] = {letter: gains["feedback"], **gains}  # a letter beside the roles is refused too
+    explanation = "'feedback' (u = -F x_hat; python-control's dlqr K) and 'estimator' (python-control's dlqe L)"
+    for tree in (body, {**body, "controller": {"gains": {"K": gains["feedback"], "L": gains["estimator"]}}}):
+        with pytest.raises(kfio.InvalidInput) as err:
+            kfio.loop(tree)
+        field = f"/controller/gains/{letter}" if tree is body else "/controller/gains/K"
+        assert err.value.field == field and explanation in err.value.rule
+    code, _, err_text = _cli(capsys, tmp_path, body)
+    assert code == 2 and f"/controller/gains/{letter}" in err_text and explanation in err_text
+    r = client.post("/v1/loop", json=body)
+    assert r.status_code == 422 and f"/controller/gains/{letter}" in r.text and "dlqr K" in r.text
+
+
+def test_python_control_gains_by_role_match_the_json_door_and_swapped_gains_do_not():
+    sys_d, Q, R, K, L = _plant()
+    common = {"channel": kfio.bernoulli(0.9), "actuator_channel": kfio.bernoulli(0.8), "Q": Q, "R": R}
+    report = kfio.loop(sys_d, feedback=K, estimator=L, **common)
+    body = loop_request(sys_d, feedback=K, estimator=L, **common)
+    req = parse_loop_request(body)
+    assert req.feedback == tuple(tuple(Fraction(repr(float(x))) for x in row) for row in K)  # the floats' decimal text
+    assert req.estimator == tuple(tuple(Fraction(repr(float(x))) for x in row) for row in L)
+    assert report.to_json() == kfio.loop(json.loads(json.dumps(body))).to_json()
+    # the closed loop's mean dynamics (both links perfect) is eig(A - B K) and eig(A - L C), as python-control says
+    assert report.verdict == "stable"
+    assert (
+        max(abs(np.linalg.eigvals(sys_d.A - sys_d.B @ K))) < 1
+        and max(abs(np.linalg.eigvals(sys_d.A - L @ sys_d.C))) < 1
+    )
+    with pytest.raises(kfio.InvalidInput) as err:  # the shapes differ here: swapped gains are named
+        kfio.loop(sys_d, feedback=L, estimator=K, **common)
+    assert err.value.field == "feedback" and "1x2" in err.value.rule
+
+
+def test_python_arguments_are_named_in_errors():
+    sys_d, Q, R, K, L = _plant()
+    with pytest.raises(kfio.InvalidInput) as err:
+        kfio.loop(
+            sys_d, feedback=K, estimator=L, channel=kfio.bernoulli(0.9), actuator_channel={"model": "x"}, Q=Q, R=R
+        )
+    assert err.value.field.startswith("actuator_channel")
+    with pytest.raises(kfio.InvalidInput) as err:
+        kfio.loop(sys_d, feedback=K, channel=kfio.bernoulli(0.9), actuator_channel=kfio.bernoulli(0.9), Q=Q, R=R)
+    assert err.value.field == "estimator"
