@@ -37,10 +37,63 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=_run, quick_exit=True)
 
 
-def _probability(value: float | None, exact: str | None) -> str:
-    """``0.5625`` or ``0.372842 (exact: 15625.../41908...)``: the decimal first, the exact text beside it when it differs."""
+#: Longest exact text the summary prints beside a decimal; a longer one is named by its degree.
+SHORT_EXACT = 24
+
+
+def _probability(value: float | None, exact: str | None, degree: int | None = None) -> str:
+    """``0.5625 (exact: 9/16)``, ``0.453924 (algebraic, degree 2)`` or ``0.453924``: the decimal first.
+
+    The exact text stands beside it when it differs and is short (at most :data:`SHORT_EXACT`
+    characters); a longer one is named by the degree of its minimal polynomial when known
+    (degree 1: a rational whose text is long).
+    """
     text = f"{value:.6g}"
-    return text if exact is None or exact == text else f"{text} (exact: {exact})"
+    if exact is None or exact == text:
+        return text
+    if len(exact) <= SHORT_EXACT:
+        return f"{text} (exact: {exact})"
+    if degree == 1:
+        return f"{text} (rational, {len(exact)} characters exact in --json)"
+    return text if degree is None else f"{text} (algebraic, degree {degree})"
+
+
+def _link_name(critical: dict) -> str:
+    """``critical sensor arrival probability``, ``critical recovery rate of sensor gps``, ..."""
+    link, parameter = critical["link"], critical["parameter"].rsplit("/", 1)[-1].replace("_", " ")
+    if link in ("sensor", "actuator"):
+        return (
+            f"critical {link} {parameter}"
+            if parameter == "arrival probability"
+            else f"critical {parameter} of the {link} link"
+        )
+    return f"critical {parameter} of sensor {link}"
+
+
+def critical_lines(report: dict) -> list[str]:
+    """One line per link (``critical_values`` of the report): its critical value as a decimal, always.
+
+    A link whose stable set is an interval that does not reach 1 (a UDP-like estimator
+    assumes the link's arrival rate, so a better link can destabilize the loop) gets that
+    interval instead; a link with no stable value says so; a value not computed, the note.
+    """
+    lines = []
+    for c in report.get("critical_values") or []:
+        name = _link_name(c)
+        poly = c.get("value_minimal_polynomial")
+        if c["value"] is not None:
+            degree = None if poly is None else len(poly) - 1
+            lines.append(f"{name}: {_probability(c['value'], c['value_exact'], degree)}")
+            continue
+        stable = [i for i in c.get("intervals") or [] if i["verdict"] == "stable"]
+        if stable:
+            spans = " or ".join(f"({_probability(i['from'], None)}, {_probability(i['to'], None)})" for i in stable)
+            lines.append(f"{name}: none near 1; stable only for values in {spans}")
+        elif c.get("intervals"):
+            lines.append(f"{name}: none; no value of this link stabilizes the loop")
+        else:
+            lines.append(f"{name}: {c['note']}")
+    return lines
 
 
 def summary(report: dict) -> str:
@@ -55,11 +108,7 @@ def summary(report: dict) -> str:
     ]
     cost = report["cost"]
     lines.append(f"stationary cost of these gains: {'unbounded' if cost is None else f'{cost:.6g}'}")
-    for key in ("sensor", "actuator"):
-        exact = report[f"critical_{key}_arrival_probability_exact"]
-        if exact is not None:
-            value = _probability(report[f"critical_{key}_arrival_probability"], exact)
-            lines.append(f"critical {key} arrival probability: {value}")
+    lines += critical_lines(report)
     statement = report["estimator_alone"]["statement"]
     if statement:
         lines.append(f"estimator alone: {statement}")
