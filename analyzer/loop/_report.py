@@ -14,6 +14,7 @@ from typing import Any, Callable
 
 from .._budget import Budget
 from .._reporting import Report
+from .._verdicts import Verdict
 from ..errors import BudgetExceeded
 from ..model import MarkovChannel, PerSensorChannel, Request, fraction_text
 from ._cost import stationary_cost
@@ -72,7 +73,7 @@ class LoopReport(Report):
         (sensor, actuator) arrival-probability plane (:mod:`kfio.loop._region`).
     """
 
-    verdict: str
+    verdict: Verdict
     exact: bool
     certified: bool
     certificate: str
@@ -337,7 +338,7 @@ def analyze_loop(req: LoopRequest, *, critical: bool = True, budget: Budget | No
     if skipped:
         notes.append("partial: the time budget ran out; not computed: " + "; ".join(skipped))
     return LoopReport(
-        verdict=dec.verdict,
+        verdict=Verdict(dec.verdict),
         exact=dec.exact,
         certified=dec.certified,
         certificate=dec.certificate,
