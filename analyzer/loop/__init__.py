@@ -21,14 +21,19 @@ from typing import TYPE_CHECKING, Any
 
 #: Public name -> the private module (relative to this package) that defines it.
 _LAZY = {
+    "BoundaryPoint": "._region",
+    "EstimatorAlone": "._parts",
     "LoopReport": "._report",
     "LoopRequest": "._model",
+    "OptimalFilter": "._parts",
+    "Region": "._region",
+    "UdpOuterBound": "._udp_bounds",
+    "UdpRegionBounds": "._udp_bounds",
     "analyze_loop": "._report",
     "decide": "._verdict",
     "load_loop_request": "._model",
     "loop": "._api",
     "loop_mjls": "._mjls",
-    "loop_report_view": "._report",
     "loop_request": "._api",
     "parameter_of": "._critical",
     "parse_loop_request": "._model",
@@ -43,8 +48,10 @@ if TYPE_CHECKING:
     from ._critical import parameter_of
     from ._mjls import loop_mjls, sensor_links
     from ._model import LoopRequest, load_loop_request, parse_loop_request
-    from ._region import region
-    from ._report import LoopReport, analyze_loop, loop_report_view
+    from ._parts import EstimatorAlone, OptimalFilter
+    from ._region import BoundaryPoint, Region, region
+    from ._report import LoopReport, analyze_loop
+    from ._udp_bounds import UdpOuterBound, UdpRegionBounds
     from ._verdict import decide
 
 
@@ -62,14 +69,19 @@ def __dir__() -> list[str]:
 
 
 __all__ = [
+    "BoundaryPoint",
+    "EstimatorAlone",
     "LoopReport",
     "LoopRequest",
+    "OptimalFilter",
+    "Region",
+    "UdpOuterBound",
+    "UdpRegionBounds",
     "analyze_loop",
     "decide",
     "load_loop_request",
     "loop",
     "loop_mjls",
-    "loop_report_view",
     "loop_request",
     "parameter_of",
     "parse_loop_request",

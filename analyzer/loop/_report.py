@@ -7,6 +7,7 @@ and ``POST /v1/loop`` all validate a loop request with
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 from dataclasses import dataclass, field
 from fractions import Fraction
@@ -21,14 +22,13 @@ from ._cost import stationary_cost
 from ._critical import Critical, critical_value, parameter_of
 from ._mjls import Mjls, estimator_mjls, loop_mjls, sensor_links
 from ._model import LoopRequest
-from ._region import region
+from ._parts import EstimatorAlone, OptimalFilter
+from ._region import Region, region
+from ._udp_bounds import UdpRegionBounds
 from ._verdict import decide
 
 #: Exact fraction texts longer than this are left out of the report (the float stays).
 MAX_EXACT_TEXT = 2000
-
-THEOREM = "Costa, Fragoso and Marques 2005, Theorem 3.9 (mean-square stability of Markov jump linear systems)"
-MODEL = "Schenato, Sinopoli, Franceschetti, Poolla and Sastry 2007, Sec. II (sensor and actuator packet losses)"
 
 
 def _text(x: Fraction | None) -> str | None:
@@ -36,10 +36,6 @@ def _text(x: Fraction | None) -> str | None:
         return None
     t = fraction_text(x)
     return t if len(t) <= MAX_EXACT_TEXT else None
-
-
-def _matrix(m: Any) -> list[list[str]]:
-    return [[fraction_text(x) for x in row] for row in m]
 
 
 @dataclass(frozen=True)
@@ -85,12 +81,12 @@ class LoopReport(Report):
     critical: tuple[Critical, ...]
     sensor_critical: Critical | None
     actuator_critical: Critical | None
-    estimator_alone: dict[str, Any]
+    estimator_alone: EstimatorAlone
     request: LoopRequest
-    region: dict[str, Any] | None
+    region: Region | None
     lqg: dict[str, Any] | None = None
     notes: tuple[str, ...] = field(default=())
-    udp_region_bounds: dict[str, Any] | None = None
+    udp_region_bounds: UdpRegionBounds | None = None
     partial: bool = False
 
     _repr_fields = ("verdict", "spectral_radius", "cost")
@@ -124,63 +120,21 @@ class LoopReport(Report):
         return self.actuator_critical.exact if self.actuator_critical else None
 
 
-def loop_report_view(r: LoopReport) -> dict[str, Any]:
-    """The JSON fields of a :class:`LoopReport` (encoded by :func:`kfio._json.encode`)."""
-    req = r.request
-    return {
-        "verdict": r.verdict,
-        "theorem": THEOREM,
-        "model": MODEL,
-        "exact": r.exact,
-        "certified": r.certified,
-        "certificate": r.certificate,
-        "partial": r.partial,
-        "spectral_radius": r.spectral_radius,
-        "spectral_radius_exact": r.spectral_radius_exact,
-        "operator_size": r.operator_size,
-        "modes": r.modes,
-        "cost": r.cost,
-        "cost_exact": r.cost_exact,
-        "critical_sensor_arrival_probability": r.critical_sensor_arrival_probability,
-        "critical_sensor_arrival_probability_exact": r.critical_sensor_arrival_probability_exact,
-        "critical_actuator_arrival_probability": r.critical_actuator_arrival_probability,
-        "critical_actuator_arrival_probability_exact": r.critical_actuator_arrival_probability_exact,
-        "critical_values": [c.as_dict() for c in r.critical],
-        "estimator_alone": r.estimator_alone,
-        "region": r.region,
-        "lqg": r.lqg,
-        "udp_region_bounds": r.udp_region_bounds,
-        "loop": {
-            "protocol": req.protocol,
-            "on_loss": req.on_loss,
-            "form": req.form,
-            "controller": req.controller,
-            "feedback": _matrix(req.feedback),
-            "estimator": _matrix(req.estimator),
-        },
-        "notes": list(r.notes),
-    }
-
-
-def _bernoulli_only(ch: MarkovChannel) -> bool:
-    return ch.model == "bernoulli"
-
-
-def _optimal_filter_critical(req: LoopRequest) -> tuple[float | None, str | None, str | None]:
+def _optimal_filter_critical(req: LoopRequest) -> OptimalFilter:
     """The optimal time-varying filter's critical arrival probability (``kfio.analyze``, Theorem 1)."""
     if isinstance(req.channel, PerSensorChannel) or req.channel.model != "bernoulli":
-        return None, None, "defined for one Bernoulli sensor packet"
+        return OptimalFilter(None, None, "defined for one Bernoulli sensor packet")
     from .._api import analyze
     from ..errors import AnalyzerError
 
     try:
         rep = analyze(Request(system=req.system, channel=req.channel))
     except AnalyzerError as exc:
-        return None, None, str(exc)
-    return rep.critical_arrival_probability, rep.critical_arrival_probability_exact, None
+        return OptimalFilter(None, None, str(exc))
+    return OptimalFilter(rep.critical_arrival_probability, rep.critical_arrival_probability_exact, None)
 
 
-def _estimator_alone(req: LoopRequest, with_critical: bool, budget: Budget | None = None) -> dict[str, Any]:
+def _estimator_alone(req: LoopRequest, with_critical: bool, budget: Budget | None = None) -> EstimatorAlone:
     sys = estimator_mjls(req)
     dec = decide(sys, budget)
     trace = stationary_cost(sys, dec.moments) if dec.moments is not None else None
@@ -191,7 +145,8 @@ def _estimator_alone(req: LoopRequest, with_critical: bool, budget: Budget | Non
         crit = critical_value(
             lk.label, lk.pointer, lk.channel, lambda ch: estimator_mjls(req, {lk.pointer: ch}), budget
         )
-    opt, opt_exact, why = _optimal_filter_critical(req)
+    optimal = _optimal_filter_critical(req)
+    opt, opt_exact = optimal.critical_arrival_probability, optimal.critical_arrival_probability_exact
     mine = None
     if crit is not None and crit.value is not None:
         short = crit.exact is not None and len(crit.exact) <= 24
@@ -205,24 +160,16 @@ def _estimator_alone(req: LoopRequest, with_critical: bool, budget: Budget | Non
     ):
         theirs = opt_exact if len(opt_exact) <= 24 or opt is None else f"{opt:.4g}"
         statement = f"the optimal time-varying filter needs {theirs}; your steady-state gain needs {mine}"
-    return {
-        "verdict": dec.verdict,
-        "spectral_radius": dec.spectral_radius,
-        "spectral_radius_exact": dec.spectral_radius_exact,
-        "stationary_error_trace": None if trace is None else float(trace),
-        "stationary_error_trace_exact": _text(trace),
-        "critical_sensor_arrival_probability": crit.value
-        if crit and crit.parameter.endswith("arrival_probability")
-        else None,
-        "critical_sensor_arrival_probability_exact": crit.exact
-        if crit and crit.parameter.endswith("arrival_probability")
-        else None,
-        "critical_value": crit.as_dict() if crit else None,
-        "optimal_filter_critical_arrival_probability": opt,
-        "optimal_filter_critical_arrival_probability_exact": opt_exact,
-        "optimal_filter_note": why,
-        "statement": statement,
-    }
+    return EstimatorAlone(
+        verdict=Verdict(dec.verdict),
+        spectral_radius=dec.spectral_radius,
+        spectral_radius_exact=dec.spectral_radius_exact,
+        stationary_error_trace=None if trace is None else float(trace),
+        stationary_error_trace_exact=_text(trace),
+        critical=crit,
+        optimal_filter=optimal,
+        statement=statement,
+    )
 
 
 #: Largest second-moment operator (``modes * d (d + 1) / 2``) a loop request may need: beyond it even
@@ -242,19 +189,19 @@ def _lqg_part(req: LoopRequest, budget: Budget | None, with_bounds: bool = True)
     return {**control_critical(req), "cost_bounds": lqg_cost_bounds(req, budget)}
 
 
-def _udp_part(req: LoopRequest, verdict: str) -> dict[str, Any]:
+def _udp_part(req: LoopRequest, verdict: str) -> UdpRegionBounds:
     """Bounds on the optimal UDP-like critical region, and where the request's point falls (:mod:`kfio.loop._udp_bounds`)."""
     from ._udp_bounds import udp_region_bounds
 
     out = udp_region_bounds(req, _optimal_filter_critical(req))
-    outer = out["outer"]
-    if verdict == "stable":
-        out["request_point_inside_optimal_region"] = True  # the inner bound: these gains are stable here
-    elif outer is not None and not isinstance(req.channel, PerSensorChannel):
+    outer = out.outer
+    if verdict == "stable":  # the inner bound: these gains are stable here
+        return dataclasses.replace(out, request_point_inside_optimal_region=True)
+    if outer is not None and not isinstance(req.channel, PerSensorChannel):
         lam, nu = req.channel.table[0], req.actuator.table[0]  # Bernoulli links: checked by udp_region_bounds
-        g, n_ = outer["sensor_arrival_probability_above"], outer["actuator_arrival_probability_above"]
+        g, n_ = outer.sensor_arrival_probability_above, outer.actuator_arrival_probability_above
         if (g is not None and float(lam) < g) or (n_ is not None and float(nu) < n_):
-            out["request_point_inside_optimal_region"] = False
+            return dataclasses.replace(out, request_point_inside_optimal_region=False)
     return out
 
 
@@ -365,4 +312,4 @@ def _skipped_critical(label: str, pointer: str, ch: MarkovChannel) -> Critical:
     return Critical(label, par[0] if par else pointer, None, None, (), "not computed: the time budget ran out")
 
 
-__all__ = ["LoopReport", "analyze_loop", "loop_report_view"]
+__all__ = ["LoopReport", "analyze_loop"]

@@ -42,7 +42,7 @@ def test_a_budget_spent_after_the_verdict_gives_a_partial_report_with_the_verdic
     assert all(c.note.startswith("not computed: the time budget ran out") for c in part.critical)
     out = part.to_dict()
     assert out["partial"] is True and any(n.startswith("partial: the time budget ran out") for n in out["notes"])
-    assert out["estimator_alone"]["verdict"] == full.estimator_alone["verdict"]
+    assert out["estimator_alone"]["verdict"] == full.estimator_alone.verdict
 
 
 def test_seconds_reach_the_library_through_options_time_budget_s():

@@ -184,3 +184,33 @@ def test_python_arguments_are_named_in_errors():
     with pytest.raises(kfio.InvalidInput) as err:
         kfio.loop(sys_d, feedback=K, channel=kfio.bernoulli(0.9), actuator_channel=kfio.bernoulli(0.9), Q=Q, R=R)
     assert err.value.field == "estimator"
+
+
+def test_typed_parts_of_the_report_are_its_json_with_values_derived_by_hand():
+    # a = 5/4, b = c = 1, estimator k = 1/2, feedback 3/5 (examples/loop_scalar.json): the estimator alone is
+    # stable iff lam (a - k)^2 + (1 - lam) a^2 < 1, i.e. lam > 9/16; the optimal filter needs 1 - 1/a^2 = 9/25;
+    # the plant under u = -F x_hat needs nu (a - F)^2 + (1 - nu) a^2 < 1, i.e. nu > 75/152, wherever lam > 9/16
+    body = json.loads((ROOT / "examples" / "loop_scalar.json").read_text())
+    body["options"]["loop"]["region"] = 4
+    report = kfio.loop(body)
+    d = report.to_dict()
+    assert json.loads(report.to_json()) == d
+    alone = report.estimator_alone
+    assert type(alone.verdict) is kfio.Verdict and alone.to_dict() == d["estimator_alone"]
+    assert alone.critical_sensor_arrival_probability_exact == "9/16"
+    assert alone.optimal_filter.critical_arrival_probability_exact == "9/25"
+    assert alone.statement == "the optimal time-varying filter needs 9/25; your steady-state gain needs 9/16"
+    region = report.region
+    assert region is not None and region.to_dict() == d["region"]
+    assert [p.sensor for p in region.boundary] == [Fraction(1, 8), Fraction(3, 8), Fraction(5, 8), Fraction(7, 8)]
+    assert [p.critical_actuator_arrival_probability_exact for p in region.boundary] == [None, None, "75/152", "75/152"]
+    assert report.udp_region_bounds is None and d["udp_region_bounds"] is None
+    for on_loss in ("zero", "hold"):
+        body["options"]["loop"] = {"protocol": "udp", "on_loss": on_loss}
+        udp = kfio.loop(body)
+        bounds = udp.udp_region_bounds
+        assert bounds is not None and bounds.to_dict() == udp.to_dict()["udp_region_bounds"]
+        outer = bounds.outer
+        assert outer is not None and outer.sensor_arrival_probability_above_exact == "9/25"
+        assert outer.actuator_arrival_probability_above_exact == (None if on_loss == "hold" else "9/25")
+        assert bounds.request_point_inside_optimal_region is (udp.verdict == "stable")
