@@ -214,3 +214,27 @@ def test_typed_parts_of_the_report_are_its_json_with_values_derived_by_hand():
         assert outer is not None and outer.sensor_arrival_probability_above_exact == "9/25"
         assert outer.actuator_arrival_probability_above_exact == (None if on_loss == "hold" else "9/25")
         assert bounds.request_point_inside_optimal_region is (udp.verdict == "stable")
+
+
+def test_one_report_from_a_request_dict_a_validated_request_and_keywords():
+    body = json.loads((ROOT / "examples" / "loop_scalar.json").read_text())
+    req = parse_loop_request(body)
+    assert req.K is req.estimator and req.L is req.feedback  # the letters of Schenato et al. (2007), read-only
+    assert (req.feedback, req.estimator) == (((Fraction(3, 5),),), ((Fraction(1, 2),),))
+    plant = kfio.System(A=[[1.25]], C=[[1]], Q=[[1]], R=[[0.5]])
+    by_keywords = kfio.loop(
+        plant,
+        B=[[1]],
+        feedback=[[0.6]],
+        estimator=[[0.5]],
+        form="predictor",
+        channel=kfio.bernoulli(0.8),
+        actuator_channel=kfio.bernoulli(0.9),
+        cost={"W": [[1]], "U": [[0.5]]},
+        options={"protocol": "tcp", "on_loss": "zero"},
+        budget=60,
+    )
+    assert by_keywords.to_json() == kfio.loop(body).to_json() == kfio.loop(req, budget=60).to_json()
+    with pytest.raises(kfio.InvalidInput) as err:
+        kfio.loop(body, feedback=[[0.6]])
+    assert err.value.field == "system" and "only budget" in err.value.rule
