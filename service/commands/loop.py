@@ -83,7 +83,8 @@ def critical_lines(report: dict) -> list[str]:
         poly = c.get("value_minimal_polynomial")
         if c["value"] is not None:
             degree = None if poly is None else len(poly) - 1
-            lines.append(f"{name}: {_probability(c['value'], c['value_exact'], degree)}")
+            every = " (stable at every value of this link)" if c["value_exact"] == "0" else ""
+            lines.append(f"{name}: {_probability(c['value'], c['value_exact'], degree)}{every}")
             continue
         stable = [i for i in c.get("intervals") or [] if i["verdict"] == "stable"]
         if stable:

@@ -159,3 +159,41 @@ def test_a_udp_stable_interval_that_does_not_reach_1_is_printed() -> None:
     step = Fraction(1, 10**5)
     verdicts = [verdict(x) for x in (lo - step, lo + step, Fraction(1, 2), hi - step, hi + step, Fraction(99, 100))]
     assert verdicts == ["unstable", "stable", "stable", "stable", "unstable", "unstable"]
+
+
+PER_SENSOR = {
+    "system": {
+        "A": [["1.1", "0.2"], ["0", "0.9"]],
+        "B": [["0"], ["1"]],
+        "C": [["1", "0"], ["0", "1"]],
+        "Q": [["1", "0"], ["0", "1"]],
+        "R": [["1", "0"], ["0", "1"]],
+        "sensors": [{"name": "a", "rows": [0]}, {"name": "b", "rows": [1]}],
+    },
+    "channel": {
+        "model": "per_sensor",
+        "channels": {
+            "a": {"model": "bernoulli", "arrival_probability": "0.8"},
+            "b": {"model": "gilbert_elliott", "failure_rate": "0.2", "recovery_rate": "0.7"},
+        },
+    },
+    "actuator_channel": {"model": "bernoulli", "arrival_probability": "0.9"},
+    "controller": {"gains": {"feedback": [["0.4", "0.5"]], "estimator": [["0.5", "0"], ["0", "0.3"]]}},
+}
+
+
+def test_a_per_sensor_channel_prints_one_line_per_packet() -> None:
+    report = kfio.loop(PER_SENSOR).to_dict()
+    lines = summary(report).splitlines()
+    a = _line(lines, "critical arrival probability of sensor a: ")
+    value, exact = _decimal_and_exact(a)
+    assert exact is not None and value == pytest.approx(float(Fraction(exact)), rel=1e-6)
+    tiny = Fraction(1, 10**9)
+    pointer = "/channel/channels/a/arrival_probability"
+    at = [_verdict_at(PER_SENSOR, pointer, Fraction(exact) + d) for d in (-tiny, tiny)]
+    assert at == ["unstable", "stable"]
+    b = _line(lines, "critical recovery rate of sensor b: ")
+    assert b == "0 (stable at every value of this link)"
+    assert _verdict_at(PER_SENSOR, "/channel/channels/b/recovery_rate", Fraction(1, 1000)) == "stable"
+    _line(lines, "critical actuator arrival probability: ")
+    assert len([line for line in lines if line.startswith("critical ")]) == len(report["critical_values"]) == 3
