@@ -32,7 +32,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -40,6 +40,7 @@ from .._reporting import ReportPart
 from ..model import PerSensorChannel, fraction_text, is_psd, to_float
 
 if TYPE_CHECKING:
+    from ._model import LoopRequest
     from ._parts import OptimalFilter
 
 
@@ -75,7 +76,7 @@ class UdpRegionBounds(ReportPart):
     reason: str | None
 
 
-def actuator_outer_bound(req: Any) -> tuple[float, str | None]:
+def actuator_outer_bound(req: LoopRequest) -> tuple[float, str | None]:
     """``1 - 1/rho(A)^2`` (``0`` for a stable ``A``), exactly for a scalar plant."""
     A = to_float(req.system.A)
     rho = float(np.max(np.abs(np.linalg.eigvals(A))))
@@ -87,7 +88,7 @@ def actuator_outer_bound(req: Any) -> tuple[float, str | None]:
     return value, exact
 
 
-def udp_region_bounds(req: Any, optimal_filter: OptimalFilter) -> UdpRegionBounds:
+def udp_region_bounds(req: LoopRequest, optimal_filter: OptimalFilter) -> UdpRegionBounds:
     """The outer and inner bounds of the module docstring for a UDP-like loop request.
 
     ``optimal_filter`` is the optimal filter's critical value from :func:`kfio.analyze`.

@@ -198,6 +198,8 @@ def test_typed_parts_of_the_report_are_its_json_with_values_derived_by_hand():
     alone = report.estimator_alone
     assert type(alone.verdict) is kfio.Verdict and alone.to_dict() == d["estimator_alone"]
     assert alone.critical_sensor_arrival_probability_exact == "9/16"
+    assert alone.exact_of("critical_sensor_arrival_probability") == Fraction(9, 16)
+    assert report.exact_of("critical_actuator_arrival_probability") == Fraction(75, 152)
     assert alone.optimal_filter.critical_arrival_probability_exact == "9/25"
     assert alone.statement == "the optimal time-varying filter needs 9/25; your steady-state gain needs 9/16"
     region = report.region
