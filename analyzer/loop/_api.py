@@ -188,6 +188,7 @@ def _request_tree(
         if seconds is not None:
             given["options"] = {**given.get("options", {}), "time_budget_s": seconds}
         return json_ready(given), []
+    keywords = {"B": B, "Q": Q, "R": R}  # the plant's matrices that come as keywords, named so in errors
     if isinstance(system, System):
         sys_tree = system.to_dict()
         if B is None:
@@ -199,6 +200,7 @@ def _request_tree(
     elif all(hasattr(system, a) for a in ("A", "B", "C", "dt")):
         sys_tree = System.from_statespace(system, Q=Q, R=R).to_dict()
         sys_tree["B"] = python_tree(system.B if B is None else B)
+        keywords = {"B": B, "Q": Q if Q is not None else "", "R": R if R is not None else ""}
     else:
         raise InvalidInput(
             "system",
@@ -245,8 +247,9 @@ def _request_tree(
         ("/cost", "cost", tree.get("cost"), False),
         ("/options/loop", "options", tree.get("options", {}).get("loop"), False),
         ("/options/time_budget_s", "budget", seconds, False),
-        ("/system", "system", tree["system"], True),
     ]
+    routes += [(f"/system/{k}", k, tree["system"].get(k), False) for k, v in keywords.items() if v is not None]
+    routes.append(("/system", "system", tree["system"], True))
     return tree, routes
 
 

@@ -184,6 +184,11 @@ def test_python_arguments_are_named_in_errors():
     with pytest.raises(kfio.InvalidInput) as err:
         kfio.loop(sys_d, feedback=K, channel=kfio.bernoulli(0.9), actuator_channel=kfio.bernoulli(0.9), Q=Q, R=R)
     assert err.value.field == "estimator"
+    links = {"channel": kfio.bernoulli(0.9), "actuator_channel": kfio.bernoulli(0.9)}
+    for kw, field in (({"R": R}, "Q"), ({"Q": -Q, "R": R}, "Q"), ({"Q": Q, "R": R, "B": [[1, 2]]}, "B")):
+        with pytest.raises(kfio.InvalidInput) as err:  # the plant's keywords are named as keywords
+            kfio.loop(sys_d, feedback=K, estimator=L, **links, **kw)
+        assert err.value.field == field, (kw, err.value)
 
 
 def test_typed_parts_of_the_report_are_its_json_with_values_derived_by_hand():
