@@ -37,7 +37,7 @@ _LAZY = {
     "bounds": "._api",
     "simulate": "._api",
     "expected_covariance": "._api",
-    "loop": ".loop",
+    "loop": ".loop._api",
     "build_request": "._api",
     "request_dict": "._api",
     "bernoulli": ".model._channels",
@@ -97,6 +97,7 @@ if TYPE_CHECKING:  # what the lazy names are, for type checkers and editors
         LimitExceeded,
         NumericalFailure,
     )
+    from .loop._api import loop
     from .model import (
         DEFAULT_LIMITS,
         Limits,
@@ -122,12 +123,16 @@ def __getattr__(name: str) -> Any:
     module = _LAZY.get(name)
     if module is None:
         raise AttributeError(f"module 'kfio' has no attribute {name!r}")
-    if name == "loop":  # the package kfio.loop, which is callable: kfio.loop(...) is kfio.loop.loop(...)
-        value = importlib.import_module(module, __name__)
-    else:
-        value = getattr(importlib.import_module(module, __name__), name)
+    value = getattr(importlib.import_module(module, __name__), name)
     globals()[name] = value
     return value
+
+
+# The import system binds a subpackage to its parent's attribute of the same name when it first loads
+# it, which would make ``kfio.loop`` the subpackage after any ``from kfio.loop import ...``.  Loading the
+# (lazy, import-free) subpackage now and unbinding it leaves the attribute to ``__getattr__``: the function.
+importlib.import_module(".loop", __name__)
+del globals()["loop"]
 
 
 def __dir__() -> list[str]:

@@ -28,10 +28,13 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 import control  # noqa: E402
 
 import kfio  # noqa: E402
-from kfio.loop import analyze_loop, parse_loop_request  # noqa: E402
+from kfio.loop import (  # noqa: E402
+    analyze_loop,
+    loop_request,  # noqa: E402
+    parse_loop_request,
+)
 from kfio.loop._mjls import loop_mjls  # noqa: E402
 from kfio.loop._operator import float_operator, noise_vector, operator_matrix  # noqa: E402
-from kfio.loop._report import loop_request  # noqa: E402
 
 
 def plant_request() -> dict:
@@ -44,11 +47,12 @@ def plant_request() -> dict:
     ge = kfio.gilbert_elliott
     return loop_request(
         kfio.System(A=plant.A, C=plant.C, Q=Q, R=R, sensors={"cart1": [0], "cart2": [1]}),
-        {"K": K, "L": L},
-        kfio.per_sensor(
+        feedback=L,
+        estimator=K,
+        channel=kfio.per_sensor(
             {"cart1": ge(failure_rate=0.05, recovery_rate=0.6), "cart2": ge(failure_rate=0.1, recovery_rate=0.5)}
         ),
-        ge(failure_rate=0.05, recovery_rate=0.7),
+        actuator_channel=ge(failure_rate=0.05, recovery_rate=0.7),
         B=plant.B,
     )
 

@@ -24,7 +24,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import bench_loop  # noqa: E402
 
 import kfio  # noqa: E402
-from kfio.loop import loop_mjls, parse_loop_request  # noqa: E402
+from kfio.loop import loop_mjls, loop_request, parse_loop_request  # noqa: E402
 from kfio.loop._critical import det_polynomial, det_polynomial_rational, parameter_of  # noqa: E402
 from kfio.loop._operator import float_operator  # noqa: E402
 
@@ -32,16 +32,16 @@ from kfio.loop._operator import float_operator  # noqa: E402
 def small_request():
     ge = kfio.gilbert_elliott
     return parse_loop_request(
-        kfio.loop.loop_request(
+        loop_request(
             kfio.System(
                 A=[["1.1", "0.3"], ["0", "0.9"]], C=[["1", "0.5"]], Q=[["0.2", "0"], ["0", "0.1"]], R=[["0.3"]]
             ),
-            {"K": [["0.6123456789"], ["0.1334567891"]], "L": [["0.4712345678", "0.2234567891"]]},
-            ge(failure_rate="0.05", recovery_rate="0.6"),
-            ge(failure_rate="0.1", recovery_rate="0.7"),
+            feedback=[["0.4712345678", "0.2234567891"]],
+            estimator=[["0.6123456789"], ["0.1334567891"]],
+            channel=ge(failure_rate="0.05", recovery_rate="0.6"),
+            actuator_channel=ge(failure_rate="0.1", recovery_rate="0.7"),
             B=[["0"], ["1"]],
-            protocol="udp",
-            on_loss="hold",
+            options={"protocol": "udp", "on_loss": "hold"},
         )
     )
 

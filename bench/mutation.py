@@ -163,6 +163,38 @@ MUTANTS: tuple[Mutant, ...] = (
         ("tests/loop/test_loop_certified.py",),
         "the cost enclosure forgets the float solve's error: only the rounding of J(X_hat) is enclosed",
     ),
+    Mutant(
+        "gain-letters-accepted-silently",
+        "analyzer/loop/_model.py",
+        "            if letter in gains:\n",
+        "            if letter in gains and letter not in gains:\n",
+        ("tests/loop/test_loop_doors.py",),
+        "controller.gains K/L no longer refused with the explanation of which gain is which",
+    ),
+    Mutant(
+        "check-interval-left-end-ignored",
+        "analyzer/check/_requirements.py",
+        '    return Judgement("pass" if above and below else "fail", measured, detail)\n',
+        '    return Judgement("pass" if below else "fail", measured, detail)\n',
+        ("tests/check/test_check_loop.py",),
+        "a limit below a UDP loop's stable interval passes: the interval's left end is not compared",
+    ),
+    Mutant(
+        "check-interval-not-at-request",
+        "analyzer/check/_requirements.py",
+        "    home = [(a, b) for a, b in stable if at is not None and a < at < b]\n",
+        "    home = stable\n",
+        ("tests/check/test_check_loop.py",),
+        "a stable interval that does not hold the request's point stands for the critical value",
+    ),
+    Mutant(
+        "summary-degree-off-by-one",
+        "service/commands/loop.py",
+        "            degree = None if poly is None else len(poly) - 1\n",
+        "            degree = None if poly is None else len(poly)\n",
+        ("tests/loop/test_loop_summary.py",),
+        "the summary names a critical value's degree as its number of coefficients",
+    ),
 )
 
 

@@ -83,7 +83,8 @@ def loop_region_data(req: Any, points: int) -> dict[str, Any]:
     labels = [
         [decide(loop_mjls(req, {sx.pointer: sx.at(x), ax.pointer: ax.at(y)})).verdict for y in centres] for x in centres
     ]
-    boundary = region(req, points)  # None unless both links are Bernoulli
+    found = region(req, points)  # None unless both links are Bernoulli
+    boundary = None if found is None else found.to_dict()
     along = [Fraction(k, 4 * points) for k in range(1, 4 * points)]
     costs: dict[str, list[float | None]] = {}
     for axis in (sx, ax):

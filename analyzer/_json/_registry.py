@@ -46,6 +46,12 @@ VIEWS: dict[str, str] = {
     "simulation._outage_target.OutageTarget": "_simulation:outage_target",
     # kfio loop (Schenato, Sinopoli, Franceschetti, Poolla and Sastry 2007; Costa, Fragoso and Marques 2005)
     "loop._report.LoopReport": "_loop:loop_report",
+    "loop._parts.EstimatorAlone": "_loop:estimator_alone",
+    "loop._region.Region": "_loop:region",
+    "loop._region.BoundaryPoint": "_loop:boundary_point",
+    "loop._udp_bounds.UdpRegionBounds": "_loop:udp_region_bounds",
+    "loop._udp_bounds.UdpOuterBound": "_loop:udp_outer_bound",
+    "loop._lqg_types.LqgPart": "_loop:lqg_part",
     # kfio sweep
     "sweep._engine.SweepResult": "_sweep:sweep_result",
     "sweep._engine.SweepRow": "_sweep:sweep_row",

@@ -30,6 +30,11 @@ at_most: v``                                          probability ``<= v`` (the 
 at_most: v``                                          probability ``<= v`` (the sensor at its value)
 =========================================  =========  ==================================================
 
+A link whose stable set is an interval ``(a, b)`` that does not reach 1 (a
+UDP-like loop: the estimator assumes the link's arrival rate, so a better link
+can destabilize it) has no critical value; the stable interval holding the
+request's point stands for it, and ``critical <= v`` holds iff ``a <= v <= b``.
+
 The ``loop`` requirements are judged on the report of ``kfio loop --json``
 for the entry's loop request (Schenato, Sinopoli, Franceschetti, Poolla and
 Sastry 2007, Sec. II, for the model).
@@ -240,7 +245,7 @@ def judge(req: Requirement, payload: Mapping[str, Any]) -> Judgement:
             "pass" if verdict == req.value else "fail", str(verdict), f"exact loop verdict ({report.get('theorem')})"
         )
     if req.key in LOOP_LIMITS:
-        return _judge_loop_limit(req, report)
+        return _judge_loop_limit(req, report, payload.get("link_points") or {})
     if req.key == "outage":
         stationary = report.get("stationary") or {}
         rows = stationary.get("outage") or []
@@ -255,8 +260,12 @@ def judge(req: Requirement, payload: Mapping[str, Any]) -> Judgement:
     raise AssertionError(req.key)  # pragma: no cover - parse_requirements admits only the keys above
 
 
-def _judge_loop_limit(req: Requirement, report: Mapping[str, Any]) -> Judgement:
-    """``cost``, or a link's critical arrival probability, of a loop report at most the limit (exactly)."""
+def _judge_loop_limit(req: Requirement, report: Mapping[str, Any], points: Mapping[str, str]) -> Judgement:
+    """``cost``, or a link's critical arrival probability, of a loop report at most the limit (exactly).
+
+    ``points`` holds the request's value of each link parameter (by JSON pointer): a link whose
+    stable set does not reach 1 is judged on the stable interval that holds the request's point.
+    """
     field = LOOP_LIMITS[req.key]
     value, text = report.get(field), report.get(f"{field}_exact")
     if value is None:
@@ -267,13 +276,41 @@ def _judge_loop_limit(req: Requirement, report: Mapping[str, Any]) -> Judgement:
             c for c in report.get("critical_values") or [] if (c.get("link") == "actuator") == (link == "actuator")
         ]
         note = found[0].get("note", "") if found else f"no critical {link} arrival probability in the report"
-        if note.startswith("no value"):  # no arrival probability of this link stabilizes the loop
-            return Judgement("fail", "none", note)
+        if note.startswith("no value"):  # no value near 1 stabilizes the loop: a stable interval may lie lower
+            return _judge_stable_interval(req, found[0], points.get(found[0].get("parameter", "")))
         return Judgement("error", "none", note)
     exact = _exact_or_none(text)
     what = "exact stationary cost" if field == "cost" else f"exact critical {field.split('_')[1]} arrival probability"
     measured = str(text) if exact is not None and len(str(text)) <= 40 else f"{value:.6g}"
     return _verdict(_compare(value, exact, req.value, False, True), measured, what)
+
+
+def _judge_stable_interval(req: Requirement, critical: Mapping[str, Any], point: str | None) -> Judgement:
+    """A link whose stable set is an interval ``(a, b)`` with ``b < 1`` (a UDP-like estimator assumes the link's rate).
+
+    The interval that holds the request's point stands for the critical value: its left end ``a``
+    is the least arrival probability the loop tolerates, and a better link than ``b`` destabilizes
+    it.  The requirement ``critical <= v`` holds iff ``v`` lies in ``[a, b]``: the loop is then
+    stable with the link anywhere between ``v`` and the request's point.  No stable interval at the
+    request's point: fail.
+    """
+    stable = [(i["from"], i["to"]) for i in critical.get("intervals") or [] if i.get("verdict") == "stable"]
+    spans = ", ".join(f"({a:.6g}, {b:.6g})" for a, b in stable)
+    at = None if point is None else _exact_or_none(point)
+    home = [(a, b) for a, b in stable if at is not None and a < at < b]
+    if not home:
+        where = "no arrival probability of this link stabilizes the loop" if not stable else f"stable only in {spans}"
+        return Judgement("fail", "none", f"the loop is not stable at the request's point {point}; {where}")
+    a, b = home[0]
+    above, below = _compare(a, None, req.value, False, True), _compare(b, None, req.value, False, False)
+    measured = f"stable interval ({a:.6g}, {b:.6g})"
+    detail = (
+        f"no critical value near 1: the loop is stable for this link only in ({a:.6g}, {b:.6g}), which holds the "
+        f"request's point {point} (the estimator's assumed arrival rate is fixed); the limit must lie in it"
+    )
+    if above is None or below is None:
+        return _verdict(None, measured, detail)
+    return Judgement("pass" if above and below else "fail", measured, detail)
 
 
 __all__ = ["COMMAND_OF", "OUTAGE_KEYS", "Judgement", "Requirement", "judge", "parse_requirements"]

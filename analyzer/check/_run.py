@@ -105,6 +105,23 @@ def _worst_rate(report: Any) -> tuple[float | None, str | None]:
     return best[0], (fraction_text(best[1]) if best[1] is not None else None)
 
 
+def link_points(req: Any) -> dict[str, str]:
+    """The request's value of each link parameter a loop's critical value varies, by its JSON pointer.
+
+    ``{"/actuator_channel/arrival_probability": "1/2", ...}``: where the loop's own operating point
+    lies on each link, to find the stable interval it belongs to (:mod:`kfio.check._requirements`).
+    """
+    from ..loop import parameter_of, sensor_links
+
+    links = [(lk.pointer, lk.channel) for lk, _rows in sensor_links(req)] + [("/actuator_channel", req.actuator)]
+    out = {}
+    for pointer, channel in links:
+        found = parameter_of(pointer, channel)
+        if found is not None:
+            out[found[0]] = fraction_text(channel.params[found[0].rsplit("/", 1)[1]])
+    return out
+
+
 def run_one(command: str, tree: dict[str, Any], seconds: float) -> tuple[str, Any, float]:
     """Run ``command`` on the request ``tree``: ``("ok", payload, s)`` or ``("error", (kind, message), s)``.
 
@@ -117,7 +134,12 @@ def run_one(command: str, tree: dict[str, Any], seconds: float) -> tuple[str, An
         if command == "loop":  # the report of ``kfio loop --json`` (kfio.loop)
             from ..loop import analyze_loop, parse_loop_request
 
-            return "ok", {"report": analyze_loop(parse_loop_request(tree)).to_dict()}, time.perf_counter() - t0
+            loop_request = parse_loop_request(tree)
+            payload: dict[str, Any] = {
+                "report": analyze_loop(loop_request).to_dict(),
+                "link_points": link_points(loop_request),
+            }
+            return "ok", payload, time.perf_counter() - t0
         request = parse_request(tree, DEFAULT_LIMITS.for_command(command))
         budget = Budget(seconds=seconds)
         if command == "analyze":

@@ -5,7 +5,7 @@ Mo and Sinopoli (2012); docs/design-answers.md and docs/regions.md say which is 
 
 from __future__ import annotations
 
-from ._critical_parameter import CriticalParameter, ParameterConstraint, critical_parameter
+from ._critical_parameter import CriticalParameter, ParameterConstraint, channel_parameter, critical_parameter
 from ._design_options import analyze_options
 from ._ge_boundary import boundary_lines
 from ._ge_region import Crossing, GeMap, GeRegion, GeStructure, LineResult, ge_region
@@ -37,6 +37,7 @@ __all__ = [
     "TailReport",
     "analyze_options",
     "boundary_lines",
+    "channel_parameter",
     "critical_parameter",
     "exact_region_grid",
     "ge_region",

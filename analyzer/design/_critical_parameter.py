@@ -92,18 +92,34 @@ def parse_parameter(request: Request, pointer: str) -> Parameter:
         group, chan, rest = names.index(rest[1]), ch.channels[names.index(rest[1])][1], rest[2:]
     else:
         chan = ch
+    found = channel_parameter(chan, rest)
+    if found is None:
+        raise InvalidInput(where, f"{pointer[:80]!r} names no arrival probability of this {chan.model} channel")
+    entries, complement, value = found
+    return Parameter(pointer, group, entries, complement, value)
+
+
+def channel_parameter(chan: MarkovChannel, rest: Sequence[str]) -> tuple[tuple[int, ...], bool, Fraction] | None:
+    """The entries of ``chan.table`` that the pointer tokens ``rest`` name, set to ``x`` or ``1 - x``.
+
+    ``(entries, complement, value)``: the table entries that become ``1 - x`` (``complement``)
+    or ``x``, and the channel's present value of the parameter; ``None`` when ``rest``
+    (``["recovery_rate"]``, ``["arrival_probability", "01"]``, ...) names no probability of
+    ``chan`` (the table of the module docstring).
+    """
+    rest = list(rest)
     if chan.model == "bernoulli" and rest == ["arrival_probability"]:
-        return Parameter(pointer, group, (0,), False, chan.table[0])
+        return (0,), False, chan.table[0]
     if chan.model == "gilbert_elliott" and rest == ["recovery_rate"]:
-        return Parameter(pointer, group, (0,), False, chan.table[0])
+        return (0,), False, chan.table[0]
     if chan.model == "gilbert_elliott" and rest == ["failure_rate"]:
-        return Parameter(pointer, group, (1,), True, 1 - chan.table[1])
+        return (1,), True, 1 - chan.table[1]
     if chan.model == "markov" and len(rest) == 2 and rest[0] == "arrival_probability":
         key = rest[1]
         if len(key) == chan.order and all(c in "01" for c in key):
             h = int(key, 2) if chan.order else 0
-            return Parameter(pointer, group, (h,), False, chan.table[h])
-    raise InvalidInput(where, f"{pointer[:80]!r} names no arrival probability of this {chan.model} channel")
+            return (h,), False, chan.table[h]
+    return None
 
 
 def _symbolic_group_matrix(channel: MarkovChannel, period: int, phases: set[int], param: Parameter | None) -> Any:
@@ -278,4 +294,4 @@ def critical_parameter(
     )
 
 
-__all__ = ["CriticalParameter", "Parameter", "critical_parameter", "parse_parameter"]
+__all__ = ["CriticalParameter", "Parameter", "channel_parameter", "critical_parameter", "parse_parameter"]

@@ -6,31 +6,82 @@ Franceschetti, Poolla and Sastry 2007) is a Markov jump linear system;
 its mean-square stability, stationary cost and the critical reliability of
 each link are decided exactly over Q (Costa, Fragoso and Marques 2005).
 See ``docs/loop.md``.
+
+``kfio.loop`` (the attribute of the package ``kfio``) is the typed function
+:func:`loop`; this subpackage stays importable under the same name
+(``from kfio.loop import analyze_loop``).  Its names load on first use, so
+importing it costs nothing until then: ``kfio`` imports it at start-up to
+keep the function, not the subpackage, as its attribute.
 """
 
 from __future__ import annotations
 
-import sys
-import types
-from typing import Any
+import importlib
+from typing import TYPE_CHECKING, Any
 
-from ._cost import stationary_cost
-from ._critical import parameter_of
-from ._mjls import loop_mjls, sensor_links
-from ._model import LoopRequest, load_loop_request, parse_loop_request
-from ._region import region
-from ._report import LoopReport, analyze_loop, loop, loop_report_view, loop_request
-from ._verdict import decide
+#: Public name -> the private module (relative to this package) that defines it.
+_LAZY = {
+    "BoundaryPoint": "._region",
+    "EstimatorAlone": "._parts",
+    "LoopReport": "._report",
+    "LoopRequest": "._model",
+    "OptimalFilter": "._parts",
+    "Region": "._region",
+    "UdpOuterBound": "._udp_bounds",
+    "UdpRegionBounds": "._udp_bounds",
+    "analyze_loop": "._report",
+    "decide": "._verdict",
+    "load_loop_request": "._model",
+    "loop": "._api",
+    "loop_mjls": "._mjls",
+    "loop_request": "._api",
+    "parameter_of": "._critical",
+    "parse_loop_request": "._model",
+    "region": "._region",
+    "sensor_links": "._mjls",
+    "stationary_cost": "._cost",
+}
+
+if TYPE_CHECKING:
+    from ._api import loop, loop_request
+    from ._cost import stationary_cost
+    from ._critical import parameter_of
+    from ._mjls import loop_mjls, sensor_links
+    from ._model import LoopRequest, load_loop_request, parse_loop_request
+    from ._parts import EstimatorAlone, OptimalFilter
+    from ._region import BoundaryPoint, Region, region
+    from ._report import LoopReport, analyze_loop
+    from ._udp_bounds import UdpOuterBound, UdpRegionBounds
+    from ._verdict import decide
+
+
+def __getattr__(name: str) -> Any:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(module, __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))
+
 
 __all__ = [
+    "BoundaryPoint",
+    "EstimatorAlone",
     "LoopReport",
     "LoopRequest",
+    "OptimalFilter",
+    "Region",
+    "UdpOuterBound",
+    "UdpRegionBounds",
     "analyze_loop",
     "decide",
     "load_loop_request",
     "loop",
     "loop_mjls",
-    "loop_report_view",
     "loop_request",
     "parameter_of",
     "parse_loop_request",
@@ -38,35 +89,3 @@ __all__ = [
     "sensor_links",
     "stationary_cost",
 ]
-
-
-class _CallableModule(types.ModuleType):
-    """``kfio.loop`` is both this package and the function :func:`loop`: calling the package calls it."""
-
-    def __call__(self, *args: Any, **kwargs: Any) -> LoopReport:
-        return loop(*args, **kwargs)
-
-
-sys.modules[__name__].__class__ = _CallableModule
-
-
-def _call_section() -> str:
-    """What ``help(kfio.loop)`` shows first: the call's signature (read from :func:`loop`) and an example."""
-    import inspect
-
-    example = """
-    >>> import kfio
-    >>> request = {"system": {"A": [[1.25]], "B": [[1]], "C": [[1]], "Q": [[1]], "R": [[0.5]]},
-    ...            "channel": {"model": "bernoulli", "arrival_probability": 0.8},
-    ...            "actuator_channel": {"model": "bernoulli", "arrival_probability": 0.9},
-    ...            "controller": {"lqg": {"W": [[1]], "U": [[0.5]]}}, "cost": {"W": [[1]], "U": [[0.5]]}}
-    >>> str(kfio.loop.analyze_loop(kfio.loop.parse_loop_request(request)).verdict)
-    'stable'
-"""
-    return (
-        f"\n\nCalling the package calls :func:`loop`:\n\n    kfio.loop{inspect.signature(loop)}\n\n"
-        f"{inspect.getdoc(loop) or ''}\n\nA loop request (the JSON of ``kfio loop``), from Python::\n{example}"
-    )
-
-
-__doc__ = (__doc__ or "") + _call_section()

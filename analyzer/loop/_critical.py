@@ -28,6 +28,7 @@ the optimal design (Schenato, Sinopoli, Franceschetti, Poolla and Sastry
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any, Callable
@@ -95,18 +96,31 @@ class Critical:
         }
 
 
+#: The parameter a link's critical value varies, by channel model.
+LINK_PARAMETER = {"bernoulli": "arrival_probability", "gilbert_elliott": "recovery_rate"}
+
+
 def parameter_of(pointer: str, ch: MarkovChannel) -> tuple[str, Callable[[Fraction], MarkovChannel]] | None:
-    """The parameter varied for a link, and the channel at a value; ``None`` when not defined."""
-    if ch.model == "bernoulli":
-        return f"{pointer}/arrival_probability", lambda x: MarkovChannel(
-            "bernoulli", 0, (x,), {"arrival_probability": x}
-        )
-    if ch.model == "gilbert_elliott":
-        p = ch.params["failure_rate"]
-        return f"{pointer}/recovery_rate", lambda x: MarkovChannel(
-            "gilbert_elliott", 1, (x, 1 - p), {"failure_rate": p, "recovery_rate": x}
-        )
-    return None
+    """The parameter varied for a link, and the channel at a value; ``None`` when not defined.
+
+    The parameter's table entries come from the core's channel-parameter parser
+    (:func:`kfio.design.channel_parameter`, the one of ``options.analyze.critical_parameter``).
+    """
+    from ..design import channel_parameter
+
+    name = LINK_PARAMETER.get(ch.model)
+    found = None if name is None else channel_parameter(ch, [name])
+    if name is None or found is None:
+        return None
+    entries, complement, _ = found
+
+    def at(x: Fraction) -> MarkovChannel:
+        table = list(ch.table)
+        for e in entries:
+            table[e] = 1 - x if complement else x
+        return dataclasses.replace(ch, table=tuple(table), params={**ch.params, name: x})
+
+    return f"{pointer}/{name}", at
 
 
 def _text(f: flint.fmpz_poly, ball: flint.arb) -> str | None:

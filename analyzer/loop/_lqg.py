@@ -243,7 +243,7 @@ def with_lqg_gains(req: Any) -> Any:
     check_lqg_links(req)
     crit = actuator_critical(req)
     if optimal_reasons(req, crit):
-        return dataclasses.replace(req, K=(), L=())
+        return dataclasses.replace(req, estimator=(), feedback=())
     S, _ = control_fixed_point(req)
     if S.matrix is None:
         raise NumericalFailure(
@@ -263,7 +263,7 @@ def with_lqg_gains(req: Any) -> Any:
     L = np.linalg.solve(B.T @ Sm @ B + U, B.T @ Sm @ A)
     K_f = Pm @ C.T @ np.linalg.inv(C @ Pm @ C.T + R)
     K = K_f if req.form == "filter" else A @ K_f
-    return dataclasses.replace(req, K=_exact(K), L=_exact(L))
+    return dataclasses.replace(req, estimator=_exact(K), feedback=_exact(L))
 
 
 def lqg_part(req: Any, budget: Any = None, with_bounds: bool = True) -> LqgPart:

@@ -244,7 +244,7 @@ def loop_maps(req: LoopRequest, gamma: Sequence[int], nu: int, nubar: Fraction) 
     n, m, p = req.n, req.m, req.p
     d = loop_state_size(req)
     width = d + n + p
-    A, B, C, K, L = (qmat(x) for x in (req.system.A, req.B, req.system.C, req.K, req.L))
+    A, B, C, K, L = (qmat(x) for x in (req.system.A, req.B, req.system.C, req.estimator, req.feedback))
 
     def sel(start: int, size: int) -> flint.fmpq_mat:
         out = flint.fmpq_mat(size, width)
@@ -354,7 +354,7 @@ def estimator_mjls(req: LoopRequest, overrides: dict[str, MarkovChannel] | None 
     links = [link_of(lk.label, lk.pointer, overrides.get(lk.pointer, lk.channel)) for lk, _ in sensors]
     rows_of = [rows for _, rows in sensors]
     n, p = req.n, req.p
-    A, C, K = qmat(req.system.A), qmat(req.system.C), qmat(req.K)
+    A, C, K = qmat(req.system.A), qmat(req.system.C), qmat(req.estimator)
     modes, P, pi = _reduced(links)
     zero_a = flint.fmpq_mat(0, n)
     zero_e = flint.fmpq_mat(0, n + p)

@@ -6,18 +6,22 @@ fields (Schenato, Sinopoli, Franceschetti, Poolla and Sastry 2007, Sec. II)::
     {"system": {"A": ..., "B": ..., "C": ..., "Q": ..., "R": ..., "sensors": ...},
      "channel": <the sensor packets' channel, any kfio channel>,
      "actuator_channel": <bernoulli | gilbert_elliott | markov>,
-     "controller": {"gains": {"K": ..., "L": ...}, "form": "predictor" | "filter"},
+     "controller": {"gains": {"feedback": F, "estimator": E}, "form": "predictor" | "filter"},
      "cost": {"W": ..., "U": ...},
      "options": {"loop": {"protocol": "tcp" | "udp", "on_loss": "zero" | "hold", "region": 11}}}
 
 The plant is ``x[t+1] = A x[t] + B a[t] + w[t]`` where ``a[t]`` is the input
 the actuator applies: ``u[t]`` when the actuator packet arrives, else ``0``
 (``on_loss: zero``, the paper's model) or ``a[t-1]`` (``on_loss: hold``).
-The control law is ``u[t] = -L x_hat[t]`` (python-control's sign for
-``dlqr``).  ``K`` is the estimator gain, in the form python-control's ``dlqe``
-returns it (``predictor``: ``x_hat[t+1|t] = A x_hat[t|t-1] + B a_hat[t] +
-K (y[t] - C x_hat[t|t-1])``) or in ``filter`` form (``x_hat[t|t] =
-x_hat[t|t-1] + K (y[t] - C x_hat[t|t-1])``, then ``u[t] = -L x_hat[t|t]``).
+The gains are named by their role, never by a letter: the control law is
+``u[t] = -F x_hat[t]`` with ``F = feedback`` (python-control's ``dlqr`` returns
+it as ``K``), and ``E = estimator`` is the estimator gain, in the form
+python-control's ``dlqe`` returns it as ``L`` (``predictor``: ``x_hat[t+1|t] =
+A x_hat[t|t-1] + B a_hat[t] + E (y[t] - C x_hat[t|t-1])``) or in ``filter``
+form (``x_hat[t|t] = x_hat[t|t-1] + E (y[t] - C x_hat[t|t-1])``, then
+``u[t] = -F x_hat[t|t]``).  Schenato, Sinopoli, Franceschetti, Poolla and
+Sastry (2007) call them ``L`` and ``K``, python-control the other way round,
+so the letters are refused with a message saying which is which.
 Lost sensor rows contribute nothing to the innovation.  ``cost`` weighs
 ``x' W x + a' U a`` (default ``W = I``, ``U = 0``).
 
@@ -63,16 +67,19 @@ MAX_REGION_POINTS = 41
 class LoopRequest:
     """A validated loop request (see the module docstring for the model).
 
-    ``controller`` is ``"gains"`` when the request gives ``K`` and ``L``, and
-    ``"lqg"`` when kfio computed them from the weights (:mod:`kfio.loop._lqg`).
+    ``controller`` is ``"gains"`` when the request gives ``feedback`` and
+    ``estimator``, and ``"lqg"`` when kfio computed them from the weights
+    (:mod:`kfio.loop._lqg`).  ``feedback`` is ``F`` of ``u = -F x_hat``
+    (python-control's ``dlqr`` ``K``), ``estimator`` the estimator gain
+    (python-control's ``dlqe`` ``L``).
     """
 
     system: System
     B: Matrix
     channel: Channel
     actuator: MarkovChannel
-    K: Matrix
-    L: Matrix
+    estimator: Matrix
+    feedback: Matrix
     form: str
     W: Matrix
     U: Matrix
@@ -81,6 +88,16 @@ class LoopRequest:
     controller: str = "gains"
     time_budget_s: float | None = None
     region: int | None = None
+
+    @property
+    def K(self) -> Matrix:
+        """The estimator gain under its letter in Schenato, Sinopoli, Franceschetti, Poolla and Sastry (2007): :attr:`estimator`."""
+        return self.estimator
+
+    @property
+    def L(self) -> Matrix:
+        """The feedback gain under its letter in Schenato, Sinopoli, Franceschetti, Poolla and Sastry (2007): :attr:`feedback`."""
+        return self.feedback
 
     @property
     def n(self) -> int:
@@ -93,6 +110,28 @@ class LoopRequest:
     @property
     def p(self) -> int:
         return len(self.system.C)
+
+
+#: The gains of a ``controller.gains`` object, by role, and their shapes (``n`` states, ``m`` inputs, ``p`` outputs).
+GAIN_SHAPES = {"feedback": "m x n", "estimator": "n x p"}
+
+#: Why the letters are refused: the paper and python-control use them the other way round.
+LETTERS_REFUSED = (
+    "kfio names gains by role: 'feedback' (u = -F x_hat; python-control's dlqr K) and 'estimator' "
+    "(python-control's dlqe L); Schenato, Sinopoli, Franceschetti, Poolla and Sastry (2007) write them L and K, "
+    "the other way round, so the letters are ambiguous"
+)
+
+
+def _no_letters(gains: Any) -> Any:
+    """``gains`` unchanged, or :class:`InvalidInput` at ``/controller/gains/K`` (or ``L``) saying which gain is which."""
+    if isinstance(gains, dict):
+        for letter in ("K", "L"):
+            if letter in gains:
+                raise InvalidInput(
+                    f"/controller/gains/{letter}", f"{LETTERS_REFUSED}; give {letter!r} as 'feedback' or 'estimator'"
+                )
+    return gains
 
 
 def _identity(n: int) -> Matrix:
@@ -160,16 +199,16 @@ def parse_loop_request(obj: Any, limits: Limits = DEFAULT_LIMITS) -> LoopRequest
         if "U" not in ctrl["lqg"] or not is_psd(U, strict=True, where="/controller/lqg/U"):
             raise InvalidInput("/controller/lqg/U", "U is required and must be positive definite for LQG gains")
         source = "lqg"
-        K = L = None
+        estimator = feedback = None
         # filter form by default: the optimal TCP-like controller applies u = -L x_hat[t|t]
         form = ctrl.get("form", "filter")
         if form not in FORMS:
             raise InvalidInput("/controller/form", f"form must be one of {', '.join(FORMS)}; got {form!r}")
     else:
         check_keys(ctrl, "/controller", {"gains", "form"}, {"gains"})
-        gains = check_keys(ctrl["gains"], "/controller/gains", {"K", "L"}, {"K", "L"})
-        K = _shaped(gains["K"], "/controller/gains/K", "K", n, p, limits)
-        L = _shaped(gains["L"], "/controller/gains/L", "L", m, n, limits)
+        gains = check_keys(_no_letters(ctrl["gains"]), "/controller/gains", set(GAIN_SHAPES), set(GAIN_SHAPES))
+        feedback = _shaped(gains["feedback"], "/controller/gains/feedback", "feedback", m, n, limits)
+        estimator = _shaped(gains["estimator"], "/controller/gains/estimator", "estimator", n, p, limits)
         form = ctrl.get("form", "predictor")
         if form not in FORMS:
             raise InvalidInput("/controller/form", f"form must be one of {', '.join(FORMS)}; got {form!r}")
@@ -204,7 +243,20 @@ def parse_loop_request(obj: Any, limits: Limits = DEFAULT_LIMITS) -> LoopRequest
                         f"region must be an integer number of points in [2, {MAX_REGION_POINTS}]",
                     )
     req = LoopRequest(
-        system, B, channel, actuator, K or (), L or (), form, W, U, protocol, on_loss, source, budget, region
+        system,
+        B,
+        channel,
+        actuator,
+        estimator or (),
+        feedback or (),
+        form,
+        W,
+        U,
+        protocol,
+        on_loss,
+        source,
+        budget,
+        region,
     )
     if source == "lqg":
         from ._lqg import with_lqg_gains
@@ -218,4 +270,13 @@ def load_loop_request(text: str | bytes, limits: Limits = DEFAULT_LIMITS) -> Loo
     return parse_loop_request(load_json(text), limits)
 
 
-__all__ = ["FORMS", "ON_LOSS", "PROTOCOLS", "LoopRequest", "load_loop_request", "parse_loop_request"]
+__all__ = [
+    "FORMS",
+    "GAIN_SHAPES",
+    "LETTERS_REFUSED",
+    "ON_LOSS",
+    "PROTOCOLS",
+    "LoopRequest",
+    "load_loop_request",
+    "parse_loop_request",
+]

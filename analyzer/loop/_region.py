@@ -10,21 +10,52 @@ the optimal design; this is the region of the given gains).
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any
 
 from .._budget import Budget
+from .._reporting import ReportPart
 from ..model import MarkovChannel, PerSensorChannel
-from ._critical import critical_value
+from ._critical import Critical, critical_value, parameter_of
 from ._mjls import Mjls, loop_mjls
 from ._model import MAX_REGION_POINTS, LoopRequest
 
 
+@dataclass(frozen=True)
+class BoundaryPoint(ReportPart):
+    """A point ``(lam, nu_c(lam))`` of the boundary: the exact critical actuator value at one sensor value."""
+
+    sensor: Fraction
+    critical: Critical
+
+    @property
+    def sensor_arrival_probability(self) -> float:
+        return float(self.sensor)
+
+    @property
+    def critical_actuator_arrival_probability(self) -> float | None:
+        return self.critical.value
+
+    @property
+    def critical_actuator_arrival_probability_exact(self) -> str | None:
+        return self.critical.exact
+
+
+@dataclass(frozen=True)
+class Region(ReportPart):
+    """The boundary of the stable region in the (sensor, actuator) arrival-probability plane."""
+
+    boundary: tuple[BoundaryPoint, ...]
+
+
 def _bernoulli(x: Fraction) -> MarkovChannel:
-    return MarkovChannel("bernoulli", 0, (x,), {"arrival_probability": x})
+    """The Bernoulli channel with arrival probability ``x`` (the channel :func:`parameter_of` builds)."""
+    found = parameter_of("/channel", MarkovChannel("bernoulli", 0, (x,), {"arrival_probability": x}))
+    assert found is not None  # a Bernoulli channel always has its arrival probability
+    return found[1](x)
 
 
-def region(req: LoopRequest, points: int, budget: Budget | None = None) -> dict[str, Any] | None:
+def region(req: LoopRequest, points: int, budget: Budget | None = None) -> Region | None:
     """``points`` sensor probabilities ``(i + 1/2) / points`` and the exact critical actuator probability at each.
 
     ``budget`` (:class:`kfio.Budget`) is checked at every point; :class:`kfio.errors.BudgetExceeded` when spent.
@@ -42,21 +73,8 @@ def region(req: LoopRequest, points: int, budget: Budget | None = None) -> dict[
         def build(ch: MarkovChannel, lam: Fraction = lam) -> Mjls:
             return loop_mjls(req, {"/channel": _bernoulli(lam), "/actuator_channel": ch})
 
-        c = critical_value("actuator", "/actuator_channel", req.actuator, build, budget)
-        rows.append(
-            {
-                "sensor_arrival_probability": float(lam),
-                "sensor_arrival_probability_exact": f"{lam.numerator}/{lam.denominator}",
-                "critical_actuator_arrival_probability": c.value,
-                "critical_actuator_arrival_probability_exact": c.exact,
-                "note": None if c.value is not None else c.note,
-            }
-        )
-    return {
-        "boundary": rows,
-        "rule": "stable iff the actuator arrival probability exceeds the critical value at that sensor "
-        "arrival probability (null: no actuator probability stabilizes the loop there)",
-    }
+        rows.append(BoundaryPoint(lam, critical_value("actuator", "/actuator_channel", req.actuator, build, budget)))
+    return Region(tuple(rows))
 
 
-__all__ = ["MAX_REGION_POINTS", "region"]
+__all__ = ["MAX_REGION_POINTS", "BoundaryPoint", "Region", "region"]

@@ -1,19 +1,21 @@
 """``kfio.loop``: the exact verdict, cost and critical link reliabilities of a closed loop.
 
-One code path for the three doors: :func:`loop` (Python), ``kfio loop FILE``
+One code path for the three doors: :func:`kfio.loop` (Python), ``kfio loop FILE``
 and ``POST /v1/loop`` all validate a loop request with
 :func:`kfio.loop._model.parse_loop_request` and call :func:`analyze_loop`.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Any, Callable, Mapping
+from typing import Any, Callable
 
 from .._budget import Budget
 from .._reporting import Report
+from .._verdicts import Verdict
 from ..errors import BudgetExceeded
 from ..model import (
     MAX_EXACT_DIGITS,
@@ -22,20 +24,18 @@ from ..model import (
     Request,
     capped_fraction_text,
     decimal_enclosure,
-    fraction_text,
 )
 from ._cost import stationary_cost
 from ._critical import Critical, critical_value, parameter_of
-from ._lqg_critical import ActuatorCritical
-from ._lqg_types import LqgCostBounds, LqgOptimal, LqgPart, RiccatiSolve
+from ._lqg_types import LqgPart
 from ._mjls import Mjls, estimator_mjls, loop_mjls, sensor_links
 from ._model import LoopRequest
-from ._region import region
+from ._parts import EstimatorAlone, OptimalFilter
+from ._region import Region, region
+from ._udp_bounds import UdpRegionBounds
 from ._verdict import decide
 
 LQG_PAPER = "Schenato, Sinopoli, Franceschetti, Poolla and Sastry 2007, Sec. V"
-THEOREM = "Costa, Fragoso and Marques 2005, Theorem 3.9 (mean-square stability of Markov jump linear systems)"
-MODEL = "Schenato, Sinopoli, Franceschetti, Poolla and Sastry 2007, Sec. II (sensor and actuator packet losses)"
 
 
 def _text(x: Fraction | None) -> str | None:
@@ -47,13 +47,9 @@ def _enclosure(box: tuple[Fraction, Fraction] | None) -> list[str] | None:
     return None if box is None else list(decimal_enclosure(*box))
 
 
-def _matrix(m: Any) -> list[list[str]]:
-    return [[fraction_text(x) for x in row] for row in m]
-
-
 @dataclass(frozen=True)
 class LoopReport(Report):
-    """The report of :func:`loop`: ``to_dict()`` is the JSON of ``kfio loop --json`` and ``POST /v1/loop``.
+    """The report of :func:`kfio.loop`: ``to_dict()`` is the JSON of ``kfio loop --json`` and ``POST /v1/loop``.
 
     Attributes
     ----------
@@ -85,7 +81,7 @@ class LoopReport(Report):
         (sensor, actuator) arrival-probability plane (:mod:`kfio.loop._region`).
     """
 
-    verdict: str
+    verdict: Verdict
     exact: bool
     certified: bool
     certificate: str
@@ -97,12 +93,12 @@ class LoopReport(Report):
     critical: tuple[Critical, ...]
     sensor_critical: Critical | None
     actuator_critical: Critical | None
-    estimator_alone: dict[str, Any] | None
+    estimator_alone: EstimatorAlone | None
     request: LoopRequest
-    region: dict[str, Any] | None
+    region: Region | None
     lqg: LqgPart | None = None
     notes: tuple[str, ...] = field(default=())
-    udp_region_bounds: dict[str, Any] | None = None
+    udp_region_bounds: UdpRegionBounds | None = None
     partial: bool = False
     spectral_radius_enclosure: tuple[Fraction, Fraction] | None = None
     certified_cost: float | None = None
@@ -157,140 +153,18 @@ class LoopReport(Report):
         return self.actuator_critical.exact if self.actuator_critical else None
 
 
-def loop_report_view(r: LoopReport) -> dict[str, Any]:
-    """The JSON fields of a :class:`LoopReport` (encoded by :func:`kfio._json.encode`)."""
-    req = r.request
-    return {
-        "verdict": r.verdict,
-        "theorem": THEOREM,
-        "model": MODEL,
-        "exact": r.exact,
-        "certified": r.certified,
-        "certificate": r.certificate,
-        "partial": r.partial,
-        "spectral_radius": r.spectral_radius,
-        "spectral_radius_exact": r.spectral_radius_exact,
-        "spectral_radius_enclosure": _enclosure(r.spectral_radius_enclosure),
-        "operator_size": r.operator_size,
-        "modes": r.modes,
-        "cost": r.cost,
-        "cost_exact": r.cost_exact,
-        "cost_exact_digits": r.cost_exact_digits,
-        "cost_enclosure": r.cost_enclosure,
-        "critical_sensor_arrival_probability": r.critical_sensor_arrival_probability,
-        "critical_sensor_arrival_probability_exact": r.critical_sensor_arrival_probability_exact,
-        "critical_actuator_arrival_probability": r.critical_actuator_arrival_probability,
-        "critical_actuator_arrival_probability_exact": r.critical_actuator_arrival_probability_exact,
-        "critical_values": [c.as_dict() for c in r.critical],
-        "estimator_alone": r.estimator_alone,
-        "region": r.region,
-        "lqg": None if r.lqg is None else _lqg_view(r.lqg),
-        "udp_region_bounds": r.udp_region_bounds,
-        "loop": {
-            "protocol": req.protocol,
-            "on_loss": req.on_loss,
-            "form": req.form,
-            "controller": req.controller,
-            "K": _matrix(req.K) if req.K else None,
-            "L": _matrix(req.L) if req.L else None,
-        },
-        "notes": list(r.notes),
-    }
-
-
-def _cost_bounds_view(b: LqgCostBounds) -> dict[str, Any]:
-    out: dict[str, Any] = {
-        "lower": b.lower,
-        "upper": b.upper,
-        "lower_from": b.lower_from,
-        "upper_from": b.upper_from,
-        "paper_upper": b.paper_upper,
-        "reason": b.reason,
-    }
-    if b.S is not None:
-        out.update(
-            formula="J_inf = tr(S Q) + tr((A'SA + W - S) E[P(t|t)]), S the control MARE's fixed point",
-            covariance="filtered P(t|t) of the optimal time-varying Kalman filter (time average of its expectation)",
-            tr_S_Q=b.tr_S_Q,
-            S=b.S,
-            applies_to="the optimal TCP-like controller (time-varying Kalman filter, stationary L); "
-            "the exact `cost` above is that of the stationary gains, at least J_inf",
-            reference=LQG_PAPER,
-        )
-    return out
-
-
-def _actuator_view(a: ActuatorCritical) -> dict[str, Any]:
-    return {
-        "lower": a.lower,
-        "upper": a.upper,
-        "is_exact": a.is_exact,
-        "from": a.source,
-        "stabilizable": a.stabilizable,
-    }
-
-
-def _riccati_view(r: RiccatiSolve | None) -> dict[str, Any] | None:
-    if r is None:
-        return None
-    return {
-        "equation": r.equation,
-        "method": "Newton's method (policy iteration) from stabilizing gains, continued from probability 1",
-        "relative_residual": r.residual,
-        "newton_steps": r.newton_steps,
-        "continuation_points": r.continuation_points,
-        "trace": r.trace,
-    }
-
-
-def _optimal_view(o: LqgOptimal) -> dict[str, Any]:
-    a = o.actuator
-    return {
-        "verdict": o.verdict,
-        "reasons": list(o.reasons),
-        "critical_sensor_arrival_probability": o.critical_sensor,
-        "critical_sensor_arrival_probability_exact": o.critical_sensor_exact,
-        "critical_sensor_from": "the optimal time-varying filter (kfio analyze, Rohr, Marelli and Fu 2014, Theorem 1)",
-        "critical_sensor_note": o.sensor_note,
-        "critical_actuator_arrival_probability": a.value,
-        "critical_actuator_arrival_probability_exact": a.exact,
-        "critical_actuator": _actuator_view(a),
-        "cost_bounds": _cost_bounds_view(o.cost_bounds),
-        "statement": o.statement,
-        "reference": LQG_PAPER,
-    }
-
-
-def _lqg_view(p: LqgPart) -> dict[str, Any]:
-    """The ``lqg`` block: ``optimal`` (the optimal TCP-like controller) and the stationary gains' derivation."""
-    return {
-        "optimal": _optimal_view(p.optimal),
-        "stationary_gains": {
-            "exist": p.gains,
-            "form": p.form,
-            "applies_to": "the top level: the exact analysis of these stationary gains",
-            "control_riccati": _riccati_view(p.control_riccati),
-            "estimation_riccati": _riccati_view(p.estimation_riccati),
-        },
-    }
-
-
-def _bernoulli_only(ch: MarkovChannel) -> bool:
-    return ch.model == "bernoulli"
-
-
-def _optimal_filter_critical(req: LoopRequest) -> tuple[float | None, str | None, str | None]:
+def _optimal_filter_critical(req: LoopRequest) -> OptimalFilter:
     """The optimal time-varying filter's critical arrival probability (``kfio.analyze``, Theorem 1)."""
     if isinstance(req.channel, PerSensorChannel) or req.channel.model != "bernoulli":
-        return None, None, "defined for one Bernoulli sensor packet"
+        return OptimalFilter(None, None, "defined for one Bernoulli sensor packet")
     from .._api import analyze
     from ..errors import AnalyzerError
 
     try:
         rep = analyze(Request(system=req.system, channel=req.channel))
     except AnalyzerError as exc:
-        return None, None, str(exc)
-    return rep.critical_arrival_probability, _capped_text(rep.critical_arrival_probability_exact), None
+        return OptimalFilter(None, None, str(exc))
+    return OptimalFilter(rep.critical_arrival_probability, _capped_text(rep.critical_arrival_probability_exact), None)
 
 
 def _capped_text(text: str | None) -> str | None:
@@ -300,7 +174,7 @@ def _capped_text(text: str | None) -> str | None:
     return text
 
 
-def _estimator_alone(req: LoopRequest, with_critical: bool, budget: Budget | None = None) -> dict[str, Any]:
+def _estimator_alone(req: LoopRequest, with_critical: bool, budget: Budget | None = None) -> EstimatorAlone:
     sys = estimator_mjls(req)
     dec = decide(sys, budget)
     trace = stationary_cost(sys, dec.moments) if dec.moments is not None else None
@@ -312,7 +186,8 @@ def _estimator_alone(req: LoopRequest, with_critical: bool, budget: Budget | Non
         crit = critical_value(
             lk.label, lk.pointer, lk.channel, lambda ch: estimator_mjls(req, {lk.pointer: ch}), budget
         )
-    opt, opt_exact, why = _optimal_filter_critical(req)
+    optimal = _optimal_filter_critical(req)
+    opt, opt_exact = optimal.critical_arrival_probability, optimal.critical_arrival_probability_exact
     mine = None
     if crit is not None and crit.value is not None:
         short = crit.exact is not None and len(crit.exact) <= 24
@@ -326,24 +201,16 @@ def _estimator_alone(req: LoopRequest, with_critical: bool, budget: Budget | Non
     ):
         theirs = opt_exact if len(opt_exact) <= 24 or opt is None else f"{opt:.4g}"
         statement = f"the optimal time-varying filter needs {theirs}; your steady-state gain needs {mine}"
-    return {
-        "verdict": dec.verdict,
-        "spectral_radius": dec.spectral_radius,
-        "spectral_radius_exact": dec.spectral_radius_exact,
-        "stationary_error_trace": trace_float,
-        "stationary_error_trace_exact": _text(trace),
-        "critical_sensor_arrival_probability": crit.value
-        if crit and crit.parameter.endswith("arrival_probability")
-        else None,
-        "critical_sensor_arrival_probability_exact": crit.exact
-        if crit and crit.parameter.endswith("arrival_probability")
-        else None,
-        "critical_value": crit.as_dict() if crit else None,
-        "optimal_filter_critical_arrival_probability": opt,
-        "optimal_filter_critical_arrival_probability_exact": opt_exact,
-        "optimal_filter_note": why,
-        "statement": statement,
-    }
+    return EstimatorAlone(
+        verdict=Verdict(dec.verdict),
+        spectral_radius=dec.spectral_radius,
+        spectral_radius_exact=dec.spectral_radius_exact,
+        stationary_error_trace=trace_float,
+        stationary_error_trace_exact=_text(trace),
+        critical=crit,
+        optimal_filter=optimal,
+        statement=statement,
+    )
 
 
 #: Largest second-moment operator (``modes * d (d + 1) / 2``) a loop request may need: beyond it even
@@ -376,7 +243,7 @@ def _without_gains(req: LoopRequest) -> LoopReport:
         f"the verdict is that of the optimal TCP-like controller ({LQG_PAPER}); lqg.optimal gives its critical values",
     )
     return LoopReport(
-        verdict="unstable",
+        verdict=Verdict.UNSTABLE,
         exact=True,
         certified=True,
         certificate="below the optimal TCP-like critical values (" + LQG_PAPER + ")",
@@ -396,19 +263,19 @@ def _without_gains(req: LoopRequest) -> LoopReport:
     )
 
 
-def _udp_part(req: LoopRequest, verdict: str) -> dict[str, Any]:
+def _udp_part(req: LoopRequest, verdict: str) -> UdpRegionBounds:
     """Bounds on the optimal UDP-like critical region, and where the request's point falls (:mod:`kfio.loop._udp_bounds`)."""
     from ._udp_bounds import udp_region_bounds
 
     out = udp_region_bounds(req, _optimal_filter_critical(req))
-    outer = out["outer"]
-    if verdict == "stable":
-        out["request_point_inside_optimal_region"] = True  # the inner bound: these gains are stable here
-    elif outer is not None and not isinstance(req.channel, PerSensorChannel):
+    outer = out.outer
+    if verdict == "stable":  # the inner bound: these gains are stable here
+        return dataclasses.replace(out, request_point_inside_optimal_region=True)
+    if outer is not None and not isinstance(req.channel, PerSensorChannel):
         lam, nu = req.channel.table[0], req.actuator.table[0]  # Bernoulli links: checked by udp_region_bounds
-        g, n_ = outer["sensor_arrival_probability_above"], outer["actuator_arrival_probability_above"]
+        g, n_ = outer.sensor_arrival_probability_above, outer.actuator_arrival_probability_above
         if (g is not None and float(lam) < g) or (n_ is not None and float(nu) < n_):
-            out["request_point_inside_optimal_region"] = False
+            return dataclasses.replace(out, request_point_inside_optimal_region=False)
     return out
 
 
@@ -502,7 +369,7 @@ def analyze_loop(req: LoopRequest, *, critical: bool = True, budget: Budget | No
     if skipped:
         notes.append("partial: the time budget ran out; not computed: " + "; ".join(skipped))
     return LoopReport(
-        verdict=dec.verdict,
+        verdict=Verdict(dec.verdict),
         exact=dec.exact,
         certified=dec.certified,
         certificate=dec.certificate,
@@ -532,129 +399,4 @@ def _skipped_critical(label: str, pointer: str, ch: MarkovChannel) -> Critical:
     return Critical(label, par[0] if par else pointer, None, None, (), "not computed: the time budget ran out")
 
 
-def loop(
-    system: Any,
-    controller: Mapping[str, Any],
-    channel: Any,
-    actuator_channel: Any,
-    *,
-    B: Any = None,
-    Q: Any = None,
-    R: Any = None,
-    cost: Mapping[str, Any] | None = None,
-    protocol: str = "tcp",
-    on_loss: str = "zero",
-    budget: Any = None,
-) -> LoopReport:
-    """Exact mean-square stability, cost and critical link reliabilities of a loop closed over lossy links.
-
-    The plant ``x[t+1] = A x + B a + w``, ``y = C x + v`` is observed through
-    the sensor packets (``channel``) and actuated through the actuator packets
-    (``actuator_channel``), with fixed gains ``K`` (estimator) and ``L``
-    (``u = -L x_hat``) as python-control's ``dlqe`` and ``dlqr`` return them
-    (Schenato, Sinopoli, Franceschetti, Poolla and Sastry 2007, Sec. II).  The
-    loop is a Markov jump linear system; it is mean-square stable iff the
-    spectral radius of its second-moment operator is below 1 (Costa,
-    Fragoso and Marques 2005, Thm 3.9), decided exactly over Q.
-
-    Parameters
-    ----------
-    system:
-        A :class:`kfio.System` with ``Q`` and ``R`` (then ``B`` is required),
-        or a discrete-time python-control ``StateSpace`` (``A``, ``B``, ``C``
-        from it; ``Q`` and ``R`` as keywords).
-    controller:
-        ``{"K": ..., "L": ..., "form": "predictor" | "filter"}``, or the
-        request's ``{"gains": {"K": ..., "L": ...}, "form": ...}``, or
-        ``{"lqg": {"W": ..., "U": ...}}``.
-    channel, actuator_channel:
-        Channels as for :func:`kfio.analyze` (``kfio.bernoulli(0.9)``, ...);
-        the actuator's is a one-packet channel.
-    cost:
-        ``{"W": ..., "U": ...}`` weighing ``x' W x + a' U a`` (default ``W = I``, ``U = 0``).
-    protocol, on_loss:
-        ``"tcp"`` (acknowledged actuator packets) or ``"udp"``; ``"zero"``
-        (a lost input is zero) or ``"hold"`` (the last input is held).
-    budget:
-        Seconds (as ``options.time_budget_s``, in ``[0.01, 3600]``) or a
-        :class:`kfio.Budget`, as for :func:`kfio.analyze`: the verdict raises
-        :class:`kfio.errors.BudgetExceeded` if it does not fit; later parts
-        are left out of a ``partial`` report.
-
-    Returns
-    -------
-    LoopReport
-        ``to_dict()`` is the JSON of ``kfio loop --json`` for :func:`loop_request` of the same arguments.
-    """
-    from ._model import parse_loop_request
-
-    work = budget if isinstance(budget, Budget) else None
-    tree = loop_request(
-        system,
-        controller,
-        channel,
-        actuator_channel,
-        B=B,
-        Q=Q,
-        R=R,
-        cost=cost,
-        protocol=protocol,
-        on_loss=on_loss,
-        budget=None if work is not None else budget,
-    )
-    return analyze_loop(parse_loop_request(tree), budget=work)
-
-
-def loop_request(
-    system: Any,
-    controller: Mapping[str, Any],
-    channel: Any,
-    actuator_channel: Any,
-    *,
-    B: Any = None,
-    Q: Any = None,
-    R: Any = None,
-    cost: Mapping[str, Any] | None = None,
-    protocol: str = "tcp",
-    on_loss: str = "zero",
-    budget: Any = None,
-) -> dict[str, Any]:
-    """The loop request file (JSON-ready dict) for the arguments of :func:`loop` (``budget`` in seconds)."""
-    from .._system import System
-    from ..errors import InvalidInput
-    from ..model import channel_tree, json_ready, python_tree
-
-    if isinstance(system, System):
-        sys_tree = system.to_dict()
-        if B is None:
-            raise InvalidInput("B", "a loop needs the input matrix B (or pass a python-control StateSpace)")
-        sys_tree["B"] = python_tree(B)
-        for key, val in (("Q", Q), ("R", R)):
-            if val is not None:
-                sys_tree[key] = python_tree(val)
-    elif all(hasattr(system, a) for a in ("A", "B", "C", "dt")):
-        plant = System.from_statespace(system, Q=Q, R=R)
-        sys_tree = plant.to_dict()
-        sys_tree["B"] = python_tree(system.B if B is None else B)
-    else:
-        raise InvalidInput(
-            "system", f"expected a kfio.System or a python-control StateSpace; got a {type(system).__name__}"
-        )
-    ctrl = python_tree(dict(controller))
-    if isinstance(ctrl, dict) and "K" in ctrl and "L" in ctrl:
-        ctrl = {"gains": {"K": ctrl.pop("K"), "L": ctrl.pop("L")}, **ctrl}
-    tree: dict[str, Any] = {
-        "system": sys_tree,
-        "channel": channel_tree(channel, bernoulli_number=True),
-        "actuator_channel": channel_tree(actuator_channel, bernoulli_number=True),
-        "controller": ctrl,
-    }
-    if cost is not None:
-        tree["cost"] = python_tree(dict(cost))
-    tree["options"] = {"loop": {"protocol": protocol, "on_loss": on_loss}}
-    if budget is not None:
-        tree["options"]["time_budget_s"] = python_tree(budget)
-    return json_ready(tree)
-
-
-__all__ = ["LoopReport", "analyze_loop", "loop", "loop_report_view", "loop_request"]
+__all__ = ["LoopReport", "analyze_loop"]

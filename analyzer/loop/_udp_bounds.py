@@ -30,19 +30,53 @@ lies inside the optimal UDP-like region, which lies inside the outer bound.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..model import PerSensorChannel, is_psd, to_float
+from .._reporting import ReportPart
+from ..model import PerSensorChannel, fraction_text, is_psd, to_float
+
+if TYPE_CHECKING:
+    from ._model import LoopRequest
+    from ._parts import OptimalFilter
 
 
-def _text(x: Fraction) -> str:
-    return str(x.numerator) if x.denominator == 1 else f"{x.numerator}/{x.denominator}"
+@dataclass(frozen=True)
+class UdpOuterBound(ReportPart):
+    """The outer bound of the module docstring: necessary arrival probabilities for any design.
+
+    ``sensor_arrival_probability_above`` is the optimal filter's critical value (``None`` with
+    ``sensor_note`` when not available); ``actuator_arrival_probability_above`` is
+    ``1 - 1/rho(A)^2``, ``None`` with ``on_loss: hold``.
+    """
+
+    sensor_arrival_probability_above: float | None
+    sensor_arrival_probability_above_exact: str | None
+    sensor_note: str | None
+    actuator_arrival_probability_above: float | None
+    actuator_arrival_probability_above_exact: str | None
+    held: bool
 
 
-def actuator_outer_bound(req: Any) -> tuple[float, str | None]:
+@dataclass(frozen=True)
+class UdpRegionBounds(ReportPart):
+    """Outer and inner bounds on the optimal UDP-like critical region, and where the request lies.
+
+    ``outer`` is ``None`` with a ``reason`` outside the bounds' hypotheses (one Bernoulli sensor
+    packet, a Bernoulli actuator, ``W > 0``, ``Q > 0``); ``request_point_inside_optimal_region``
+    is ``True`` when the gains are stable at the request, ``False`` when the request lies outside
+    the outer bound, else ``None``.
+    """
+
+    outer: UdpOuterBound | None
+    request_point_inside_optimal_region: bool | None
+    reason: str | None
+
+
+def actuator_outer_bound(req: LoopRequest) -> tuple[float, str | None]:
     """``1 - 1/rho(A)^2`` (``0`` for a stable ``A``), exactly for a scalar plant."""
     A = to_float(req.system.A)
     rho = float(np.max(np.abs(np.linalg.eigvals(A))))
@@ -50,50 +84,37 @@ def actuator_outer_bound(req: Any) -> tuple[float, str | None]:
     exact = None
     if req.n == 1:
         a = req.system.A[0][0]
-        exact = _text(max(Fraction(0), 1 - 1 / a**2) if a else Fraction(0))
+        exact = fraction_text(max(Fraction(0), 1 - 1 / a**2) if a else Fraction(0))
     return value, exact
 
 
-def udp_region_bounds(req: Any, optimal_filter: tuple[float | None, str | None, str | None]) -> dict[str, Any]:
+def udp_region_bounds(req: LoopRequest, optimal_filter: OptimalFilter) -> UdpRegionBounds:
     """The outer and inner bounds of the module docstring for a UDP-like loop request.
 
-    ``optimal_filter`` is ``(gamma_c, its exact text, why not)`` from :func:`kfio.analyze`.
+    ``optimal_filter`` is the optimal filter's critical value from :func:`kfio.analyze`.
     """
-    out: dict[str, Any] = {
-        "kind": "bounds on the critical region of the optimal UDP-like controller, proved in kfio's "
-        "documentation (not the paper's Sec. VI statement)",
-        "outer": None,
-        "inner": "the exact stable region of the given gains (region and critical values above): the optimal "
-        "UDP-like cost is finite wherever these gains are mean-square stable",
-        "request_point_inside_optimal_region": None,
-        "reason": None,
-    }
     if (
         isinstance(req.channel, PerSensorChannel)
         or req.channel.model != "bernoulli"
         or req.actuator.model != "bernoulli"
     ):
-        out["reason"] = "defined for one Bernoulli sensor packet and a Bernoulli actuator link"
-        return out
+        return UdpRegionBounds(None, None, "defined for one Bernoulli sensor packet and a Bernoulli actuator link")
     assert req.system.Q is not None  # required by the loop validator
     if not is_psd(req.W, strict=True) or not is_psd(req.system.Q, strict=True):
-        out["reason"] = "the outer bound needs W > 0 and Q > 0 (the cost must see every direction of x)"
-        return out
-    gamma_c, gamma_c_exact, why = optimal_filter
+        return UdpRegionBounds(
+            None, None, "the outer bound needs W > 0 and Q > 0 (the cost must see every direction of x)"
+        )
     nu_min, nu_min_exact = actuator_outer_bound(req)
     held = req.on_loss == "hold"  # a lost packet then applies the last input: the actuator argument fails
-    out["outer"] = {
-        "sensor_arrival_probability_above": gamma_c,
-        "sensor_arrival_probability_above_exact": gamma_c_exact,
-        "sensor_from": "the optimal filter's critical value (Theorem 1, kfio analyze); below it E[P(t|t)] is "
-        "unbounded under any controller" + ("" if why is None else f" (not available: {why})"),
-        "actuator_arrival_probability_above": None if held else nu_min,
-        "actuator_arrival_probability_above_exact": None if held else nu_min_exact,
-        "actuator_from": "not available with on_loss: hold (a lost packet applies the last input)"
-        if held
-        else "1 - 1/rho(A)^2: below it E[x x'] >= (1 - nu) A E[x x'] A' + Q diverges under any controller",
-    }
-    return out
+    outer = UdpOuterBound(
+        optimal_filter.critical_arrival_probability,
+        optimal_filter.critical_arrival_probability_exact,
+        optimal_filter.note,
+        None if held else nu_min,
+        None if held else nu_min_exact,
+        held,
+    )
+    return UdpRegionBounds(outer, None, None)
 
 
-__all__ = ["actuator_outer_bound", "udp_region_bounds"]
+__all__ = ["UdpOuterBound", "UdpRegionBounds", "actuator_outer_bound", "udp_region_bounds"]

@@ -11,7 +11,7 @@ LOOP_EXAMPLE: dict[str, Any] = {
     "system": {"A": [[1.25]], "B": [[1]], "C": [[1]], "Q": [[1]], "R": [[0.5]]},
     "channel": {"model": "bernoulli", "arrival_probability": 0.8},
     "actuator_channel": {"model": "bernoulli", "arrival_probability": 0.9},
-    "controller": {"gains": {"K": [[0.5]], "L": [[0.6]]}, "form": "predictor"},
+    "controller": {"gains": {"feedback": [[0.6]], "estimator": [[0.5]]}, "form": "predictor"},
     "cost": {"W": [[1]], "U": [[0.5]]},
     "options": {"loop": {"protocol": "tcp", "on_loss": "zero"}},
 }
@@ -33,8 +33,8 @@ LOOP_COMPONENTS: dict[str, dict[str, Any]] = {
         "description": (
             "A closed loop over lossy links (Schenato, Sinopoli, Franceschetti, Poolla and Sastry 2007): "
             "x[t+1] = A x + B a + w, y = C x + v; the sensor packets travel over `channel`, the actuator packets "
-            "over `actuator_channel`; u = -L x_hat with the estimator gain K in predictor form (python-control's "
-            "dlqe) or filter form.  See docs/loop.md."
+            "over `actuator_channel`; u = -F x_hat with F = gains.feedback (python-control's dlqr K) and the "
+            "estimator gain gains.estimator in predictor form (python-control's dlqe L) or filter form.  See docs/loop.md."
         ),
         "properties": {
             "system": {
@@ -67,10 +67,19 @@ LOOP_COMPONENTS: dict[str, dict[str, Any]] = {
                             "gains": {
                                 "type": "object",
                                 "properties": {
-                                    "K": {**schema_ref("Matrix"), "description": "n x p estimator gain"},
-                                    "L": {**schema_ref("Matrix"), "description": "m x n feedback gain, u = -L x_hat"},
+                                    "feedback": {
+                                        **schema_ref("Matrix"),
+                                        "description": "m x n feedback gain F, u = -F x_hat (python-control's dlqr K)",
+                                    },
+                                    "estimator": {
+                                        **schema_ref("Matrix"),
+                                        "description": "n x p estimator gain (python-control's dlqe L in "
+                                        "predictor form)",
+                                    },
                                 },
-                                "required": ["K", "L"],
+                                "required": ["feedback", "estimator"],
+                                "description": "gains named by role; the letters K and L are refused (the paper "
+                                "and python-control use them the other way round)",
                                 "additionalProperties": False,
                             },
                             "form": {"enum": ["predictor", "filter"]},

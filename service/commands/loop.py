@@ -37,11 +37,57 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=_run, quick_exit=True)
 
 
-def _probability(value: float | None, exact: str | None) -> str:
-    """``0.5625 = 9/16`` or ``0.237112 (algebraic, degree 3)``: kfio's one number format (:func:`kfio._numbers.number_text`)."""
+def _probability(value: float | None, exact: str | None, degree: int | None = None) -> str:
+    """``0.5625 = 9/16``, ``0.453924 (algebraic, degree 2)`` or ``0.453924``: kfio's one number format.
+
+    :func:`kfio._numbers.number_text` decides from the exact text; when the report left the text
+    out (over 200 digits) but knows the degree of the minimal polynomial, the degree is named.
+    """
     from kfio._numbers import number_text
 
-    return number_text(exact, value)
+    text = number_text(exact, value)
+    if exact is None and degree is not None and degree > 1:
+        text += f" (algebraic, degree {degree})"
+    return text
+
+
+def _link_name(critical: dict) -> str:
+    """``critical sensor arrival probability``, ``critical recovery rate of sensor gps``, ..."""
+    link, parameter = critical["link"], critical["parameter"].rsplit("/", 1)[-1].replace("_", " ")
+    if link in ("sensor", "actuator"):
+        return (
+            f"critical {link} {parameter}"
+            if parameter == "arrival probability"
+            else f"critical {parameter} of the {link} link"
+        )
+    return f"critical {parameter} of sensor {link}"
+
+
+def critical_lines(report: dict) -> list[str]:
+    """One line per link (``critical_values`` of the report): its critical value as a decimal, always.
+
+    A link whose stable set is an interval that does not reach 1 (a UDP-like estimator
+    assumes the link's arrival rate, so a better link can destabilize the loop) gets that
+    interval instead; a link with no stable value says so; a value not computed, the note.
+    """
+    lines = []
+    for c in report.get("critical_values") or []:
+        name = _link_name(c)
+        poly = c.get("value_minimal_polynomial")
+        if c["value"] is not None:
+            degree = None if poly is None else len(poly) - 1
+            every = " (stable at every value of this link)" if c["value_exact"] == "0" else ""
+            lines.append(f"{name}: {_probability(c['value'], c['value_exact'], degree)}{every}")
+            continue
+        stable = [i for i in c.get("intervals") or [] if i["verdict"] == "stable"]
+        if stable:
+            spans = " or ".join(f"({_probability(i['from'], None)}, {_probability(i['to'], None)})" for i in stable)
+            lines.append(f"{name}: none near 1; stable only for values in {spans}")
+        elif c.get("intervals"):
+            lines.append(f"{name}: none; no value of this link stabilizes the loop")
+        else:
+            lines.append(f"{name}: {c['note']}")
+    return lines
 
 
 def summary(report: dict) -> str:
@@ -60,11 +106,7 @@ def summary(report: dict) -> str:
     ]
     cost = report["cost"]
     lines.append(f"stationary cost of these gains: {'unbounded' if cost is None else f'{cost:.6g}'}")
-    for key in ("sensor", "actuator"):
-        exact = report[f"critical_{key}_arrival_probability_exact"]
-        if exact is not None:
-            value = _probability(report[f"critical_{key}_arrival_probability"], exact)
-            lines.append(f"critical {key} arrival probability: {value}")
+    lines += critical_lines(report)
     statement = report["estimator_alone"]["statement"]
     if statement:
         lines.append(f"estimator alone: {statement}")

@@ -108,7 +108,7 @@ const FIELD_HELP = {
   "/channel": "packet channel: bernoulli, gilbert_elliott, markov, or per_sensor",
   "/system/B": "input matrix B (n x m; loop requests)",
   "/actuator_channel": "actuator packet channel of a loop: bernoulli, gilbert_elliott or markov",
-  "/controller": "loop controller: {\"gains\": {\"K\": ..., \"L\": ...}, \"form\": ...} or {\"lqg\": {\"W\": ..., \"U\": ...}}",
+  "/controller": "loop controller: {\"gains\": {\"feedback\": F, \"estimator\": E}, \"form\": ...} (u = -F x_hat) or {\"lqg\": {\"W\": ..., \"U\": ...}}",
   "/cost": "loop cost weights: x' W x + a' U a",
   "/options": "options (time_budget_s, bounds, simulate, loop, ...)",
 };

@@ -11,6 +11,7 @@ that the comparisons are exact.
 from __future__ import annotations
 
 import json
+import re
 import shutil
 from fractions import Fraction
 from pathlib import Path
@@ -130,3 +131,64 @@ def test_cli_exit_codes(folder, capsys) -> None:
     )
     code, out, _ = run_cli(capsys, str(path), "--workers", "1")
     assert code == exitcodes.UNSTABLE and "lossy" in out
+
+
+UDP_INTERVAL = Path(__file__).parents[2] / "examples" / "loop_udp_interval.json"
+
+
+def _udp_verdict(tree: dict, pointer: str, value: Fraction) -> str:
+    """The exact verdict with one link at ``value``, the estimator's assumed arrival rate kept (UDP-like)."""
+    from kfio.loop import decide, loop_mjls, parameter_of
+
+    req = parse_loop_request(tree)
+    channel = req.actuator if pointer == "/actuator_channel" else req.channel
+    _, at = parameter_of(pointer, channel)
+    return decide(loop_mjls(req, {pointer: at(value)})).verdict
+
+
+@pytest.mark.parametrize(
+    "limit, status",
+    [("0.45", "pass"), ("0.6", "pass"), ("0.4", "fail"), ("0.7", "fail"), ("1", "fail")],
+)
+def test_a_udp_stable_interval_below_1_passes_iff_the_limit_lies_in_it(tmp_path, limit, status) -> None:
+    (tmp_path / "loops").mkdir()
+    shutil.copy(UDP_INTERVAL, tmp_path / "loops" / "udp.json")
+    tree = json.loads(UDP_INTERVAL.read_text())
+    key = "critical_actuator_arrival_probability_at_most"
+    got = outcomes(tmp_path, "udp", {key: limit, "loop_verdict": "stable"})
+    assert got["loop_verdict"].status == "pass"  # stable at its own request point (actuator 1/2)
+    o = got[key]
+    assert o.status == status, (o.measured, o.detail)
+    m = re.fullmatch(r"stable interval \((\S+), (\S+)\)", o.measured)
+    assert m and "1/2" in o.detail
+    lo, hi = Fraction(m.group(1)), Fraction(m.group(2))
+    assert lo < Fraction(1, 2) < hi < 1
+    # the semantics, checked against exact verdicts: pass iff the loop is stable with the link at the limit
+    v = Fraction(limit)
+    assert (_udp_verdict(tree, "/actuator_channel", v) == "stable") == (status == "pass")
+    step = Fraction(1, 10**5)
+    assert [_udp_verdict(tree, "/actuator_channel", x) for x in (lo - step, lo + step, hi - step, hi + step)] == [
+        "unstable",
+        "stable",
+        "stable",
+        "unstable",
+    ]
+
+
+def test_a_loop_unstable_at_its_request_point_fails_though_a_stable_interval_lies_below(tmp_path) -> None:
+    tree = json.loads(UDP_INTERVAL.read_text())
+    tree["system"]["A"] = [["0.8"]]
+    tree["controller"]["gains"] = {"feedback": [["1.5"]], "estimator": [["1.8"]]}
+    tree["actuator_channel"]["arrival_probability"] = "0.7"
+    tree["channel"]["arrival_probability"] = "0.6"
+    (tmp_path / "loops").mkdir()
+    (tmp_path / "loops" / "udp.json").write_text(json.dumps(tree))
+    report = analyze_loop(parse_loop_request(tree)).to_dict()
+    sensor = next(c for c in report["critical_values"] if c["link"] == "sensor")
+    assert report["verdict"] == "unstable" and sensor["value"] is None
+    assert [i["verdict"] for i in sensor["intervals"]] == ["stable", "unstable"]  # stable only for small arrival
+    assert _udp_verdict(tree, "/channel", Fraction(1, 10)) == "stable"
+    o = outcomes(tmp_path, "udp", {"critical_sensor_arrival_probability_at_most": "0.1"})[
+        "critical_sensor_arrival_probability_at_most"
+    ]
+    assert o.status == "fail" and o.measured == "none" and "not stable at the request's point 3/5" in o.detail

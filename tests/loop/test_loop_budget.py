@@ -9,7 +9,7 @@ import pytest
 
 import kfio
 from kfio.errors import BudgetExceeded
-from kfio.loop import analyze_loop, load_loop_request, loop_mjls, parse_loop_request
+from kfio.loop import analyze_loop, load_loop_request, loop_mjls, loop_request, parse_loop_request
 from kfio.loop._verdict import decide
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -42,7 +42,7 @@ def test_a_budget_spent_after_the_verdict_gives_a_partial_report_with_the_verdic
     assert all(c.note.startswith("not computed: the time budget ran out") for c in part.critical)
     out = part.to_dict()
     assert out["partial"] is True and any(n.startswith("partial: the time budget ran out") for n in out["notes"])
-    assert out["estimator_alone"]["verdict"] == full.estimator_alone["verdict"]
+    assert out["estimator_alone"]["verdict"] == full.estimator_alone.verdict
 
 
 def test_seconds_reach_the_library_through_options_time_budget_s():
@@ -52,11 +52,12 @@ def test_seconds_reach_the_library_through_options_time_budget_s():
     assert req.time_budget_s == 60
     rep = analyze_loop(req)
     assert not rep.partial and rep.critical_sensor_arrival_probability_exact == "9/16"
-    tree = kfio.loop.loop_request(
+    tree = loop_request(
         kfio.System(A=[[1.25]], C=[[1]], Q=[[1]], R=[[1]]),
-        {"K": [[0.5]], "L": [[0.6]]},
-        kfio.bernoulli(0.8),
-        kfio.bernoulli(0.9),
+        feedback=[[0.6]],
+        estimator=[[0.5]],
+        channel=kfio.bernoulli(0.8),
+        actuator_channel=kfio.bernoulli(0.9),
         B=[[1]],
         budget=30,
     )

@@ -58,7 +58,7 @@ def _random_loop(seed: int) -> dict:
         "system": {"A": A, "B": B, "C": C, "Q": eye, "R": [["1/2"]]},
         "channel": _channel(rng, rng.random() < 0.4),
         "actuator_channel": _channel(rng, rng.random() < 0.4),
-        "controller": {"gains": {"K": K, "L": L}, "form": rng.choice(("predictor", "filter"))},
+        "controller": {"gains": {"estimator": K, "feedback": L}, "form": rng.choice(("predictor", "filter"))},
         "cost": {"W": eye, "U": [["1/3"]]},
         "options": {"loop": {"protocol": rng.choice(("tcp", "udp")), "on_loss": rng.choice(("zero", "hold"))}},
     }
@@ -142,7 +142,7 @@ def _ge_loop() -> dict:
         "Q": [["1", "0"], ["0", "1"]],
         "R": [["1/2"]],
     }
-    body["controller"] = {"gains": {"K": [["0.8"], ["0.1"]], "L": [["0.5", "0.9"]]}, "form": "predictor"}
+    body["controller"] = {"gains": {"estimator": [["0.8"], ["0.1"]], "feedback": [["0.5", "0.9"]]}, "form": "predictor"}
     body["channel"] = dict(GE)
     body["actuator_channel"] = dict(GE)
     body["options"] = {"loop": {"protocol": "tcp", "on_loss": "zero"}}

@@ -30,7 +30,7 @@ def _request(A: str, B: str, C: str, K: str, L: str) -> dict:
         "system": {"A": [[A]], "B": [[B]], "C": [[C]], "Q": [[1]], "R": [[1]]},
         "channel": {"model": "bernoulli", "arrival_probability": "0.8"},
         "actuator_channel": {"model": "bernoulli", "arrival_probability": "0.9"},
-        "controller": {"gains": {"K": [[K]], "L": [[L]]}, "form": "predictor"},
+        "controller": {"gains": {"estimator": [[K]], "feedback": [[L]]}, "form": "predictor"},
     }
 
 

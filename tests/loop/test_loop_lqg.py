@@ -44,7 +44,7 @@ def test_control_mare_converges_iff_nu_exceeds_one_minus_inverse_a_squared(nu, c
     rep = analyze_loop(req).to_dict()
     assert rep["lqg"]["optimal"]["verdict"] == ("stable" if converges else "unstable")
     if not converges:
-        assert rep["verdict"] == "unstable" and rep["cost"] is None and rep["loop"]["L"] is None
+        assert rep["verdict"] == "unstable" and rep["cost"] is None and rep["loop"]["feedback"] is None
 
 
 def test_lqg_needs_tcp_and_bernoulli_links():

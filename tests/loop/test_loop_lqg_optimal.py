@@ -104,7 +104,7 @@ def test_single_input_critical_value_is_elias_fifty_seven_over_one_hundred_twent
 def test_below_the_optimal_critical_values_the_verdict_is_unstable_without_gains(body, why):
     rep = _report(body)
     assert rep["verdict"] == "unstable" and rep["cost"] is None and rep["cost_exact"] is None
-    assert rep["loop"]["K"] is None and rep["loop"]["L"] is None
+    assert rep["loop"]["estimator"] is None and rep["loop"]["feedback"] is None
     assert rep["lqg"]["stationary_gains"]["exist"] is False
     opt = rep["lqg"]["optimal"]
     assert opt["verdict"] == "unstable" and any(why in r for r in opt["reasons"]), opt["reasons"]
@@ -127,7 +127,7 @@ def test_below_the_optimal_critical_values_the_verdict_is_unstable_without_gains
 def test_just_above_the_critical_values_the_fixed_points_exist_and_satisfy_their_equations(body):
     rep = _report(body)
     assert rep["lqg"]["optimal"]["verdict"] == "stable"
-    assert rep["lqg"]["stationary_gains"]["exist"] and rep["loop"]["L"] is not None
+    assert rep["lqg"]["stationary_gains"]["exist"] and rep["loop"]["feedback"] is not None
     assert _control_residual(rep, body) < 1e-9
     for solve in ("control_riccati", "estimation_riccati"):
         assert rep["lqg"]["stationary_gains"][solve]["relative_residual"] < 1e-9

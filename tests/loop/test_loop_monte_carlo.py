@@ -48,13 +48,14 @@ def test_monte_carlo_cost_within_its_confidence_interval_of_the_exact_cost(form,
     sys = kfio.System(A=[[a]], C=[[c]], Q=[[q]], R=[[r]])
     rep = kfio.loop(
         sys,
-        {"K": [[k]], "L": [[L]], "form": form},
-        kfio.bernoulli(lam),
-        kfio.bernoulli(nu),
+        feedback=[[L]],
+        estimator=[[k]],
+        form=form,
+        channel=kfio.bernoulli(lam),
+        actuator_channel=kfio.bernoulli(nu),
         B=[[b]],
         cost={"W": [[1]], "U": [["1/2"]]},
-        protocol=protocol,
-        on_loss=on_loss,
+        options={"protocol": protocol, "on_loss": on_loss},
     )
     assert rep.verdict == "stable"
     samples = _simulate(a, b, c, q, r, k, L, lam, nu, 1.0, 0.5, form, protocol, on_loss, np.random.default_rng(7))

@@ -53,7 +53,7 @@ def _request(form, protocol, on_loss):
             },
             "actuator_channel": {"model": "gilbert_elliott", "failure_rate": "1/10", "recovery_rate": "2/3"},
             "controller": {
-                "gains": {"K": _m([[F(1, 2), F(1, 10)], [0, F(2, 5)]]), "L": _m([[F(1, 5), F(3, 5)]])},
+                "gains": {"feedback": _m([[F(1, 5), F(3, 5)]]), "estimator": _m([[F(1, 2), F(1, 10)], [0, F(2, 5)]])},
                 "form": form,
             },
             "options": {"loop": {"protocol": protocol, "on_loss": on_loss}},
@@ -207,7 +207,7 @@ def _random_request(rng: random.Random):
             "channel": ch(),
             "actuator_channel": ch(),
             "controller": {
-                "gains": {"K": _m([[r(0, 8)], [r(-2, 4)]]), "L": _m([[r(-2, 8), r(0, 8)]])},
+                "gains": {"feedback": _m([[r(-2, 8), r(0, 8)]]), "estimator": _m([[r(0, 8)], [r(-2, 4)]])},
                 "form": rng.choice(["predictor", "filter"]),
             },
             "options": {"loop": {"protocol": rng.choice(["tcp", "udp"]), "on_loss": rng.choice(["zero", "hold"])}},

@@ -14,7 +14,7 @@ import flint
 import pytest
 
 import kfio
-from kfio.loop import loop_mjls, parse_loop_request
+from kfio.loop import loop_mjls, loop_request, parse_loop_request
 from kfio.loop._critical import det_polynomial, det_polynomial_rational, parameter_of
 from kfio.loop._operator import operator_matrix
 from kfio.loop._pencil import det_pencil, det_polynomial_of, integer_pencil
@@ -25,14 +25,14 @@ def _request(on_loss: str = "zero", protocol: str = "tcp"):
         A=[["1.1", "0.3"], ["0", "0.9"]], C=[["1", "0.5"]], Q=[["0.2", "0"], ["0", "0.1"]], R=[["0.3"]]
     )
     ge = kfio.gilbert_elliott
-    tree = kfio.loop.loop_request(
+    tree = loop_request(
         system,
-        {"K": [["0.61"], ["0.13"]], "L": [["0.47", "0.22"]]},
-        ge(failure_rate="0.05", recovery_rate="0.6"),
-        ge(failure_rate="0.1", recovery_rate="0.7"),
+        feedback=[["0.47", "0.22"]],
+        estimator=[["0.61"], ["0.13"]],
+        channel=ge(failure_rate="0.05", recovery_rate="0.6"),
+        actuator_channel=ge(failure_rate="0.1", recovery_rate="0.7"),
         B=[["0"], ["1"]],
-        protocol=protocol,
-        on_loss=on_loss,
+        options={"protocol": protocol, "on_loss": on_loss},
     )
     return parse_loop_request(tree)
 

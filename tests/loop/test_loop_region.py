@@ -22,15 +22,15 @@ def _body(protocol: str, points: int) -> dict:
 
 def test_tcp_scalar_region_is_the_rectangle_of_the_closed_forms():
     # e-block: lam (a - k)^2 + (1 - lam) a^2 < 1 iff lam > 9/16; x-block: nu > 75/152 (a = 5/4, k = 1/2, L = 3/5)
-    rows = analyze_loop(parse_loop_request(_body("tcp", 6))).region["boundary"]
+    rows = analyze_loop(parse_loop_request(_body("tcp", 6))).region.boundary
+    assert [row.sensor for row in rows] == [F(2 * i + 1, 12) for i in range(6)]
     for row in rows:
-        lam = F(row["sensor_arrival_probability_exact"])
-        assert row["critical_actuator_arrival_probability_exact"] == ("75/152" if lam > F(9, 16) else None)
+        assert row.critical_actuator_arrival_probability_exact == ("75/152" if row.sensor > F(9, 16) else None)
 
 
 def test_udp_boundary_points_separate_exact_verdicts():
     req = parse_loop_request(_body("udp", 3))
-    rows = analyze_loop(req).region["boundary"]
+    rows = analyze_loop(req).to_dict()["region"]["boundary"]
     found = [r for r in rows if r["critical_actuator_arrival_probability"] is not None]
     assert found
     for row in found:

@@ -15,8 +15,7 @@ from fractions import Fraction as F
 
 import pytest
 
-import kfio
-from kfio.loop import parse_loop_request
+from kfio.loop import analyze_loop, parse_loop_request
 from kfio.loop._cost import stationary_cost
 from kfio.loop._mjls import estimator_mjls
 from kfio.loop._verdict import decide
@@ -32,7 +31,7 @@ def _request(a, b, c, q, r, k, L, lam, nu, form="predictor"):
             "system": {"A": [[_text(a)]], "B": [[_text(b)]], "C": [[_text(c)]], "Q": [[_text(q)]], "R": [[_text(r)]]},
             "channel": {"model": "bernoulli", "arrival_probability": _text(lam)},
             "actuator_channel": {"model": "bernoulli", "arrival_probability": _text(nu)},
-            "controller": {"gains": {"K": [[_text(k)]], "L": [[_text(L)]]}, "form": form},
+            "controller": {"gains": {"feedback": [[_text(L)]], "estimator": [[_text(k)]]}, "form": form},
         }
     )
 
@@ -73,7 +72,7 @@ def test_fixed_gain_estimator_boundary_is_exact():
 def test_estimator_alone_critical_value_and_optimal_filter_beside_it():
     a, k = F(5, 4), F(1, 2)
     rep = _request(a, F(1), F(1), F(1), F(1), k, F(3, 5), F(4, 5), F(9, 10))
-    out = kfio.loop._report.analyze_loop(rep).to_dict()["estimator_alone"]
+    out = analyze_loop(rep).to_dict()["estimator_alone"]
     # lam ((a - k)^2 - a^2) = 1 - a^2
     lam_c = (1 - a**2) / ((a - k) ** 2 - a**2)
     assert out["critical_sensor_arrival_probability_exact"] == _text(lam_c)
@@ -89,7 +88,7 @@ def test_tcp_like_control_critical_value_one_minus_inverse_a_squared(a):
     b = F(2)
     # perfect sensor link, dead-beat predictor K = a / c: the error vanishes in one step
     req = _request(a, b, F(1), F(1), F(1), a, a / b, F(1), F(1, 2))
-    rep = kfio.loop._report.analyze_loop(req)
+    rep = analyze_loop(req)
     assert rep.actuator_critical is not None
     assert rep.actuator_critical.exact == _text(1 - 1 / a**2)
 
@@ -98,7 +97,7 @@ def test_tcp_like_control_critical_value_one_minus_inverse_a_squared(a):
 def test_no_fixed_control_gain_beats_one_minus_inverse_a_squared(L):
     a, b = F(5, 4), F(1)
     req = _request(a, b, F(1), F(1), F(1), a, L, F(1), F(1, 2))
-    rep = kfio.loop._report.analyze_loop(req)
+    rep = analyze_loop(req)
     nu_c = (1 - a**2) / ((a - b * L) ** 2 - a**2)  # nu (a - b L)^2 + (1 - nu) a^2 = 1
     assert rep.actuator_critical.exact == _text(nu_c)
     assert nu_c > 1 - 1 / a**2
@@ -123,8 +122,8 @@ def test_an_operator_too_large_is_refused_naming_the_field():
         "system": {"A": eye, "B": [["1"]] * n, "C": [["1"] * n], "Q": eye, "R": [["1"]]},
         "channel": {"model": "markov", "order": 3, "arrival_probability": {format(h, "03b"): "1/2" for h in range(8)}},
         "actuator_channel": {"model": "gilbert_elliott", "failure_rate": "1/2", "recovery_rate": "1/2"},
-        "controller": {"gains": {"K": [["0"]] * n, "L": [["0"] * n]}},
+        "controller": {"gains": {"feedback": [["0"] * n], "estimator": [["0"]] * n}},
     }
     with pytest.raises(LimitExceeded) as err:
-        kfio.loop._report.analyze_loop(parse_loop_request(body))
+        analyze_loop(parse_loop_request(body))
     assert err.value.field == "/system/A" and "limit is 3000" in err.value.rule

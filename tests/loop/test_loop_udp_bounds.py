@@ -50,7 +50,7 @@ def test_no_fixed_design_is_stable_outside_the_outer_bound():
     for k, el, form, protocol in itertools.product(
         (F(1, 4), F(1, 2), F(1), F(5, 4)), (F(1, 4), F(3, 5), F(1), F(5, 4)), ("predictor", "filter"), ("udp", "tcp")
     ):
-        req = dataclasses.replace(base, K=((k,),), L=((el,),), form=form, protocol=protocol)
+        req = dataclasses.replace(base, estimator=((k,),), feedback=((el,),), form=form, protocol=protocol)
         for lam, nu in outside:
             sys = loop_mjls(req, {"/channel": _bernoulli(lam), "/actuator_channel": _bernoulli(nu)})
             assert decide(sys).verdict != "stable", (k, el, form, protocol, lam, nu)

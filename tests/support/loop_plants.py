@@ -66,7 +66,7 @@ def loop_plant_request(
         "system": system,
         "channel": channel,
         "actuator_channel": actuator_channel or {"model": "bernoulli", "arrival_probability": "0.95"},
-        "controller": {"gains": {"K": _text(K), "L": _text(L)}, "form": "predictor"},
+        "controller": {"gains": {"estimator": _text(K), "feedback": _text(L)}, "form": "predictor"},
         "options": {"loop": {"protocol": "tcp", "on_loss": "zero"}},
     }
 

@@ -37,5 +37,23 @@ def request_file(system: kfio.System) -> kfio.Request:
     return kfio.build_request(system, kfio.gilbert_elliott(failure_rate=0.1, recovery_rate="3/5"), budget=10)
 
 
+def loop_needs(feedback: kfio.MatrixLike, estimator: kfio.MatrixLike) -> tuple[kfio.Verdict, float | None]:
+    """A scalar loop's verdict and its critical actuator arrival probability, gains named by role."""
+    plant = kfio.System(A=[[1.25]], C=[[1]], Q=[[1]], R=[["1/2"]])
+    report = kfio.loop(
+        plant,
+        B=[[1]],
+        feedback=feedback,
+        estimator=estimator,
+        form="predictor",
+        channel=kfio.bernoulli(0.8),
+        actuator_channel=kfio.bernoulli(0.9),
+        options={"protocol": "tcp"},
+        budget=30,
+    )
+    verdict: kfio.Verdict = report.verdict
+    return verdict, report.critical_actuator_arrival_probability
+
+
 if __name__ == "__main__":
     print(critical_probability(Fraction(5, 4)), is_stable([[1.25]], 0.5), request_file(kfio.System(A=[[2]], C=[[1]])))

@@ -3,13 +3,16 @@
 kfio is installed into a fresh virtual environment the way PEP 561 sees a
 package: a folder named ``kfio`` (this checkout's ``analyzer/``) on a path
 line of its site-packages, which mypy reads only because of ``py.typed``.
-A second file with two type errors shows the hints are real types, not
-``Any``: mypy must reject exactly those lines.
+A second file with type errors shows the hints are real types, not
+``Any``: mypy must reject exactly those lines.  ``kfio.loop`` is checked to
+be the typed function (its keywords, its report), not the subpackage of the
+same name.
 """
 
 from __future__ import annotations
 
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -27,6 +30,9 @@ import kfio
 report = kfio.analyze(kfio.System(A=[[2]], C=[[1]]), kfio.bernoulli("1/2"))
 count: int = report.verdict
 channel = kfio.bernoulli([0.5])
+plant = kfio.System(A=[[2]], C=[[1]], Q=[[1]], R=[[1]])
+kfio.loop(plant, B=[[1]], K=[[1]], L=[[1]], channel=kfio.bernoulli(0.9), actuator_channel=kfio.bernoulli(0.9))
+text: str = kfio.loop(plant, B=[[1]], feedback=[[1]], estimator=[[1]], channel=kfio.bernoulli(0.9), actuator_channel=kfio.bernoulli(0.9))
 """
 
 
@@ -35,7 +41,10 @@ def test_py_typed_ships_in_the_package() -> None:
     assert (REPO / "analyzer" / "py.typed").exists() and '"kfio" = ["py.typed"]' in text
 
 
-def test_mypy_strict_passes_on_downstream_code_and_rejects_wrong_code(tmp_path: Path) -> None:
+@pytest.fixture(scope="module")
+def downstream_python(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A fresh virtual environment that sees this checkout's kfio the way PEP 561 sees a package."""
+    tmp_path = tmp_path_factory.mktemp("typing")
     src = tmp_path / "src"
     src.mkdir()
     (src / "kfio").symlink_to(REPO / "analyzer", target_is_directory=True)
@@ -54,17 +63,40 @@ def test_mypy_strict_passes_on_downstream_code_and_rejects_wrong_code(tmp_path: 
     (Path(site) / "zz_dependencies.pth").write_text("".join(f"{p}\n" for p in deps))
     where = subprocess.run([str(py), "-c", "import kfio; print(kfio.__file__)"], capture_output=True, text=True)
     assert where.stdout.startswith(str(src)), where.stderr
+    return py
 
-    wrong = tmp_path / "wrong.py"
-    wrong.write_text(WRONG)
+
+def _mypy(py: Path, tmp_path: Path, *files: Path) -> str:
     env = {k: v for k, v in os.environ.items() if k not in ("MYPYPATH", "PYTHONPATH")}
     out = subprocess.run(
         [sys.executable, "-m", "mypy", "--strict", "--python-executable", str(py), "--cache-dir",
-         str(tmp_path / "cache"), "--no-error-summary", str(DOWNSTREAM), str(wrong)],
+         str(py.parents[2] / "cache"), "--no-error-summary", *map(str, files)],
         cwd=tmp_path, env=env, capture_output=True, text=True, timeout=600,
     )  # fmt: skip
-    errors = [line for line in out.stdout.splitlines() if ": error:" in line]
-    assert not [e for e in errors if "downstream.py" in e], out.stdout
-    assert [e.split(":")[1] for e in errors] == ["4", "5"], out.stdout + out.stderr
+    return out.stdout + out.stderr
+
+
+def test_mypy_strict_passes_on_downstream_code_and_rejects_wrong_code(downstream_python: Path, tmp_path: Path) -> None:
+    wrong = tmp_path / "wrong.py"
+    wrong.write_text(WRONG)
+    out = _mypy(downstream_python, tmp_path, DOWNSTREAM, wrong)
+    errors = [line for line in out.splitlines() if ": error:" in line]
+    assert not [e for e in errors if "downstream.py" in e], out
+    assert [e.split(":")[1] for e in errors] == ["4", "5", "7", "7", "8"], out
     assert 'expression has type "Verdict", variable has type "int"' in errors[0]
     assert 'incompatible type "list[float]"' in errors[1]
+    assert 'Unexpected keyword argument "K"' in errors[2]  # the letters are no keywords of kfio.loop
+    assert 'Unexpected keyword argument "L"' in errors[3]
+    assert 'expression has type "LoopReport", variable has type "str"' in errors[4]
+
+
+def test_kfio_loop_is_a_typed_function_with_keywords_not_a_module(downstream_python: Path, tmp_path: Path) -> None:
+    probe = tmp_path / "probe.py"
+    probe.write_text("import kfio\nreveal_type(kfio.loop)\n")
+    out = _mypy(downstream_python, tmp_path, probe)
+    (note,) = [line for line in out.splitlines() if "Revealed type is" in line]
+    assert '"def (system: ' in note and note.endswith('-> kfio.loop._report.LoopReport"'), note
+    keywords = re.findall(r"(?:\*, |, )(\w+): ", note)
+    assert keywords[:6] == ["feedback", "estimator", "form", "lqg", "channel", "actuator_channel"], note
+    assert keywords[-3:] == ["cost", "options", "budget"], note
+    assert "feedback: typing.Sequence[typing.Sequence[" in note and "form: Literal['predictor']" in note
