@@ -1,4 +1,4 @@
-"""The typed parts of a loop report's ``lqg`` block (their JSON view is :func:`kfio.loop.loop_report_view`).
+"""The typed parts of a loop report's ``lqg`` block (their JSON view is in :mod:`kfio._json._loop`).
 
 Two questions, kept apart (Schenato, Sinopoli, Franceschetti, Poolla and Sastry 2007, Sec. V):
 
@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from .._reporting import ReportPart
 from ._lqg_critical import ActuatorCritical
 
 
@@ -79,7 +80,7 @@ class LqgOptimal:
 
 
 @dataclass(frozen=True)
-class LqgPart:
+class LqgPart(ReportPart):
     """The ``lqg`` block: the optimal controller, and the stationary gains the top level analyzes.
 
     ``form`` is the estimator form of the stationary gains (``filter`` by

@@ -40,15 +40,18 @@ def register(sub: argparse._SubParsersAction) -> None:
 def _probability(value: float | None, exact: str | None, degree: int | None = None) -> str:
     """``0.5625 = 9/16``, ``0.453924 (algebraic, degree 2)`` or ``0.453924``: kfio's one number format.
 
-    :func:`kfio._numbers.number_text` decides from the exact text; when the report left the text
-    out (over 200 digits) but knows the degree of the minimal polynomial, the degree is named.
+    :func:`kfio._numbers.show` decides from the exact text; a long algebraic value whose minimal
+    polynomial's degree the report knows is named by that degree (and, when its text carries the
+    digits of float data, says so too).
     """
-    from kfio._numbers import number_text
+    from kfio._numbers import show
 
-    text = number_text(exact, value)
-    if exact is None and degree is not None and degree > 1:
-        text += f" (algebraic, degree {degree})"
-    return text
+    shown = show(exact, value)
+    long_algebraic = degree is not None and degree > 1 and exact != shown.decimal
+    if long_algebraic and not shown.exact and shown.note in ("", "from float data"):
+        note = f"algebraic, degree {degree}" + (", from float data" if shown.note else "")
+        return f"{shown.decimal} ({note})"
+    return shown.text
 
 
 def _link_name(critical: dict) -> str:
