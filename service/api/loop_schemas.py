@@ -27,6 +27,9 @@ _WEIGHTS = {
     "additionalProperties": False,
 }
 
+#: A proved enclosure ``[lo, hi]`` as two decimal texts.
+_ENCLOSURE: dict[str, Any] = {"type": ["array", "null"], "items": {"type": "string"}, "minItems": 2, "maxItems": 2}
+
 LOOP_COMPONENTS: dict[str, dict[str, Any]] = {
     "LoopRequest": {
         "type": "object",
@@ -150,8 +153,24 @@ LOOP_COMPONENTS: dict[str, dict[str, Any]] = {
             },
             "spectral_radius": {"type": ["number", "null"]},
             "spectral_radius_exact": {"type": ["string", "null"]},
+            "spectral_radius_enclosure": {
+                **_ENCLOSURE,
+                "description": "decimal texts [lo, hi] proved to enclose rho(T) on the certified route "
+                "(verified Collatz-Wielandt bounds); null on the exact route",
+            },
             "cost": {"type": ["number", "null"]},
             "cost_exact": {"type": ["string", "null"]},
+            "cost_exact_digits": {
+                "type": ["integer", "null"],
+                "description": "digits of the exact cost's fraction text; null when the exact cost was not "
+                "computed (certified route) or the cost is unbounded",
+            },
+            "cost_enclosure": {
+                **_ENCLOSURE,
+                "description": "decimal texts [lo, hi] proved to enclose the stationary cost: when its exact text "
+                "would pass 200 digits (cost_exact is then null), or on the certified route (verified residual of "
+                "the float moments measured by the Lyapunov certificate's margin)",
+            },
             "critical_sensor_arrival_probability": {"type": ["number", "null"]},
             "critical_sensor_arrival_probability_exact": {"type": ["string", "null"]},
             "critical_actuator_arrival_probability": {"type": ["number", "null"]},
