@@ -175,7 +175,16 @@ LOOP_COMPONENTS: dict[str, dict[str, Any]] = {
             "critical_sensor_arrival_probability_exact": {"type": ["string", "null"]},
             "critical_actuator_arrival_probability": {"type": ["number", "null"]},
             "critical_actuator_arrival_probability_exact": {"type": ["string", "null"]},
-            "critical_values": {"type": "array", "items": {"type": "object"}},
+            "critical_values": {
+                "type": "array",
+                "items": {
+                    "type": "object",
+                    "description": "per link: value, value_exact (null past 200 digits), value_minimal_polynomial "
+                    "(null when a coefficient passes 200 digits; value_minimal_polynomial_degree and _digits then say "
+                    "how big), value_enclosure, value_bracket and value_bracket_exact (a certified bracket by "
+                    "bisection on proved verdicts, for operators too large for the exact value), intervals, note",
+                },
+            },
             "estimator_alone": {
                 "type": ["object", "null"],
                 "description": "null when there are no gains (LQG below the optimal critical values)",
