@@ -275,11 +275,13 @@ def _draw(rng: np.random.Generator) -> LoopSpec:
     )
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", range(12))
 def test_random_loops_agree_with_the_oracle(seed):
     assert_same_analysis(random_loop(seed))
 
 
+@pytest.mark.slow
 def test_the_random_loops_cover_both_verdicts_and_every_link_kind():
     specs = [random_loop(seed) for seed in range(12)]
     verdicts = {lo.analyze(s, with_cost=False).verdict for s in specs}
@@ -344,6 +346,7 @@ def test_gilbert_elliott_recovery_rates_against_bisection_other_combinations(for
     assert_critical_values_agree(with_form(TWO_GE, form, TWO_GE_FILTER_K, protocol, on_loss))
 
 
+@pytest.mark.slow
 def test_two_sensor_links_and_a_bernoulli_actuator_against_bisection():
     got = assert_critical_values_agree(TWO_SENSORS)
     assert got[0]["value"] > 0.1 and got[2]["value"] > 0.1  # the position sensor and the actuator matter
