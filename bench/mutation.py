@@ -195,6 +195,81 @@ MUTANTS: tuple[Mutant, ...] = (
         ("tests/loop/test_loop_summary.py",),
         "the summary names a critical value's degree as its number of coefficients",
     ),
+    Mutant(
+        "loop-operator-blocks-transposed",
+        "analyzer/loop/_operator.py",
+        "T[j * s + r, i * s + c] = p * srow[c]",
+        "T[i * s + r, j * s + c] = p * srow[c]",
+        ("tests/loop/test_loop_multimode_oracle.py",),
+        "the exact operator's block (j, i) written at (i, j): the multi-mode cost and verdict must match the "
+        "independent full-vec float operator",
+    ),
+    Mutant(
+        "loop-transition-transposed",
+        "analyzer/loop/_operator.py",
+        "            p = _fq(sys.P[i][j])\n",
+        "            p = _fq(sys.P[j][i])\n",
+        ("tests/loop/test_loop_multimode_oracle.py",),
+        "the exact operator weighs block (j, i) by p_ji instead of p_ij (Gilbert-Elliott chains are not symmetric)",
+    ),
+    Mutant(
+        "loop-noise-without-mode-weight",
+        "analyzer/loop/_operator.py",
+        "        per_mode.append(_fq(sys.pi[i]) * acc)\n",
+        "        per_mode.append(acc)\n",
+        ("tests/loop/test_loop_multimode_oracle.py",),
+        "the noise forcing of the stationary moments without the mode's stationary probability pi_i",
+    ),
+    Mutant(
+        "loop-ge-table-swapped",
+        "analyzer/loop/_critical.py",
+        '"gilbert_elliott", 1, (x, 1 - p),',
+        '"gilbert_elliott", 1, (1 - p, x),',
+        ("tests/loop/test_loop_multimode_oracle.py",),
+        "a Gilbert-Elliott link's recovery rate put where the arrival after an arrival belongs: the critical "
+        "recovery rates must match bisection",
+    ),
+    Mutant(
+        "loop-cost-input-noise-dropped",
+        "analyzer/loop/_cost.py",
+        "            total += w * pi * _trace(sys.U * br.Ea * sys.Sigma * br.Ea.transpose())\n",
+        "",
+        ("tests/loop/test_loop_multimode_oracle.py",),
+        "the cost term pi tr(U Ea Sigma Ea') dropped: in filter form the applied input carries measurement noise",
+    ),
+    Mutant(
+        "loop-definite-tolerance-sign",
+        "analyzer/loop/_verdict.py",
+        "    if lam > tol:\n",
+        "    if lam > -tol:\n",
+        ("tests/loop/test_loop_multimode_oracle.py",),
+        "the float definiteness filter calls a barely indefinite matrix positive definite instead of deciding it "
+        "exactly",
+    ),
+    Mutant(
+        "loop-definite-negative-as-positive",
+        "analyzer/loop/_verdict.py",
+        "    if lam < -tol:\n        return -1\n",
+        "    if lam < -tol:\n        return 1\n",
+        ("tests/loop/test_loop_multimode_oracle.py",),
+        "the float definiteness filter reports a clearly indefinite matrix as positive definite",
+    ),
+    Mutant(
+        "loop-interval-left-end-off-by-one",
+        "analyzer/loop/_critical.py",
+        "            merged.append((edges[k][1], edges[k + 1][1], lab))\n",
+        "            merged.append((edges[k - 1][1], edges[k + 1][1], lab))\n",
+        ("tests/loop/test_loop_multimode_oracle.py",),
+        "each interval of a link's range starts one root too early: its ends must match bisection",
+    ),
+    Mutant(
+        "loop-merged-right-end-off-by-one",
+        "analyzer/loop/_critical.py",
+        "            merged[-1] = (merged[-1][0], edges[k + 1][1], lab)\n",
+        "            merged[-1] = (merged[-1][0], edges[k][1], lab)\n",
+        ("tests/loop/test_loop_multimode_oracle.py",),
+        "an interval merged across a root where another eigenvalue crosses 1 ends one root too early",
+    ),
 )
 
 

@@ -1,0 +1,42 @@
+"""The closed-loop mutants stay in bench/mutation.py, each aimed at the multi-mode oracle tests.
+
+Planted one at a time, each of these bugs once passed every loop, check, sweep and service
+test; tests/loop/test_loop_multimode_oracle.py kills each (``python bench/mutation.py NAME``).
+tests/test_mutants_catalogue.py keeps every entry applicable.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+LOOP_MUTANTS = {
+    "loop-operator-blocks-transposed": "analyzer/loop/_operator.py",
+    "loop-transition-transposed": "analyzer/loop/_operator.py",
+    "loop-noise-without-mode-weight": "analyzer/loop/_operator.py",
+    "loop-ge-table-swapped": "analyzer/loop/_critical.py",
+    "loop-cost-input-noise-dropped": "analyzer/loop/_cost.py",
+    "loop-definite-tolerance-sign": "analyzer/loop/_verdict.py",
+    "loop-definite-negative-as-positive": "analyzer/loop/_verdict.py",
+    "loop-interval-left-end-off-by-one": "analyzer/loop/_critical.py",
+    "loop-merged-right-end-off-by-one": "analyzer/loop/_critical.py",
+}
+
+
+def _mutants():
+    spec = importlib.util.spec_from_file_location("kfio_bench_mutation_loop", ROOT / "bench" / "mutation.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module  # dataclasses look their module up there
+    spec.loader.exec_module(module)
+    return {m.name: m for m in module.MUTANTS}
+
+
+def test_the_closed_loop_mutants_are_listed_with_the_oracle_tests():
+    mutants = _mutants()
+    for name, path in LOOP_MUTANTS.items():
+        assert name in mutants, name
+        assert mutants[name].path == path
+        assert "tests/loop/test_loop_multimode_oracle.py" in mutants[name].tests
