@@ -222,9 +222,9 @@ MUTANTS: tuple[Mutant, ...] = (
     ),
     Mutant(
         "loop-ge-table-swapped",
-        "analyzer/loop/_critical.py",
-        '"gilbert_elliott", 1, (x, 1 - p),',
-        '"gilbert_elliott", 1, (1 - p, x),',
+        "analyzer/design/_critical_parameter.py",
+        'rest == ["recovery_rate"]:\n        return (0,), False, chan.table[0]\n',
+        'rest == ["recovery_rate"]:\n        return (1,), False, chan.table[1]\n',
         ("tests/loop/test_loop_multimode_oracle.py",),
         "a Gilbert-Elliott link's recovery rate put where the arrival after an arrival belongs: the critical "
         "recovery rates must match bisection",
