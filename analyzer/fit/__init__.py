@@ -11,11 +11,12 @@ from __future__ import annotations
 
 from ._confidence import ConfidenceVerdict, confidence_verdict
 from ._estimate import transition_counts
-from ._fit import DEFAULT_LEVEL, DEFAULT_MAX_ORDER, MAX_ORDER, FitReport, channel_of, fit, fit_trace, parse_level
+from ._fit import DEFAULT_LEVEL, DEFAULT_MAX_ORDER, MAX_ORDER, FitReport, channel_of, fit, fit_trace, parse_level, refit
 from ._read import parse_trace_text, read_trace
 from ._requests import (
     analyze_at_confidence,
     fit_link,
+    load_trace_loop_request,
     load_trace_request,
     loop_at_confidence,
     resolve_traces,
@@ -54,11 +55,13 @@ __all__ = [
     "fit",
     "fit_link",
     "fit_trace",
+    "load_trace_loop_request",
     "load_trace_request",
     "loop_at_confidence",
     "parse_level",
     "parse_trace_text",
     "read_trace",
+    "refit",
     "resolve_traces",
     "run_length_law",
     "run_test",

@@ -143,6 +143,12 @@ class FitReport(Report):
                 f"loss runs: {runs['runs']} complete, mean {runs['mean_length']:.4g} (model {runs['model_mean_length']:.4g}), "
                 f"chi-square p = {runs['p_value']:.3g}"
             )
+        if self.sequence is not None:
+            q = self.sequence
+            lines.append(
+                f"sequence numbers: {q['received']} received, {q['lost']} lost, {q['duplicates']} duplicates, "
+                f"{q['reordered']} reordered, {q['wraps']} wraps (modulus {q['modulus']}, window {q['window']})"
+            )
         lines.append(f"channel: {_channel_text(self.channel)}")
         lines += [f"note: {n}" for n in self.notes]
         lines += [f"warning: {w}" for w in self.warnings]
@@ -195,7 +201,7 @@ def _too_short(c: Candidate, n: int) -> InvalidInput:
         "/arrivals",
         f"the trace is too short for a {name} model: every history of {c.order} packets must be followed by a "
         f"packet at least once, which needs at least {(1 << c.order) + c.order} packets; in these {n}, "
-        f"history {shown} never is",
+        f"these histories never are: {shown}",
     )
 
 
@@ -343,6 +349,21 @@ def fit_trace(
         warnings=tuple(warnings),
         notes=tuple(list(trace.notes) + notes),
         forced=forced is not None,
+    )
+
+
+def refit(found: FitReport, level: Any) -> FitReport:
+    """``found`` with its intervals at another joint ``level`` (same model and estimates)."""
+    import dataclasses
+
+    lvl = level if isinstance(level, Fraction) else parse_level(level, "--level")
+    m = len(found.trials)
+    return dataclasses.replace(
+        found,
+        level=lvl,
+        intervals=found.joint_intervals(lvl),
+        marginal_intervals={name: clopper_pearson(k, n, float(lvl)) for name, (k, n) in found.trials.items()},
+        interval_method=interval_method(lvl, m),
     )
 
 

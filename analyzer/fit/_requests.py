@@ -83,6 +83,14 @@ def load_trace_request(text: str | bytes, limits: Limits = DEFAULT_LIMITS) -> tu
     return parse_request(tree, limits), fits
 
 
+def load_trace_loop_request(text: str | bytes, limits: Limits = DEFAULT_LIMITS) -> tuple[Any, dict[str, FitReport]]:
+    """:func:`kfio.loop.load_loop_request`, with trace channels (sensor or actuator) fitted first."""
+    from ..loop import parse_loop_request
+
+    tree, fits = resolve_traces(load_json(text), ("/channel", "/actuator_channel"))
+    return parse_loop_request(tree, limits), fits
+
+
 def with_trace(request: Request, trace: Trace | Any, level: Any = None) -> tuple[Request, FitReport]:
     """``request`` with its channel replaced by the model fitted to ``trace`` (``kfio analyze --trace``)."""
     from ..model import PerSensorChannel
@@ -154,6 +162,7 @@ __all__ = [
     "LOOP_METHOD",
     "analyze_at_confidence",
     "fit_link",
+    "load_trace_loop_request",
     "load_trace_request",
     "loop_at_confidence",
     "resolve_traces",

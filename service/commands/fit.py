@@ -1,0 +1,169 @@
+"""``kfio fit TRACE [--column NAME ...] [--sequence] [--level 0.95] [--json]``: a channel model for a packet trace.
+
+Exit 0 on a fit, 2 on bad input (one line on stderr naming the field, e.g.
+``TRACE line 7`` or ``--column``).  ``docs/traces.md`` walks through it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from typing import Any
+
+from .. import exitcodes
+from ..io import dump_json, emit, run_guarded
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "fit",
+        help="fit a packet channel (Bernoulli, Gilbert-Elliott, Markov) to a measured trace, with confidence intervals",
+        description="Fit the channel models kfio analyzes to a packet trace: exact maximum-likelihood estimates, "
+        "model choice by BIC (Schwarz 1978), exact binomial intervals (Clopper and Pearson 1934) joint by Bonferroni, "
+        "and a chi-square check of the loss-run lengths. Exit 0 on a fit, 2 on invalid input.",
+    )
+    p.add_argument("trace", metavar="TRACE", help="trace file (- for standard input): one 0/1 per line (1 = arrived)")
+    p.add_argument(
+        "--column",
+        action="append",
+        default=[],
+        metavar="NAME",
+        help="TRACE is a CSV file with a header row: fit the 0/1 column NAME (repeat for several sensors)",
+    )
+    p.add_argument(
+        "--sequence",
+        action="store_true",
+        help="TRACE lists received sequence numbers, one per line: gaps are losses, duplicates and late packets "
+        "are handled and reported",
+    )
+    p.add_argument(
+        "--modulus",
+        type=int,
+        default=1 << 16,
+        metavar="M",
+        help="with --sequence: the counter wraps modulo M (default 65536; 0 for a counter that never wraps)",
+    )
+    p.add_argument(
+        "--window",
+        type=int,
+        default=64,
+        metavar="W",
+        help="with --sequence: a packet may arrive up to W packets late (default 64); further back is refused",
+    )
+    p.add_argument("--level", default="0.95", metavar="L", help="joint confidence level in (0, 1) (default 0.95)")
+    p.add_argument(
+        "--model",
+        choices=("bernoulli", "gilbert_elliott", "markov"),
+        help="fit this model instead of choosing by BIC (markov needs --order)",
+    )
+    p.add_argument("--order", type=int, metavar="K", help="with --model markov: its order, 2..8")
+    p.add_argument("--max-order", type=int, metavar="K", help="largest Markov order tried (default 4, at most 8)")
+    p.add_argument("--json", action="store_true", help="print the JSON report instead of a summary")
+    p.set_defaults(func=_run, quick_exit=True)
+
+
+def _run(args: argparse.Namespace) -> int:
+    def body() -> int:
+        from kfio.errors import InvalidInput
+        from kfio.fit import fit_trace, parse_level, read_trace
+
+        if args.modulus < 0 or args.modulus == 1:
+            raise InvalidInput("--modulus", "the modulus is an integer >= 2, or 0 for a counter that never wraps")
+        level = parse_level(args.level, "--level")
+        traces = read_trace(
+            args.trace,
+            columns=args.column,
+            sequence=args.sequence,
+            modulus=args.modulus or None,
+            window=args.window,
+        )
+        reports = {}
+        for name, trace in traces.items():
+            try:
+                reports[name] = fit_trace(
+                    trace, level=level, model=args.model, order=args.order, max_order=args.max_order
+                )
+            except InvalidInput as exc:
+                flag = {"/model": "--model", "/order": "--order", "/max_order": "--max-order"}.get(exc.field)
+                where = flag or (f"--column {name}" if args.column else "TRACE")
+                raise InvalidInput(where, exc.rule) from None
+        if not args.column:
+            report = reports["trace"]
+            emit(dump_json(report.to_dict()) if args.json else report.summary())
+            return exitcodes.STABLE
+        if args.json:
+            from kfio._version import __version__
+
+            out = {
+                "kfio_version": __version__,
+                "fits": {name: r.to_dict() for name, r in reports.items()},
+                "channel": {"model": "per_sensor", "channels": {name: r.channel for name, r in reports.items()}},
+            }
+            emit(dump_json(out))
+        else:
+            for name, r in reports.items():
+                emit(f"column {name}:\n" + "\n".join("  " + line for line in r.summary().splitlines()))
+            channels = {name: r.channel for name, r in reports.items()}
+            emit("per-sensor channel: " + json.dumps({"model": "per_sensor", "channels": channels}))
+        return exitcodes.STABLE
+
+    return run_guarded(body)
+
+
+def add_trace_arguments(p: argparse.ArgumentParser) -> None:
+    """``--trace TRACE`` and ``--level L`` of ``kfio analyze`` and ``kfio loop``."""
+    p.add_argument(
+        "--trace",
+        metavar="TRACE",
+        help="fit the channel to this packet trace (one 0/1 per line, 1 = arrived) and add the verdict of the whole "
+        "confidence region (the fit block); the headline stays the exact verdict of the fitted estimate",
+    )
+    p.add_argument(
+        "--level", metavar="L", help="with --trace or a trace channel: joint confidence level (default 0.95)"
+    )
+
+
+class TraceLoader:
+    """The trace of ``--trace`` or of a ``{"model": "trace"}`` channel, and its fit, for one command run."""
+
+    def __init__(self, args: argparse.Namespace, link: str = "/channel") -> None:
+        self.args = args
+        self.link = link
+        self.fit: Any = None
+
+    def load(self, data: bytes, limits: Any) -> Any:
+        """The request of ``data`` with a trace channel fitted (:func:`kfio.fit.load_trace_request`)."""
+        from kfio.fit import load_trace_request
+
+        request, fits = load_trace_request(data, limits)
+        self.fit = fits.get(self.link)
+        return request
+
+    def load_loop(self, data: bytes) -> Any:
+        """The loop request of ``data``, with a trace channel (sensor or actuator) fitted."""
+        from kfio.errors import InvalidInput
+        from kfio.fit import load_trace_loop_request
+
+        request, fits = load_trace_loop_request(data)
+        if len(fits) > 1:
+            raise InvalidInput("/actuator_channel", "one link at a time may be a trace; the sensor channel is one")
+        for link, found in fits.items():
+            self.link, self.fit = link, found
+        return request
+
+    def apply(self, request: Any) -> Any:
+        """``request`` with ``--trace`` fitted in place of its channel (unchanged without ``--trace``)."""
+        from kfio.errors import InvalidInput
+        from kfio.fit import read_trace, refit, with_trace
+
+        if self.args.trace is None:
+            if self.args.level is not None:
+                if self.fit is None:
+                    raise InvalidInput("--level", "--level needs --trace or a trace channel")
+                self.fit = refit(self.fit, self.args.level)
+            return request
+        if self.fit is not None:
+            raise InvalidInput("--trace", "the request's channel is already a trace; give one or the other")
+        trace = read_trace(self.args.trace)["trace"]
+        request, self.fit = with_trace(request, trace, self.args.level)
+        return request
