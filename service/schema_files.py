@@ -212,10 +212,11 @@ def schema_ref(name: str) -> dict[str, str]:
 
 
 def _all_components() -> dict[str, dict[str, Any]]:
+    from .api.fit import FIT_COMPONENTS
     from .api.loop_schemas import LOOP_COMPONENTS
     from .api.sweeps import SWEEP_SCHEMA
 
-    return {**COMPONENTS, **LOOP_COMPONENTS, "Sweep": SWEEP_SCHEMA, **_check_components()}
+    return {**COMPONENTS, **LOOP_COMPONENTS, **FIT_COMPONENTS, "Sweep": SWEEP_SCHEMA, **_check_components()}
 
 
 #: File name (without .json) -> (component, title).
@@ -231,6 +232,8 @@ DOCUMENTS: dict[str, tuple[str, str]] = {
     "channel": ("ChannelFile", "channel file of a kfio check file"),
     "loop": ("LoopRequest", "kfio loop request (kfio loop FILE, POST /v1/loop)"),
     "loop-report": ("LoopReport", "kfio loop --json report"),
+    "fit": ("FitRequest", "kfio fit request (POST /v1/fit)"),
+    "fit-report": ("FitReport", "kfio fit --json report"),
 }
 
 

@@ -16,6 +16,7 @@ from ._read import parse_trace_text, read_trace
 from ._requests import (
     analyze_at_confidence,
     fit_link,
+    fit_request,
     load_trace_loop_request,
     load_trace_request,
     loop_at_confidence,
@@ -54,6 +55,7 @@ __all__ = [
     "confidence_verdict",
     "fit",
     "fit_link",
+    "fit_request",
     "fit_trace",
     "load_trace_loop_request",
     "load_trace_request",

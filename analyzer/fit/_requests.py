@@ -15,7 +15,7 @@ from collections.abc import Mapping
 from typing import Any
 
 from .._budget import Budget
-from ..errors import InvalidInput
+from ..errors import AssumptionViolation, InvalidInput
 from ..model import DEFAULT_LIMITS, Limits, Request, check_keys, load_json, parse_markov_channel, parse_request
 from ._confidence import ConfidenceVerdict, confidence_verdict
 from ._fit import DEFAULT_LEVEL, FitReport, fit_trace, parse_level
@@ -51,6 +51,25 @@ def _prefixed(exc: InvalidInput, link: str) -> InvalidInput:
     return type(exc)(link + (field if field != "/" else ""), exc.rule)
 
 
+_FIT_KEYS = {"arrivals", "level", "model", "order", "max_order"}
+
+
+def fit_request(tree: Any) -> FitReport:
+    """The fit of a ``POST /v1/fit`` body: ``{"arrivals": "0110..." or [0, 1, ...], "level": 0.95}``.
+
+    Optional ``model`` (``bernoulli``, ``gilbert_elliott``, ``markov`` with
+    ``order``) forces a model; ``max_order`` bounds the Markov orders tried.
+    """
+    check_keys(tree, "", _FIT_KEYS, {"arrivals"})
+    model = tree.get("model")
+    if model is not None and not isinstance(model, str):
+        raise InvalidInput("/model", "expected one of bernoulli, gilbert_elliott, markov")
+    level = parse_level(tree["level"]) if "level" in tree else DEFAULT_LEVEL
+    return fit_trace(
+        as_trace(tree["arrivals"]), level=level, model=model, order=tree.get("order"), max_order=tree.get("max_order")
+    )
+
+
 def fit_link(obj: Any, link: str) -> FitReport:
     """Fit the trace channel object ``obj`` found at ``link`` (errors name ``link/...``)."""
     check_keys(obj, link, _TRACE_KEYS, {"model", "arrivals"})
@@ -72,8 +91,18 @@ def resolve_traces(tree: Any, links: tuple[str, ...] = ("/channel",)) -> tuple[A
         key = link.lstrip("/")
         obj = tree.get(key)
         if isinstance(obj, Mapping) and obj.get("model") == "trace":
-            fits[link] = fit_link(obj, link)
-            out[key] = fits[link].channel
+            found = fit_link(obj, link)
+            edge = [name for name, x in found.estimates.items() if x in (0, 1)]
+            if edge:
+                raise AssumptionViolation(
+                    f"{link}/arrivals",
+                    f"the {found.model} model fitted to the trace has {edge[0]} = {found.parameters[edge[0]]}: "
+                    "Assumption 1 of Rohr, Marelli and Fu 2014 requires every conditional arrival probability to "
+                    "lie strictly between 0 and 1, so no verdict is given; a longer trace, or one with both outcomes "
+                    "after every history, is needed",
+                )
+            fits[link] = found
+            out[key] = found.channel
     return out, fits
 
 
@@ -162,6 +191,7 @@ __all__ = [
     "LOOP_METHOD",
     "analyze_at_confidence",
     "fit_link",
+    "fit_request",
     "load_trace_loop_request",
     "load_trace_request",
     "loop_at_confidence",
