@@ -11,6 +11,7 @@ The Python API (see ``docs/python_api.md``)::
     kfio.bounds(sys, kfio.bernoulli(0.6))                 # Riccati and LMI bounds
     kfio.simulate(sys, kfio.bernoulli(0.6), steps=50)     # Monte Carlo
     kfio.expected_covariance(sys, kfio.bernoulli(0.6), 6) # exact E[P_t]
+    kfio.fit("0110111011")                                # a channel model for a measured trace
 
 Typed (``py.typed``): ``report.verdict`` is a :class:`Verdict` (equal to its
 JSON text), ``report.exact_of("critical_arrival_probability")`` the exact value
@@ -38,6 +39,8 @@ _LAZY = {
     "simulate": "._api",
     "expected_covariance": "._api",
     "loop": ".loop",
+    "fit": ".fit",
+    "FitReport": ".fit",
     "build_request": "._api",
     "request_dict": "._api",
     "bernoulli": ".model._channels",
@@ -97,6 +100,7 @@ if TYPE_CHECKING:  # what the lazy names are, for type checkers and editors
         LimitExceeded,
         NumericalFailure,
     )
+    from .fit import FitReport
     from .model import (
         DEFAULT_LIMITS,
         Limits,
@@ -122,7 +126,10 @@ def __getattr__(name: str) -> Any:
     module = _LAZY.get(name)
     if module is None:
         raise AttributeError(f"module 'kfio' has no attribute {name!r}")
-    if name == "loop":  # the package kfio.loop, which is callable: kfio.loop(...) is kfio.loop.loop(...)
+    if name in (
+        "loop",
+        "fit",
+    ):  # callable packages: kfio.loop(...) is kfio.loop.loop(...), kfio.fit(...) kfio.fit.fit(...)
         value = importlib.import_module(module, __name__)
     else:
         value = getattr(importlib.import_module(module, __name__), name)
@@ -148,6 +155,7 @@ __all__ = [
     "DEFAULT_SIMULATION_LIMITS",
     "ExactReal",
     "FiniteHorizonReport",
+    "FitReport",
     "InvalidInput",
     "LimitExceeded",
     "Limits",
@@ -170,6 +178,7 @@ __all__ = [
     "build_request",
     "exact_value",
     "expected_covariance",
+    "fit",
     "gilbert_elliott",
     "load_json",
     "loop",

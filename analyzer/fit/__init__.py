@@ -9,6 +9,10 @@ in kfio's exact stable set.  See ``docs/traces.md``.
 
 from __future__ import annotations
 
+import sys
+import types
+from typing import Any
+
 from ._confidence import ConfidenceVerdict, confidence_verdict
 from ._estimate import transition_counts
 from ._fit import DEFAULT_LEVEL, DEFAULT_MAX_ORDER, MAX_ORDER, FitReport, channel_of, fit, fit_trace, parse_level, refit
@@ -70,3 +74,13 @@ __all__ = [
     "transition_counts",
     "with_trace",
 ]
+
+
+class _CallableModule(types.ModuleType):
+    """``kfio.fit`` is both this package and the function :func:`fit`: calling the package calls it."""
+
+    def __call__(self, *args: Any, **kwargs: Any) -> FitReport:
+        return fit(*args, **kwargs)
+
+
+sys.modules[__name__].__class__ = _CallableModule

@@ -48,7 +48,9 @@ def _stationary(P: np.ndarray) -> np.ndarray:
 
 
 def run_length_law(table: Sequence[float], symbol: int, max_length: int = MAX_LENGTH) -> np.ndarray:
-    """``law[l - 1] = P(L = l)``, ``l = 1 .. max_length``, for runs of ``symbol`` under the chain ``table``.
+    """``law[l - 1] = P(L = l)``, ``l = 1 ..``, for runs of ``symbol`` under the chain ``table``.
+
+    The array stops where the remaining mass is below ``1e-15``, or at ``max_length``.
 
     ``table[h] = P(1 | h)`` for the histories of order ``k = log2(len(table))``
     (kfio's convention); a Bernoulli table ``(lambda,)`` is read as the order-1
@@ -82,8 +84,8 @@ def run_length_law(table: Sequence[float], symbol: int, max_length: int = MAX_LE
         w = np.zeros(n)
         np.add.at(w, targets, v * stay)
         v = w
-        if v.sum() < 1e-15:
-            break
+        if v.sum() < 1e-15:  # what is left is below float resolution of the total
+            return law[: length + 1]
     return law
 
 
