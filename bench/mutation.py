@@ -123,6 +123,38 @@ MUTANTS: tuple[Mutant, ...] = (
         ("tests/model/test_exact_edges.py",),
         "the exponent limit accepts one past its edge: 0e801 and 0e-801 must be refused",
     ),
+    Mutant(
+        "fit-bonferroni-dropped",
+        "analyzer/fit/_fit.py",
+        "    each = float(bonferroni_level(lvl, m))\n",
+        "    each = float(lvl)\n",
+        ("tests/fit/test_fit_estimates.py",),
+        "the joint box of a fitted channel built from intervals at the joint level, not 1 - (1 - level) / m each",
+    ),
+    Mutant(
+        "fit-history-bits-reversed",
+        "analyzer/fit/_estimate.py",
+        "        h |= a[first - j : a.size - j] << (j - 1)\n",
+        "        h |= a[first - j : a.size - j] << (order - j)\n",
+        ("tests/fit/test_fit_estimates.py",),
+        "Markov histories counted newest packet first, not in kfio's oldest-first table convention",
+    ),
+    Mutant(
+        "fit-worst-corner-flipped",
+        "analyzer/fit/_confidence.py",
+        '    return name == "failure_rate"\n',
+        '    return name != "failure_rate"\n',
+        ("tests/fit/test_fit_confidence.py",),
+        "the worst corner of the confidence box takes the highest arrival probabilities",
+    ),
+    Mutant(
+        "fit-samples-needed-linear",
+        "analyzer/fit/_confidence.py",
+        "    return math.ceil(samples / (good * good))\n",
+        "    return math.ceil(samples / good)\n",
+        ("tests/fit/test_fit_confidence.py",),
+        "samples_needed with half-widths shrinking like 1/N instead of 1/sqrt(N)",
+    ),
 )
 
 

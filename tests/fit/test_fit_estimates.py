@@ -168,3 +168,15 @@ def test_hidden_state_channel_is_flagged() -> None:
     assert any("no candidate model fits" in w for w in r.warnings)
     # the same law with one regime only fits
     assert fit(a[regime == 0], max_order=1).goodness_of_fit["fits"] is True
+
+
+def test_joint_intervals_are_bonferroni_clopper_pearson() -> None:
+    """Each of the m = 2 Gilbert-Elliott intervals is the exact beta-quantile interval at 1 - 0.05 / 2."""
+    r = fit("1101100111010011101101100011101", model="gilbert_elliott")
+    for name, (k, n) in r.trials.items():
+        lo, hi = r.intervals[name]
+        assert lo == pytest.approx(stats.beta.ppf(0.0125, k, n - k + 1), rel=1e-9)
+        assert hi == pytest.approx(stats.beta.ppf(0.9875, k + 1, n - k), rel=1e-9)
+        mlo, mhi = r.marginal_intervals[name]
+        assert mlo == pytest.approx(stats.beta.ppf(0.025, k, n - k + 1), rel=1e-9)
+        assert lo < mlo and hi > mhi
