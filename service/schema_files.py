@@ -102,6 +102,15 @@ def _check_components() -> dict[str, dict[str, Any]]:
                 "description": "channel file, relative to the check file "
                 "(default: the channel of the plant file, if it is a whole request)",
             },
+            "trace": {
+                "type": "string",
+                "minLength": 1,
+                "description": "a measured packet trace (one 0/1 per line), relative to the check file, instead of "
+                "a channel: the channel fitted to it (kfio fit), verdict judged for the whole confidence region",
+            },
+            "level": {
+                **_exact("with trace: the joint confidence level, in (0, 1) (default 0.95)"),
+            },
             "loop": {
                 "type": "string",
                 "minLength": 1,
