@@ -22,7 +22,7 @@ import json
 import logging
 from typing import Any, Callable, Mapping
 
-from kfio import Budget, Request, load_request
+from kfio import Budget, Request, load_json, load_request
 
 from .problems import problem_from_exception
 from .progress import budget_for
@@ -138,6 +138,16 @@ def check_job_request(kind: str, body: bytes, settings: Settings) -> None:
     its options are sized against the job's limits, so a job that would be
     refused is a 422 at once, as on the synchronous endpoint.
     """
+    if kind == "fit":
+        from kfio.fit import fit_request
+
+        fit_request(load_json(body))
+        return
+    if kind == "analyze":  # a trace channel is fitted first, as the job will
+        from kfio.fit import load_trace_request
+
+        load_trace_request(body, settings.limits(kind))
+        return
     request = parse(body, settings, kind)
     if kind == "simulate":
         from kfio.simulation import parse_options

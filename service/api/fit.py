@@ -13,7 +13,8 @@ from fastapi import APIRouter, Request
 from fastapi.responses import Response
 
 from ..._version import __version__
-from .deps import get_body, get_dispatcher
+from .deps import BodyDep, get_body, get_dispatcher
+from .jobs import STATUS_RESPONSE, JobStoreDep, validated
 from .schemas import COMPONENTS, json_response, problem_responses, schema_ref
 
 FIT_EXAMPLE: dict[str, Any] = {"arrivals": "1101101110110111011011101101", "level": 0.95}
@@ -143,6 +144,47 @@ router.add_api_route(
     "and a chi-square check of the loss-run lengths.  Returns exactly what `kfio fit --json` prints.",
     response_class=Response,
     responses={**json_response("FitReport", "The fit report"), **problem_responses(413, 415, 422, 503, 504)},
+    openapi_extra={
+        "requestBody": {
+            "required": True,
+            "content": {
+                "application/json": {
+                    "schema": schema_ref("FitRequest"),
+                    "examples": {"short-trace": {"summary": "A short trace as a 0/1 string", "value": FIT_EXAMPLE}},
+                }
+            },
+        }
+    },
+)
+
+
+def _checked(body: bytes) -> None:
+    from kfio import load_json
+    from kfio.fit import fit_request
+
+    fit_request(load_json(body))
+
+
+async def submit_fit_job(body: BodyDep, store: JobStoreDep) -> Response:
+    await validated(_checked, body)  # a bad trace is a 422 naming the field at once, not a failed job
+    job = store.submit("fit", body)
+    return Response(
+        store.document(job), status_code=202, media_type="application/json", headers={"Location": f"/v1/jobs/{job.id}"}
+    )
+
+
+router.add_api_route(
+    "/v1/jobs/fit",
+    submit_fit_job,
+    methods=["POST"],
+    status_code=202,
+    tags=["jobs"],
+    summary="Fit a long trace as a job",
+    description="Same body as `POST /v1/fit`, for traces whose fit outlasts a request's budget.  Answers 202 with "
+    "`Location: /v1/jobs/{id}` at once; poll that URL.  The trace is checked before the job is queued (422 naming "
+    "the field).",
+    response_class=Response,
+    responses={202: {"description": "The job was queued", **STATUS_RESPONSE}, **problem_responses(413, 422, 429, 503)},
     openapi_extra={
         "requestBody": {
             "required": True,

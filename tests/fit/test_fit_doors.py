@@ -163,3 +163,22 @@ def test_http_analyze_with_a_trace_channel(client: TestClient) -> None:
     body["channel"] = {"model": "trace", "arrivals": "10a1"}
     r = client.post("/v1/analyze", json=body)
     assert r.status_code == 422 and r.json()["field"] == "/channel/arrivals"
+
+
+def test_fit_as_a_job_and_analyze_job_with_a_trace(client: TestClient) -> None:
+    trace = "".join(map(str, _exact(600, 1_000).tolist()))
+    r = client.post("/v1/jobs/fit", json={"arrivals": trace})
+    assert r.status_code == 202
+    url = r.headers["Location"]
+    deadline = time.monotonic() + 60
+    while (doc := client.get(url).json())["status"] not in ("done", "failed"):
+        assert time.monotonic() < deadline
+        time.sleep(0.05)
+    assert doc["status"] == "done"
+    result = client.get(url + "/result")
+    assert result.status_code == 200 and result.json() == kfio.fit(trace).to_dict()
+    assert client.post("/v1/jobs/fit", json={"arrivals": "01a"}).json()["field"] == "/arrivals"
+    r = client.post("/v1/jobs/analyze", json={**PLANT, "channel": {"model": "trace", "arrivals": trace}})
+    assert r.status_code == 202
+    r = client.post("/v1/jobs/analyze", json={**PLANT, "channel": {"model": "trace", "arrivals": "1x"}})
+    assert r.status_code == 422 and r.json()["field"] == "/channel/arrivals"

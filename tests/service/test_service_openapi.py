@@ -74,7 +74,7 @@ def test_every_post_documents_body_examples_and_errors(path: str) -> None:
         from kfio.loop import load_loop_request
 
         kind, load = "LoopRequest", load_loop_request
-    if path == "/v1/fit":
+    if path in ("/v1/fit", "/v1/jobs/fit"):
         from kfio.fit import fit_request
 
         kind, load = "FitRequest", lambda text: fit_request(json.loads(text))
