@@ -195,11 +195,18 @@ def _loop_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[s
 
 def _loop_region_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[str, Any]) -> JobOutput:
     """PNG from :func:`kfio.service.loop_plot.loop_region` (a loop request)."""
-    from kfio.loop import load_loop_request
+    from kfio.fit import load_trace_loop_request
 
     from .loop_plot import loop_region
 
-    return loop_region(load_loop_request(body, settings.limits()), budget, params), PNG
+    return loop_region(load_trace_loop_request(body, settings.limits())[0], budget, params), PNG
+
+
+def _trace_region_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[str, Any]) -> JobOutput:
+    """PNG from :func:`kfio.service.fit_plot.trace_region` (an analyze request with a trace channel)."""
+    from .fit_plot import trace_region
+
+    return trace_region(body, settings.limits("analyze"), budget, params), PNG
 
 
 JOBS: dict[str, JobFn] = {
@@ -216,6 +223,7 @@ JOBS: dict[str, JobFn] = {
     "loop": _loop_job,
     "plot-loop-region": _loop_region_job,
     "fit": fit_job,
+    "plot-trace-region": _trace_region_job,
 }
 
 

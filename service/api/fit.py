@@ -19,6 +19,11 @@ from .schemas import COMPONENTS, json_response, problem_responses, schema_ref
 
 FIT_EXAMPLE: dict[str, Any] = {"arrivals": "1101101110110111011011101101", "level": 0.95}
 
+TRACE_REQUEST: dict[str, Any] = {
+    "system": {"A": [[-1.25]], "C": [[1]]},
+    "channel": {"model": "trace", "arrivals": "1101100111011101101001110110111011", "level": 0.95},
+}
+
 _INTERVALS = {
     "type": "object",
     "additionalProperties": {"type": "array", "items": {"type": "number"}, "minItems": 2, "maxItems": 2},
@@ -151,6 +156,43 @@ router.add_api_route(
                 "application/json": {
                     "schema": schema_ref("FitRequest"),
                     "examples": {"short-trace": {"summary": "A short trace as a 0/1 string", "value": FIT_EXAMPLE}},
+                }
+            },
+        }
+    },
+)
+
+
+async def trace_region(request: Request) -> Response:
+    dispatcher = await get_dispatcher(request)
+    return await dispatcher.answer("plot-trace-region", await get_body(request, dispatcher), {})
+
+
+router.add_api_route(
+    "/v1/plots/trace-region",
+    trace_region,
+    methods=["POST"],
+    tags=["plots"],
+    summary="The confidence region of a channel fitted to a trace, over the exact stable region",
+    description="An analyze request whose channel is a measured trace.  Bernoulli: the arrival-probability axis "
+    "split at the exact critical probability, the confidence interval over it.  Gilbert-Elliott: the exact (q, p) "
+    "map and boundary (Rohr, Marelli and Fu 2014, Theorem 1) with the Bonferroni box and its corners' verdicts.  "
+    "A Markov fit has no plot (422).",
+    response_class=Response,
+    responses={
+        200: {
+            "description": "A PNG image",
+            "content": {"image/png": {"schema": {"type": "string", "format": "binary"}}},
+        },
+        **problem_responses(413, 415, 422, 503, 504),
+    },
+    openapi_extra={
+        "requestBody": {
+            "required": True,
+            "content": {
+                "application/json": {
+                    "schema": schema_ref("AnalysisRequest"),
+                    "examples": {"trace": {"summary": "A scalar plant and a short trace", "value": TRACE_REQUEST}},
                 }
             },
         }

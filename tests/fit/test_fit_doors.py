@@ -182,3 +182,17 @@ def test_fit_as_a_job_and_analyze_job_with_a_trace(client: TestClient) -> None:
     assert r.status_code == 202
     r = client.post("/v1/jobs/analyze", json={**PLANT, "channel": {"model": "trace", "arrivals": "1x"}})
     assert r.status_code == 422 and r.json()["field"] == "/channel/arrivals"
+
+
+def test_trace_region_plot(client: TestClient) -> None:
+    body = {**PLANT, "channel": {"model": "trace", "arrivals": "".join(map(str, _exact(370, 1_000).tolist()))}}
+    r = client.post("/v1/plots/trace-region", json=body)
+    assert r.status_code == 200 and r.content.startswith(b"\x89PNG\r\n\x1a\n")
+    bursty = "".join(map(str, simulate_chain((0.3, 0.95), 5_000, 2).tolist()))
+    r = client.post("/v1/plots/trace-region", json={**PLANT, "channel": {"model": "trace", "arrivals": bursty}})
+    assert r.status_code == 200 and r.content.startswith(b"\x89PNG")
+    order2 = "".join(map(str, simulate_chain((0.2, 0.9, 0.5, 0.95), 20_000, 3).tolist()))
+    r = client.post("/v1/plots/trace-region", json={**PLANT, "channel": {"model": "trace", "arrivals": order2}})
+    assert r.status_code == 422 and r.json()["field"] == "/channel/arrivals" and "Markov" in r.json()["rule"]
+    r = client.post("/v1/plots/trace-region", json=PLANT)
+    assert r.status_code == 422 and r.json()["field"] == "/channel/model"
