@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Mapping
+from fractions import Fraction
 from typing import Any
 
 from .._budget import Budget
@@ -126,7 +127,7 @@ def with_trace(request: Request, trace: Trace | Any, level: Any = None) -> tuple
 
     if isinstance(request.channel, PerSensorChannel):
         raise InvalidInput("--trace", "a trace gives one packet's channel; this request has one channel per sensor")
-    lvl = DEFAULT_LEVEL if level is None else parse_level(level, "--level")
+    lvl = DEFAULT_LEVEL if level is None else level if isinstance(level, Fraction) else parse_level(level, "--level")
     found = fit_trace(as_trace(trace), level=lvl)
     channel = parse_markov_channel(found.channel)
     return dataclasses.replace(request, channel=channel), found

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 from typing import Any
 
 from .. import exitcodes
@@ -58,6 +59,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--order", type=int, metavar="K", help="with --model markov: its order, 2..8")
     p.add_argument("--max-order", type=int, metavar="K", help="largest Markov order tried (default 4, at most 8)")
+    p.add_argument(
+        "--plant",
+        metavar="FILE",
+        help="with TRACE a folder: a request file whose system every trace's fitted channel is analyzed with "
+        "(the exact verdict of the estimate and the verdict at --level confidence, per trace)",
+    )
     p.add_argument("--json", action="store_true", help="print the JSON report instead of a summary")
     p.set_defaults(func=_run, quick_exit=True)
 
@@ -70,6 +77,12 @@ def _run(args: argparse.Namespace) -> int:
         if args.modulus < 0 or args.modulus == 1:
             raise InvalidInput("--modulus", "the modulus is an integer >= 2, or 0 for a counter that never wraps")
         level = parse_level(args.level, "--level")
+        if os.path.isdir(args.trace):
+            return _run_folder(args, level)
+        if args.plant is not None:
+            raise InvalidInput(
+                "--plant", "--plant is for a folder of traces; for one trace use kfio analyze PLANT --trace TRACE"
+            )
         traces = read_trace(
             args.trace,
             columns=args.column,
@@ -108,6 +121,77 @@ def _run(args: argparse.Namespace) -> int:
         return exitcodes.STABLE
 
     return run_guarded(body)
+
+
+def _folder_row(args: argparse.Namespace, path: str, level: Any, plant: Any) -> list[dict[str, Any]]:
+    """The rows of one file of a folder: one per trace (CSV column), or one error row naming the field."""
+    from kfio.errors import InvalidInput
+    from kfio.fit import analyze_at_confidence, fit_trace, read_trace, with_trace
+
+    name = os.path.basename(path)
+    rows: list[dict[str, Any]] = []
+    try:
+        traces = read_trace(
+            path, columns=args.column, sequence=args.sequence, modulus=args.modulus or None, window=args.window
+        )
+        for column, trace in traces.items():
+            row: dict[str, Any] = {"file": name, "column": column if args.column else None}
+            if plant is None:
+                row["fit"] = fit_trace(
+                    trace, level=level, model=args.model, order=args.order, max_order=args.max_order
+                ).to_dict()
+            else:
+                from kfio.stability import analyze
+
+                request, found = with_trace(plant, trace, level)
+                point = analyze(request).verdict
+                row["fit"] = found.to_dict()
+                row["verdict"] = str(point)
+                row["confidence"] = analyze_at_confidence(request, found, point).to_dict()
+            rows.append(row)
+    except InvalidInput as exc:
+        rows.append({"file": name, "column": None, "error": {"field": exc.field, "rule": exc.rule}})
+    return rows
+
+
+def _run_folder(args: argparse.Namespace, level: Any) -> int:
+    """``kfio fit FOLDER [--plant PLANT]``: every file of the folder, one row per trace; exit 8 if some failed."""
+    from kfio._version import __version__
+
+    plant = None
+    if args.plant is not None:
+        from kfio.fit import load_trace_request
+
+        from ..io import read_request_text
+
+        plant, _ = load_trace_request(read_request_text(args.plant))
+    files = sorted(
+        os.path.join(args.trace, f)
+        for f in os.listdir(args.trace)
+        if not f.startswith(".") and os.path.isfile(os.path.join(args.trace, f))
+    )
+    rows = [row for path in files for row in _folder_row(args, path, level, plant)]
+    if args.json:
+        emit(dump_json({"kfio_version": __version__, "level": float(level), "traces": rows}))
+    else:
+        for row in rows:
+            label = row["file"] + (f" [{row['column']}]" if row.get("column") else "")
+            if "error" in row:
+                emit(f"{label}: error at {row['error']['field']}: {row['error']['rule']}")
+                continue
+            f = row["fit"]
+            params = ", ".join(f"{k} = {v}" for k, v in f["parameters"].items())
+            line = f"{label}: {f['samples']} packets, {f['model']}" + (
+                f" order {f['order']}" if f["model"] == "markov" else ""
+            )
+            line += f" ({params})"
+            if "confidence" in row:
+                c = row["confidence"]
+                line += f"; estimate {row['verdict']}, at {float(level) * 100:g}% {c['verdict']}"
+                if c["samples_needed"] is not None:
+                    line += f" (about {c['samples_needed']} packets would decide)"
+            emit(line)
+    return exitcodes.SWEEP_ERRORS if any("error" in r for r in rows) else exitcodes.STABLE
 
 
 def add_trace_arguments(p: argparse.ArgumentParser) -> None:

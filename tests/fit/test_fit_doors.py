@@ -196,3 +196,22 @@ def test_trace_region_plot(client: TestClient) -> None:
     assert r.status_code == 422 and r.json()["field"] == "/channel/arrivals" and "Markov" in r.json()["rule"]
     r = client.post("/v1/plots/trace-region", json=PLANT)
     assert r.status_code == 422 and r.json()["field"] == "/channel/model"
+
+
+def test_folder_of_traces_with_a_plant(files: Path, capsys) -> None:
+    folder = files / "logs"
+    folder.mkdir()
+    for name in ("long.txt", "near.txt", "bad.txt"):
+        (folder / name).write_text((files / name).read_text())
+    args = ["fit", str(folder), "--plant", str(files / "plant.json"), "--json"]
+    assert cli_main(args) == 8  # one file failed: an error row, as a sweep's
+    rows = {r["file"]: r for r in json.loads(capsys.readouterr().out)["traces"]}
+    assert rows["bad.txt"]["error"]["field"].endswith("bad.txt line 3")
+    assert rows["long.txt"]["verdict"] == "stable" and rows["long.txt"]["confidence"]["verdict"] == "stable"
+    assert rows["near.txt"]["confidence"]["verdict"] == "undecided"
+    assert rows["near.txt"]["confidence"]["samples_needed"] > 1_000
+    (folder / "bad.txt").unlink()
+    assert cli_main(["fit", str(folder)]) == 0
+    text = capsys.readouterr().out
+    assert "long.txt: 20000 packets, bernoulli (arrival_probability = 3/5)" in text
+    assert cli_main(["fit", str(files / "long.txt"), "--plant", str(files / "plant.json")]) == 2
