@@ -47,8 +47,7 @@ def transition_counts(arrivals: np.ndarray, order: int, start: int | None = None
     for j in range(1, order + 1):  # bit order - j of the history is a[t - j]
         h |= a[first - j : a.size - j] << (j - 1)
     nxt = a[first:]
-    counts = np.zeros((1 << order, 2), dtype=np.int64)
-    np.add.at(counts, (h, nxt), 1)
+    counts: np.ndarray = np.bincount(2 * h + nxt, minlength=2 << order).reshape(1 << order, 2)
     return counts
 
 
