@@ -205,6 +205,17 @@ def add_trace_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--level", metavar="L", help="with --trace or a trace channel: joint confidence level (default 0.95)"
     )
+    p.add_argument(
+        "--trace-column",
+        metavar="NAME",
+        help="with --trace: TRACE is a CSV file with a header row; fit its 0/1 column NAME",
+    )
+    p.add_argument(
+        "--trace-sequence",
+        action="store_true",
+        help="with --trace: TRACE lists received sequence numbers (16-bit counter, reordering window 64; "
+        "kfio fit --sequence takes other values)",
+    )
 
 
 class TraceLoader:
@@ -241,6 +252,12 @@ class TraceLoader:
         from kfio.fit import read_trace, refit, with_trace
 
         if self.args.trace is None:
+            for flag, given in (
+                ("--trace-column", self.args.trace_column),
+                ("--trace-sequence", self.args.trace_sequence),
+            ):
+                if given:
+                    raise InvalidInput(flag, f"{flag} needs --trace")
             if self.args.level is not None:
                 if self.fit is None:
                     raise InvalidInput("--level", "--level needs --trace or a trace channel")
@@ -248,6 +265,8 @@ class TraceLoader:
             return request
         if self.fit is not None:
             raise InvalidInput("--trace", "the request's channel is already a trace; give one or the other")
-        trace = read_trace(self.args.trace)["trace"]
+        column = self.args.trace_column
+        traces = read_trace(self.args.trace, columns=[column] if column else (), sequence=self.args.trace_sequence)
+        (trace,) = traces.values()
         request, self.fit = with_trace(request, trace, self.args.level)
         return request

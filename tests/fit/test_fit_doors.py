@@ -104,6 +104,20 @@ def test_cli_analyze_trace_stable_and_undecided(files: Path, capsys) -> None:
     assert "at 95% confidence: UNDECIDED" in text and "packets in all would decide" in text
 
 
+def test_cli_analyze_trace_from_sequence_numbers_and_a_csv_column(files: Path, capsys) -> None:
+    plant = str(files / "plant.json")
+    assert cli_main(["analyze", plant, "--trace", str(files / "seq.txt"), "--trace-sequence", "--json"]) in (0, 1)
+    out = json.loads(capsys.readouterr().out)
+    assert out["fit"]["samples"] == 7 and out["fit"]["model"] in ("bernoulli", "gilbert_elliott")
+    imu = _exact(1_500, 2_000)
+    (files / "radio.csv").write_text("t,imu\n" + "".join(f"{i},{x}\n" for i, x in enumerate(imu.tolist())))
+    assert cli_main(["analyze", plant, "--trace", str(files / "radio.csv"), "--trace-column", "imu", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["fit"]["samples"] == 2_000 and out["fit"]["parameters"] == {"arrival_probability": "3/4"}
+    assert cli_main(["analyze", plant, "--trace-column", "imu"]) == 2
+    assert "--trace-column needs --trace" in capsys.readouterr().err
+
+
 def test_cli_loop_trace(files: Path, capsys) -> None:
     args = ["loop", str(ROOT / "examples/loop_scalar.json"), "--trace", str(files / "long.txt"), "--json"]
     assert cli_main(args) == 0
