@@ -11,6 +11,7 @@ The Python API (see ``docs/python_api.md``)::
     kfio.bounds(sys, kfio.bernoulli(0.6))                 # Riccati and LMI bounds
     kfio.simulate(sys, kfio.bernoulli(0.6), steps=50)     # Monte Carlo
     kfio.expected_covariance(sys, kfio.bernoulli(0.6), 6) # exact E[P_t]
+    kfio.fit("0110111011")                                # a channel model for a measured trace
 
 Typed (``py.typed``): ``report.verdict`` is a :class:`Verdict` (equal to its
 JSON text), ``report.exact_of("critical_arrival_probability")`` the exact value
@@ -38,6 +39,8 @@ _LAZY = {
     "simulate": "._api",
     "expected_covariance": "._api",
     "loop": ".loop._api",
+    "fit": ".fit._fit",
+    "FitReport": ".fit._fit",
     "build_request": "._api",
     "request_dict": "._api",
     "bernoulli": ".model._channels",
@@ -97,6 +100,7 @@ if TYPE_CHECKING:  # what the lazy names are, for type checkers and editors
         LimitExceeded,
         NumericalFailure,
     )
+    from .fit._fit import FitReport, fit
     from .loop._api import loop
     from .model import (
         DEFAULT_LIMITS,
@@ -133,6 +137,8 @@ def __getattr__(name: str) -> Any:
 # (lazy, import-free) subpackage now and unbinding it leaves the attribute to ``__getattr__``: the function.
 importlib.import_module(".loop", __name__)
 del globals()["loop"]
+importlib.import_module(".fit", __name__)
+del globals()["fit"]
 
 
 def __dir__() -> list[str]:
@@ -153,6 +159,7 @@ __all__ = [
     "DEFAULT_SIMULATION_LIMITS",
     "ExactReal",
     "FiniteHorizonReport",
+    "FitReport",
     "InvalidInput",
     "LimitExceeded",
     "Limits",
@@ -175,6 +182,7 @@ __all__ = [
     "build_request",
     "exact_value",
     "expected_covariance",
+    "fit",
     "gilbert_elliott",
     "load_json",
     "loop",

@@ -270,6 +270,38 @@ MUTANTS: tuple[Mutant, ...] = (
         ("tests/loop/test_loop_multimode_oracle.py",),
         "an interval merged across a root where another eigenvalue crosses 1 ends one root too early",
     ),
+    Mutant(
+        "fit-bonferroni-dropped",
+        "analyzer/fit/_fit.py",
+        "    each = float(bonferroni_level(lvl, m))\n",
+        "    each = float(lvl)\n",
+        ("tests/fit/test_fit_estimates.py",),
+        "the joint box of a fitted channel built from intervals at the joint level, not 1 - (1 - level) / m each",
+    ),
+    Mutant(
+        "fit-history-bits-reversed",
+        "analyzer/fit/_estimate.py",
+        "        h |= a[first - j : a.size - j] << (j - 1)\n",
+        "        h |= a[first - j : a.size - j] << (order - j)\n",
+        ("tests/fit/test_fit_estimates.py",),
+        "Markov histories counted newest packet first, not in kfio's oldest-first table convention",
+    ),
+    Mutant(
+        "fit-worst-corner-flipped",
+        "analyzer/fit/_confidence.py",
+        '    return name == "failure_rate"\n',
+        '    return name != "failure_rate"\n',
+        ("tests/fit/test_fit_confidence.py",),
+        "the worst corner of the confidence box takes the highest arrival probabilities",
+    ),
+    Mutant(
+        "fit-samples-needed-linear",
+        "analyzer/fit/_confidence.py",
+        "    return math.ceil(samples / (good * good))\n",
+        "    return math.ceil(samples / good)\n",
+        ("tests/fit/test_fit_confidence.py",),
+        "samples_needed with half-widths shrinking like 1/N instead of 1/sqrt(N)",
+    ),
 )
 
 

@@ -179,9 +179,17 @@ class Dispatcher:
         """Raise the 422 problem of an invalid ``body`` (nothing if it is valid); a loop body is a loop request."""
         try:
             if job in ("loop", "plot-loop-region"):
-                from kfio.loop import load_loop_request
+                from kfio.fit import load_trace_loop_request
 
-                load_loop_request(body, self.settings.limits())
+                load_trace_loop_request(body, self.settings.limits())
+            elif job == "fit":
+                from kfio.fit import fit_request
+
+                fit_request(load_json(body))
+            elif job == "analyze":
+                from kfio.fit import load_trace_request
+
+                load_trace_request(body, self.settings.limits(job))
             else:
                 load_request(body, self.settings.limits(job))
         except InvalidInput as exc:

@@ -99,7 +99,10 @@ def memory_limit(args: argparse.Namespace) -> int | None:
 
 
 def run_request_command(
-    args: argparse.Namespace, work: Callable[[Request, Budget], int], command: str | None = None
+    args: argparse.Namespace,
+    work: Callable[[Request, Budget], int],
+    command: str | None = None,
+    loader: Callable[[bytes, Any], Request] | None = None,
 ) -> int:
     """Read the request of ``args.file`` and run ``work(request, budget)`` under the watchdog.
 
@@ -107,7 +110,8 @@ def run_request_command(
     else :data:`DEFAULT_TIME_BUDGET_S`; the work gets it as a cooperative
     :class:`kfio.Budget` and the watchdog (:func:`kfio.service.watchdog.run_supervised`)
     kills it shortly after.  The request is validated with the size limits of
-    ``command`` (:meth:`kfio.Limits.for_command`).  Exit codes as :func:`run_guarded`.
+    ``command`` (:meth:`kfio.Limits.for_command`), by ``loader(data, limits)`` when given
+    (default :func:`kfio.load_request`).  Exit codes as :func:`run_guarded`.
     """
 
     def body() -> int:
@@ -121,7 +125,8 @@ def run_request_command(
             from kfio import DEFAULT_LIMITS, Budget, load_request
 
             limits = DEFAULT_LIMITS.for_command(command)
-            return run_guarded(lambda: work(load_request(data, limits), Budget(seconds=seconds)))
+            load = loader or load_request
+            return run_guarded(lambda: work(load(data, limits), Budget(seconds=seconds)))
 
         return run_supervised(child, seconds, memory_bytes=memory)
 

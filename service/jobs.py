@@ -22,7 +22,7 @@ import json
 import logging
 from typing import Any, Callable, Mapping
 
-from kfio import Budget, Request, load_request
+from kfio import Budget, Request, load_json, load_request
 
 from .problems import problem_from_exception
 from .progress import budget_for
@@ -68,10 +68,30 @@ def analyze_job(body: bytes, settings: Settings, budget: Budget, params: Mapping
     on the same ``A`` and ``C`` with another channel, ``Q`` or ``R`` skips the eigenstructure.
     """
     from kfio._reuse import reused_fmo_blocks
+    from kfio.fit import analyze_at_confidence, load_trace_request
     from kfio.stability import analyze
 
-    request = parse(body, settings, "analyze")
-    return report_json(analyze(request, budget, fmo=reused_fmo_blocks(request.system, budget)))
+    request, fits = load_trace_request(body, settings.limits("analyze"))  # a trace channel is fitted first
+    report = analyze(request, budget, fmo=reused_fmo_blocks(request.system, budget))
+    if "/channel" not in fits:
+        return report_json(report)
+    block = analyze_at_confidence(request, fits["/channel"], report.verdict, budget)
+    return _json_with_fit(report.to_dict(), block)
+
+
+def _json_with_fit(report: dict[str, Any], block: Any) -> JobOutput:
+    """A report with the ``fit`` block of a trace channel (:mod:`kfio.fit`), as the CLI prints it."""
+    from .io import dump_json
+
+    return dump_json({**report, "fit": block.to_dict()}).encode("utf-8"), JSON
+
+
+def fit_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[str, Any]) -> JobOutput:
+    """``kfio fit``: a channel model for a packet trace (:func:`kfio.fit.fit_request`)."""
+    from kfio import load_json
+    from kfio.fit import fit_request
+
+    return report_json(fit_request(load_json(body)))
 
 
 def bounds_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[str, Any]) -> JobOutput:
@@ -118,6 +138,16 @@ def check_job_request(kind: str, body: bytes, settings: Settings) -> None:
     its options are sized against the job's limits, so a job that would be
     refused is a 422 at once, as on the synchronous endpoint.
     """
+    if kind == "fit":
+        from kfio.fit import fit_request
+
+        fit_request(load_json(body))
+        return
+    if kind == "analyze":  # a trace channel is fitted first, as the job will
+        from kfio.fit import load_trace_request
+
+        load_trace_request(body, settings.limits(kind))
+        return
     request = parse(body, settings, kind)
     if kind == "simulate":
         from kfio.simulation import parse_options
@@ -151,18 +181,32 @@ def _sweep_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[
 
 def _loop_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[str, Any]) -> JobOutput:
     """``kfio loop``: the closed loop's exact verdict, cost and critical probabilities (:mod:`kfio.loop`)."""
-    from kfio.loop import analyze_loop, load_loop_request
+    from kfio.fit import load_trace_loop_request, loop_at_confidence
+    from kfio.loop import analyze_loop
 
-    return report_json(analyze_loop(load_loop_request(body, settings.limits()), budget=budget))
+    request, fits = load_trace_loop_request(body, settings.limits())  # a trace channel is fitted first
+    report = analyze_loop(request, budget=budget)
+    if not fits:
+        return report_json(report)
+    (link, found), *_ = fits.items()
+    out = report.to_dict()
+    return _json_with_fit(out, loop_at_confidence(request, found, link, out, budget))
 
 
 def _loop_region_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[str, Any]) -> JobOutput:
     """PNG from :func:`kfio.service.loop_plot.loop_region` (a loop request)."""
-    from kfio.loop import load_loop_request
+    from kfio.fit import load_trace_loop_request
 
     from .loop_plot import loop_region
 
-    return loop_region(load_loop_request(body, settings.limits()), budget, params), PNG
+    return loop_region(load_trace_loop_request(body, settings.limits())[0], budget, params), PNG
+
+
+def _trace_region_job(body: bytes, settings: Settings, budget: Budget, params: Mapping[str, Any]) -> JobOutput:
+    """PNG from :func:`kfio.service.fit_plot.trace_region` (an analyze request with a trace channel)."""
+    from .fit_plot import trace_region
+
+    return trace_region(body, settings.limits("analyze"), budget, params), PNG
 
 
 JOBS: dict[str, JobFn] = {
@@ -178,6 +222,8 @@ JOBS: dict[str, JobFn] = {
     "plot-ge-region": _plot_job("ge_region"),
     "loop": _loop_job,
     "plot-loop-region": _loop_region_job,
+    "fit": fit_job,
+    "plot-trace-region": _trace_region_job,
 }
 
 

@@ -441,4 +441,5 @@ BUILTIN_KINDS = (
     worker_kind("simulate", "simulate-job", fraction=simulation_fraction),
     worker_kind("sweep", fraction=sweep_fraction),
     worker_kind("loop"),
+    worker_kind("fit"),
 )

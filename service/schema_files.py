@@ -102,6 +102,15 @@ def _check_components() -> dict[str, dict[str, Any]]:
                 "description": "channel file, relative to the check file "
                 "(default: the channel of the plant file, if it is a whole request)",
             },
+            "trace": {
+                "type": "string",
+                "minLength": 1,
+                "description": "a measured packet trace (one 0/1 per line), relative to the check file, instead of "
+                "a channel: the channel fitted to it (kfio fit), verdict judged for the whole confidence region",
+            },
+            "level": {
+                **_exact("with trace: the joint confidence level, in (0, 1) (default 0.95)"),
+            },
             "loop": {
                 "type": "string",
                 "minLength": 1,
@@ -212,10 +221,11 @@ def schema_ref(name: str) -> dict[str, str]:
 
 
 def _all_components() -> dict[str, dict[str, Any]]:
+    from .api.fit import FIT_COMPONENTS
     from .api.loop_schemas import LOOP_COMPONENTS
     from .api.sweeps import SWEEP_SCHEMA
 
-    return {**COMPONENTS, **LOOP_COMPONENTS, "Sweep": SWEEP_SCHEMA, **_check_components()}
+    return {**COMPONENTS, **LOOP_COMPONENTS, **FIT_COMPONENTS, "Sweep": SWEEP_SCHEMA, **_check_components()}
 
 
 #: File name (without .json) -> (component, title).
@@ -231,6 +241,8 @@ DOCUMENTS: dict[str, tuple[str, str]] = {
     "channel": ("ChannelFile", "channel file of a kfio check file"),
     "loop": ("LoopRequest", "kfio loop request (kfio loop FILE, POST /v1/loop)"),
     "loop-report": ("LoopReport", "kfio loop --json report"),
+    "fit": ("FitRequest", "kfio fit request (POST /v1/fit)"),
+    "fit-report": ("FitReport", "kfio fit --json report"),
 }
 
 

@@ -55,6 +55,9 @@ VIEWS: dict[str, str] = {
     # kfio sweep
     "sweep._engine.SweepResult": "_sweep:sweep_result",
     "sweep._engine.SweepRow": "_sweep:sweep_row",
+    # kfio fit (Clopper and Pearson 1934; Schwarz 1978) and the verdict at a stated confidence
+    "fit._fit.FitReport": "_fit:fit_report",
+    "fit._confidence.ConfidenceVerdict": "_fit:confidence_verdict",
     # kfio check
     "check._run.CheckResult": "_check:check_result",
     "check._run.Outcome": "_check:outcome",

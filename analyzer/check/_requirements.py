@@ -8,7 +8,9 @@ single commands agree by construction:
 key                                        command    holds when
 =========================================  =========  ==================================================
 ``verdict``                                analyze    the exact verdict (Rohr, Marelli and Fu 2014,
-                                                      Theorem 1) is the one named
+                                                      Theorem 1) is the one named; for an entry naming
+                                                      a trace, the verdict of the whole confidence
+                                                      region of the fitted channel
 ``margin: m``                              analyze    the worst rate ``max_k |alpha_k|^2 sigma_k <= 1 - m``
 ``critical_arrival_probability_at_most``   analyze    the exact critical arrival probability ``<= v``
 ``tail_exponent_above: k``                 analyze    the tail exponent ``kappa > k`` (Mo and Sinopoli
@@ -198,6 +200,16 @@ def _verdict(ok: bool | None, measured: str, detail: str) -> Judgement:
 def judge(req: Requirement, payload: Mapping[str, Any]) -> Judgement:
     """Judge ``req`` on a worker's payload: ``{"report": <report JSON>, ...exact extras}``."""
     report = payload["report"]
+    if req.key == "verdict" and report.get("fit"):  # an entry naming a trace: the whole confidence region
+        fit = report["fit"]
+        level = f"{fit['level'] * 100:g}%"
+        needed = "" if fit["samples_needed"] is None else f"; about {fit['samples_needed']} packets would decide"
+        return Judgement(
+            "pass" if fit["verdict"] == req.value else "fail",
+            f"{fit['verdict']} at {level} (estimate: {report.get('verdict')})",
+            f"verdict of the whole {level} confidence region of the {fit['model']} channel fitted to "
+            f"{fit['samples']} packets{needed}",
+        )
     if req.key == "verdict":
         verdict = report.get("verdict")
         return Judgement(

@@ -140,6 +140,9 @@ def run_one(command: str, tree: dict[str, Any], seconds: float) -> tuple[str, An
                 "link_points": link_points(loop_request),
             }
             return "ok", payload, time.perf_counter() - t0
+        from ..fit import resolve_traces
+
+        tree, fits = resolve_traces(tree)  # a trace channel: the channel fitted to it
         request = parse_request(tree, DEFAULT_LIMITS.for_command(command))
         budget = Budget(seconds=seconds)
         if command == "analyze":
@@ -147,7 +150,12 @@ def run_one(command: str, tree: dict[str, Any], seconds: float) -> tuple[str, An
 
             report = analyze(request, budget)
             rate, rate_exact = _worst_rate(report)
-            payload = {"report": report.to_dict(), "worst_rate": rate, "worst_rate_exact": rate_exact}
+            out = report.to_dict()
+            if "/channel" in fits:  # the verdict of the whole confidence region judges `verdict`
+                from ..fit import analyze_at_confidence
+
+                out["fit"] = analyze_at_confidence(request, fits["/channel"], report.verdict, budget).to_dict()
+            payload = {"report": out, "worst_rate": rate, "worst_rate_exact": rate_exact}
         elif command == "bounds":
             from ..riccati_bounds import compute_bounds
 

@@ -22,6 +22,12 @@ the request's ``options`` (e.g. ``{"bounds": {"horizon": 4}}``).  Every entry
 is validated as a request before any work starts; an error names the field of
 the check file (``/checks/2/plant``) and, inside the named file, its field.
 
+An entry may name a measured packet trace instead of a channel
+(``"trace": "traces/radio.txt"``, one 0/1 per line, and optionally
+``"level": 0.95``): the channel is the one :func:`kfio.fit.fit` fits to it,
+and ``verdict`` is then judged on the verdict of the whole confidence region
+(``docs/traces.md``).
+
 An entry may instead name a loop request file (``"loop": "loops/pendulum.json"``,
 the file of ``kfio loop``, ``docs/loop.md``) with the loop requirements
 (``loop_verdict``, ``loop_cost_at_most``,
@@ -43,7 +49,7 @@ from ..model import DEFAULT_LIMITS, fraction_text, json_pointer, load_json, pars
 from ._requirements import OUTAGE_KEYS, Requirement, parse_requirements
 
 CHECK_TOP_KEYS = {"$schema", "description", "options", "checks"}
-CHECK_ENTRY_KEYS = {"name", "description", "plant", "channel", "loop", "options", "requirements"}
+CHECK_ENTRY_KEYS = {"name", "description", "plant", "channel", "trace", "level", "loop", "options", "requirements"}
 CHECK_OPTION_KEYS = {"time_budget_s", "point_budget_s"}
 
 #: Defaults of the whole check's budget and of each evaluation's (seconds).
@@ -88,11 +94,47 @@ class CheckEntry:
         return tree
 
 
+def resolved(tree: dict[str, Any]) -> dict[str, Any]:
+    """``tree`` with a trace channel replaced by the channel fitted to it (:func:`kfio.fit.resolve_traces`)."""
+    from ..fit import resolve_traces
+
+    out: dict[str, Any] = resolve_traces(tree)[0]
+    return out
+
+
+def _trace_channel(entry: Mapping[str, Any], base: Path, where: str) -> dict[str, Any]:
+    """The trace channel object of an entry naming ``trace`` (and optionally ``level``)."""
+    from ..fit import fit_link
+
+    if "channel" in entry:
+        raise InvalidInput(f"{where}/trace", "an entry names a channel or a trace, not both")
+    if "trace" not in entry:
+        raise InvalidInput(f"{where}/level", "a confidence level needs a trace")
+    ref = entry["trace"]
+    if not isinstance(ref, str) or not ref.strip():
+        raise InvalidInput(
+            f"{where}/trace", "expected the path of a trace file (one 0/1 per line), relative to the check file"
+        )
+    try:
+        text = _read(base / ref, f"{where}/trace", "trace file").decode("utf-8")
+    except UnicodeDecodeError:
+        raise InvalidInput(f"{where}/trace", f"{ref}: not UTF-8 text") from None
+    channel: dict[str, Any] = {"model": "trace", "arrivals": text}
+    if "level" in entry:
+        channel["level"] = entry["level"]
+    try:
+        fit_link(channel, "/channel")
+    except InvalidInput as exc:
+        field_ = f"{where}/level" if exc.field == "/channel/level" else f"{where}/trace"
+        raise InvalidInput(field_, f"{ref}: {exc.rule}" if field_.endswith("trace") else exc.rule) from None
+    return channel
+
+
 def _validate_options(entry: CheckEntry, where: str) -> None:
     """Check each command's options now (a Monte Carlo too large is a bad file, exit 2, not a failed run)."""
     for command in entry.commands:
         try:
-            request = parse_request(entry.request_for(command), DEFAULT_LIMITS.for_command(command))
+            request = parse_request(resolved(entry.request_for(command)), DEFAULT_LIMITS.for_command(command))
             if command == "simulate":
                 from ..simulation import parse_options
 
@@ -217,13 +259,15 @@ def parse_check(tree: Any, base: str | Path = ".", source: str = "<check>") -> C
             if need not in entry:
                 raise InvalidInput(f"{where}/{need}", "required")
         system, plant_file = _part(entry["plant"], base, f"{where}/plant", "plant", "system")
-        if "channel" in entry:
+        if "trace" in entry or "level" in entry:
+            channel = _trace_channel(entry, base, where)
+        elif "channel" in entry:
             channel, _ = _part(entry["channel"], base, f"{where}/channel", "channel", "channel")
         elif "channel" in plant_file:
             channel = plant_file["channel"]
         else:
             raise InvalidInput(f"{where}/channel", "required (the plant file names no channel)")
-        name = entry.get("name", f"{entry['plant']} / {entry.get('channel', 'its channel')}")
+        name = entry.get("name", f"{entry['plant']} / {entry.get('channel', entry.get('trace', 'its channel'))}")
         if not isinstance(name, str) or not name.strip():
             raise InvalidInput(f"{where}/name", "expected a non-empty string")
         if name in names:
@@ -235,7 +279,7 @@ def parse_check(tree: Any, base: str | Path = ".", source: str = "<check>") -> C
         elif isinstance(plant_file.get("options"), dict) and "channel" not in entry:
             request["options"] = plant_file["options"]
         try:
-            parse_request(request, DEFAULT_LIMITS.for_command("analyze"))  # each command checks its own below
+            parse_request(resolved(request), DEFAULT_LIMITS.for_command("analyze"))  # each command checks its own
         except InvalidInput as exc:
             # the field inside the request maps to the file that holds it
             top = exc.field.split("/")[1] if exc.field.count("/") else ""

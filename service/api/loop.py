@@ -43,9 +43,9 @@ router.add_api_route(
 
 
 async def submit_loop_job(body: BodyDep, store: JobStoreDep) -> Response:
-    from kfio.loop import load_loop_request
+    from kfio.fit import load_trace_loop_request
 
-    await validated(load_loop_request, body, store.settings.limits())
+    await validated(load_trace_loop_request, body, store.settings.limits())
     job = store.submit("loop", body)
     return Response(
         store.document(job), status_code=202, media_type="application/json", headers={"Location": f"/v1/jobs/{job.id}"}

@@ -54,12 +54,13 @@ LOOP_COMPONENTS: dict[str, dict[str, Any]] = {
                 "required": ["A", "B", "C", "Q", "R"],
                 "additionalProperties": False,
             },
-            "channel": schema_ref("Channel"),
+            "channel": {"anyOf": [schema_ref("Channel"), schema_ref("TraceChannel")]},
             "actuator_channel": {
                 "anyOf": [
                     schema_ref("BernoulliChannel"),
                     schema_ref("GilbertElliottChannel"),
                     schema_ref("MarkovChannel"),
+                    schema_ref("TraceChannel"),
                 ]
             },
             "controller": {

@@ -424,7 +424,10 @@ COMPONENTS: dict[str, dict[str, Any]] = {
         "description": "The same JSON the kfio CLI reads from a file.",
         "properties": {
             "system": schema_ref("System"),
-            "channel": schema_ref("Channel"),
+            "channel": {
+                "anyOf": [schema_ref("Channel"), schema_ref("TraceChannel")],
+                "description": "the packet channel; a measured trace (model trace) is read by kfio analyze only",
+            },
             "options": schema_ref("Options"),
         },
         "required": ["system", "channel"],

@@ -8,6 +8,7 @@ from typing import Any
 
 from .. import exitcodes
 from ..io import add_request_arguments, dump_json, emit, run_request_command
+from .fit import TraceLoader, add_trace_arguments
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -29,6 +30,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         metavar="PNG",
         help="Gilbert-Elliott channel: write the exact (q, p) region map as a PNG (grid --ge-grid, default 41)",
     )
+    add_trace_arguments(p)
     p.set_defaults(func=_run, quick_exit=True)
 
 
@@ -50,7 +52,10 @@ def partial_summary(partial: dict[str, Any]) -> str:
 def _run(args: argparse.Namespace) -> int:
     from kfio import Budget, BudgetExceeded, Request, analyze  # here, not at import: `kfio --help` stays fast
 
+    traces = TraceLoader(args)
+
     def work(request: Request, budget: Budget) -> int:
+        request = traces.apply(request)
         grid = args.ge_grid if args.ge_grid is not None else (41 if args.ge_plot else None)
         if grid is not None:
             opts = {**request.options.get("analyze", {}), "ge_grid": grid}
@@ -66,7 +71,14 @@ def _run(args: argparse.Namespace) -> int:
 
             with open(args.ge_plot, "wb") as fh:
                 fh.write(draw_ge_region(report.gilbert_elliott, report.verdict, request))
+        if traces.fit is not None:  # the verdict of the whole confidence region beside the point estimate's
+            from kfio.fit import analyze_at_confidence
+
+            block = analyze_at_confidence(request, traces.fit, report.verdict, budget)
+            out = {**report.to_dict(), "fit": block.to_dict()}
+            emit(dump_json(out) if args.json else "\n".join([report.summary(), *block.summary_lines()]))
+            return exitcodes.BY_VERDICT[report.verdict]
         emit(dump_json(report.to_dict()) if args.json else report.summary())  # emit: user text made safe
         return exitcodes.BY_VERDICT[report.verdict]
 
-    return run_request_command(args, work, "analyze")
+    return run_request_command(args, work, "analyze", loader=traces.load)

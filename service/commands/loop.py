@@ -22,6 +22,7 @@ from ..io import (
     run_guarded,
 )
 from ..watchdog import run_supervised
+from .fit import TraceLoader, add_trace_arguments
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -34,6 +35,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "5 numerical failure.",
     )
     add_request_arguments(p)
+    add_trace_arguments(p)
     p.set_defaults(func=_run, quick_exit=True)
 
 
@@ -202,11 +204,23 @@ def _run(args: argparse.Namespace) -> int:
         def child() -> int:
             def work() -> int:
                 from kfio import Budget
-                from kfio.loop import analyze_loop, load_loop_request  # here: `kfio --help` stays fast
+                from kfio.loop import analyze_loop  # here: `kfio --help` stays fast
 
+                traces = TraceLoader(args)
+                request = traces.apply(traces.load_loop(data))
                 # the same seconds as the watchdog, as `kfio analyze`: work that checks in stops first (a partial report)
-                report = analyze_loop(load_loop_request(data), budget=Budget(seconds=seconds)).to_dict()
-                emit(dump_json(report) if args.json else summary(report))  # emit: user text made safe
+                budget = Budget(seconds=seconds)
+                report = analyze_loop(request, budget=budget).to_dict()
+                lines = []
+                if traces.fit is not None:  # the verdict of the whole confidence region beside the estimate's
+                    from kfio.fit import loop_at_confidence
+
+                    block = loop_at_confidence(request, traces.fit, traces.link, report, budget)
+                    report = {**report, "fit": block.to_dict()}
+                    lines = block.summary_lines()
+                emit(
+                    dump_json(report) if args.json else "\n".join([summary(report), *lines])
+                )  # emit: user text made safe
                 return exitcodes.BY_VERDICT[report["verdict"]]
 
             return run_guarded(work)

@@ -411,6 +411,31 @@ function loadText(text, what) {
   }
 }
 
+/** Fit an uploaded trace (POST /v1/fit) and put it in the /channel field as a trace channel. */
+async function loadTrace(text, name) {
+  clearErrors();
+  const arrivals = text.split(/\r?\n/).map((l) => l.trim()).filter((l) => l && !l.startsWith("#")).join("");
+  const answer = await readAnswer(await post("/v1/fit", JSON.stringify({ arrivals })));
+  if (!answer.ok) {
+    const doc = answer.doc || {};
+    $("source-error").textContent = `trace ${name}: ${doc.detail || answer.text}`;
+    $("source-error").hidden = false;
+    return;
+  }
+  const fit = answer.doc;
+  const params = Object.entries(fit.parameters).map(([k, v]) => {
+    const [lo, hi] = fit.intervals[k];
+    return `${k} = ${v} [${lo.toPrecision(4)}, ${hi.toPrecision(4)}]`;
+  });
+  const field = document.querySelector('#field-list .field[data-pointer="/channel"] textarea');
+  if (field) field.value = JSON.stringify({ model: "trace", arrivals });
+  $("trace-note").textContent = `${name}: ${fit.samples} packets, ${fit.model}${fit.model === "markov" ? ` order ${fit.order}` : ""} `
+    + `(chosen by BIC): ${params.join(", ")}. `
+    + (field ? "The channel field now holds the trace: Analyze gives the verdict at 95% confidence."
+      : "Load a request first: its channel field takes the trace.")
+    + (fit.warnings.length ? ` Warning: ${fit.warnings.join(" ")}` : "");
+}
+
 async function loadExample() {
   const id = $("example").value;
   const meta = state.examples.find((e) => e.id === id);
@@ -431,6 +456,10 @@ async function init() {
   $("upload").addEventListener("change", async (ev) => {
     const file = ev.target.files[0];
     if (file) loadText(await file.text(), `file ${file.name}`);
+  });
+  $("trace-upload").addEventListener("change", async (ev) => {
+    const file = ev.target.files[0];
+    if (file) await loadTrace(await file.text(), file.name);
   });
   $("use-paste").addEventListener("click", () => { if (loadText($("paste").value, "the pasted JSON")) $("paste-box").open = false; });
   $("fields").addEventListener("submit", (ev) => {

@@ -276,6 +276,26 @@ function channelText(ch) {
   return `${ch.model}: ${params(ch)}`;
 }
 
+/** The fit block of a report whose channel was a measured trace: the verdict of the whole confidence region. */
+function fitSection(f) {
+  const out = document.createDocumentFragment();
+  const level = `${f.level * 100}%`;
+  out.append(el("h3", `Verdict at ${level} confidence: ${f.verdict.toUpperCase()}`));
+  out.append(el("p", f.verdict === "undecided"
+    ? `The ${level} confidence region of the channel fitted to ${f.samples} packets holds stable and unstable channels.`
+      + (f.samples_needed ? ` About ${f.samples_needed} packets in all would decide, if the rate stays as measured.` : "")
+    : `Every channel in the ${level} confidence region of the channel fitted to ${f.samples} packets is ${f.verdict}.`, "note"));
+  out.append(table(
+    ["parameter", "estimate (exact)", `${level} joint interval`],
+    Object.entries(f.parameters).map(([k, v]) => [k, v, `[${dec(f.intervals[k][0])}, ${dec(f.intervals[k][1])}]`]),
+    "fit",
+  ));
+  out.append(facts([["model", f.model + (f.model === "markov" ? ` of order ${f.order}` : "")], ["method", f.method],
+    ["intervals", f.interval_method]]));
+  out.append(warningBox(f.warnings) || "");
+  return out;
+}
+
 function renderAnalyze(r) {
   const out = document.createDocumentFragment();
   out.append(exactHeadline(r.verdict, []));
@@ -300,6 +320,7 @@ function renderAnalyze(r) {
     out.append(el("p", "Ask for the critical value of one arrival probability with options.analyze.critical_parameter, "
       + 'for example "/channel/arrival_probability/01".', "note"));
   }
+  if (r.fit) out.append(fitSection(r.fit));
   if (r.regions) out.append(regionsSection(r.regions));
   if (r.tail) out.append(tailSection(r.tail));
   out.append(el("h3", "Blocks (one per class of eigenvalues with the same modulus up to a root of unity)"));
@@ -439,6 +460,7 @@ function renderLoop(r) {
   ]);
   d.id = "loop";
   out.append(d);
+  if (r.fit) out.append(fitSection(r.fit));
   out.append(el("h3", "The estimator alone, with the same fixed gain (no control)"));
   const cmp = el("p", est.statement ? `${est.statement.charAt(0).toUpperCase()}${est.statement.slice(1)}.` : (est.optimal_filter_note || "No comparison for this channel."), "advice");
   cmp.id = "estimator-alone";
@@ -509,6 +531,7 @@ function plotsFor(endpoint, request) {
   if (endpoint === "simulate") return [["simulation", "Simulated trace(P_t): mean, 95% band and percentiles"]];
   const ch = request && request.channel;
   if (!ch) return [];
+  if (ch.model === "trace") return [["trace-region", "The confidence region of the channel fitted to the trace, over the exact stable region"]];
   if (ch.model === "bernoulli") return [["phase-transition", "trace(S_bar) and trace(V_bar) against the arrival probability, critical values marked (Sinopoli et al. 2004, Figs. 1-3)"]];
   if (ch.model === "gilbert_elliott") {
     return [["ge-region", "Exact stability region in the (recovery rate q, failure rate p) square, the request's point marked (Rohr, Marelli and Fu 2014, Theorem 1)"]];
