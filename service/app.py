@@ -50,8 +50,8 @@ Stability analysis of Kalman filters whose measurements travel over lossy packet
 * Each analysis process has a memory limit (`KFIO_MEMORY_MB`); a request that needs more is 422
   `memory-exceeded`.
 * Identical requests (same canonical JSON) are answered from an in-memory cache (`X-Cache: hit`).
-* Longer work runs as a job: `POST /v1/jobs/analyze`, `POST /v1/jobs/bounds`, `POST /v1/jobs/simulate` and
-  `POST /v1/jobs/loop` take the body of their command, and `POST /v1/sweeps` a sweep; each answers
+* Longer work runs as a job: `POST /v1/jobs/analyze`, `POST /v1/jobs/bounds`, `POST /v1/jobs/simulate`,
+  `POST /v1/jobs/loop` and `POST /v1/jobs/fit` take the body of their command, and `POST /v1/sweeps` a sweep; each answers
   202 with a `Location` to poll; budgets up to an hour (`KFIO_JOB_TIME_BUDGET_S`), a separate lane of
   worker processes (`KFIO_JOB_WORKERS`), at most `KFIO_MAX_JOBS` waiting (429 beyond), `DELETE` cancels.
   Jobs live in the server's memory: a restart forgets them.

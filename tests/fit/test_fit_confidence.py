@@ -15,13 +15,14 @@ from fractions import Fraction
 
 import numpy as np
 import pytest
-from conftest import simulate_chain
 from scipy import stats
 
 import kfio
 from kfio.fit import analyze_at_confidence, fit, load_trace_loop_request, loop_at_confidence, with_trace
 from kfio.loop import analyze_loop
 from kfio.stability import analyze
+
+from support.traces import simulate_chain
 
 PLANT = kfio.load_request(
     '{"system": {"A": [["5/4"]], "C": [[1]]}, "channel": {"model": "bernoulli", "arrival_probability": 0.5}}'

@@ -10,13 +10,14 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import simulate_chain
 from fastapi.testclient import TestClient
 
 import kfio
 from kfio.service.app import create_app
 from kfio.service.cli import main as cli_main
 from kfio.service.settings import Settings
+
+from support.traces import simulate_chain
 
 ROOT = Path(__file__).resolve().parents[2]
 PLANT = {"system": {"A": [["5/4"]], "C": [[1]]}, "channel": {"model": "bernoulli", "arrival_probability": 0.5}}

@@ -7,11 +7,12 @@ from fractions import Fraction
 
 import numpy as np
 import pytest
-from conftest import simulate_chain
 from scipy import stats
 
 import kfio
 from kfio.fit import fit, transition_counts
+
+from support.traces import simulate_chain
 
 
 def test_bernoulli_estimate_is_the_exact_share_of_arrivals() -> None:

@@ -4,9 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import simulate_chain
 
 from kfio.fit import complete_runs, run_length_law, run_test
+
+from support.traces import simulate_chain
 
 
 def test_complete_runs_leave_out_the_cut_ones() -> None:
