@@ -53,7 +53,7 @@ Stability analysis of Kalman filters whose measurements travel over lossy packet
 * Longer work runs as a job: `POST /v1/jobs/analyze` (`bounds`, `simulate`) with the same body answers
   202 with a `Location` to poll; budgets up to an hour (`KFIO_JOB_TIME_BUDGET_S`), a separate lane of
   worker processes (`KFIO_JOB_WORKERS`), at most `KFIO_MAX_JOBS` waiting (429 beyond), `DELETE` cancels.
-  Jobs live in the server's memory: a restart forgets them.
+  `kfio serve` keeps jobs in an embedded database (`KFIO_DATA_DIR`): they run and answer after a restart.
 * Requests are answered only for the host names the deployment trusts (`KFIO_TRUSTED_HOSTS`, loopback names
   by default); any other `Host` header is 421 `misdirected-request` (a defence against DNS rebinding).
 * A web page for all of this is at `/`; these docs and the page load nothing from other hosts.

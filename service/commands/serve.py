@@ -79,6 +79,10 @@ def _run(args: argparse.Namespace) -> int:
     except ValidationError as exc:
         print(f"kfio: {setting_error(exc, overrides)}", file=sys.stderr)
         return exitcodes.INVALID_INPUT
+    if settings.data_dir is None:  # the served app keeps its jobs on disk (an app built in a test, in memory)
+        from ..jobdb import default_data_dir
+
+        settings = settings.model_copy(update={"data_dir": str(default_data_dir())})
     if settings.port != 0:
         reason = port_in_use(settings.host, settings.port)
         if reason is not None:  # checked before the worker pool starts, for a clear message
