@@ -22,6 +22,7 @@ from kfio.errors import AnalyzerError
 
 from .api import api_router, web
 from .api.schemas import COMPONENTS
+from .connection_guard import ChunkedResponses
 from .dispatch import Dispatcher
 from .host_check import HostCheck, parse_hosts
 from .jobstore import JobStore
@@ -89,6 +90,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         title="kfio", version=API_VERSION, description=DESCRIPTION, lifespan=lifespan, docs_url=None, redoc_url=None
     )
     app.add_middleware(HostCheck, hosts=parse_hosts(settings.trusted_hosts))  # 421 for untrusted Host names
+    app.add_middleware(ChunkedResponses)  # a slow reader holds a piece of a large response, not all of it
     app.include_router(api_router)
     web.install(app)  # /, /docs, /redoc: every asset from the package, none from another host
     for exc in (ProblemError, AnalyzerError, RequestValidationError, StarletteHTTPException, Exception):

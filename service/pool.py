@@ -335,12 +335,13 @@ class WorkerPool:
         """Counters for ``/readyz``."""
         return {
             "size": self.size,
-            "alive": sum(1 for w in self._all if w.process.is_alive()),
+            "alive": sum(1 for w in self._all if not w.reserved and w.process.is_alive()),
             "busy": self._busy,
             "waiting": self._waiting + self._spare_waiting,
             "completed": self.completed,
             "replaced": self.replaced,
             "reserved": self.reserved,
+            "reserved_alive": sum(1 for w in self._all if w.reserved and w.process.is_alive()),
             "moved": self.moved,
         }
 

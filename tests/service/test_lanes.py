@@ -104,7 +104,7 @@ def test_a_cheap_task_takes_a_free_regular_worker_first() -> None:
         try:
             regular, _ = pids(p)
             assert await p.run((0.0,), 10, cheap=True) == regular
-            assert p.stats()["reserved"] == 1 and p.stats()["alive"] == 2
+            assert p.stats()["reserved"] == p.stats()["reserved_alive"] == p.stats()["alive"] == 1
         finally:
             await p.close()
 
