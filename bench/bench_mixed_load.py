@@ -10,9 +10,9 @@ cache off and a fresh job database:
 * ``lane``: the default, one reserved worker for cheap requests
   (:mod:`kfio.service.lanes`).
 
-In each, ``--heavy`` clients (4) post a loop of ``n = 5`` states over
-Gilbert-Elliott links with ``options.time_budget_s = 8`` over and over (it
-needs longer, so each holds a worker for its whole 8 s budget and ends 504), and ``--small`` clients (8)
+In each, ``--heavy`` clients (4) post a loop of ``n = 4`` states over
+Gilbert-Elliott links with ``options.time_budget_s = 8`` over and over (its
+exact critical values take about that long: each holds a worker for 5 to 8 s), and ``--small`` clients (8)
 post 1x1 analyze requests (a new arrival probability each time, so never
 cached) one after another for ``--duration`` seconds (60), after the heavy
 ones have filled the workers.  It prints, per scenario, the small requests'
@@ -47,10 +47,12 @@ from support.live_server import JSON_HEADERS, LiveServer  # noqa: E402
 HEAVY_BUDGET_S = 8
 
 
-def heavy_loop(k: int, n: int = 5) -> bytes:
-    """A loop of ``n`` states over Gilbert-Elliott links that outlasts its 8 s budget (``n = 4``: about 6.5 s).
+def heavy_loop(k: int, n: int = 4) -> bytes:
+    """A loop of ``n`` states over Gilbert-Elliott links, about as long as its 8 s budget.
 
-    ``k`` changes the failure rate in its fifth decimal, so no two requests share a computation.
+    Its exact critical values take 5 to 11 s in a warm worker on this project's
+    machines (the report gives what the budget allowed).  ``k`` changes the
+    failure rate in its fifth decimal, so no two requests share a computation.
     """
     eye = [[1 if i == j else 0 for j in range(n)] for i in range(n)]
     A = [["11/10" if i == j else ("1/10" if j == i + 1 else 0) for j in range(n)] for i in range(n)]

@@ -92,10 +92,10 @@ from .sweep_jobs import sweep_fraction
 log = logging.getLogger("kfio.service")
 
 STATUSES = ("queued", "running", "done", "failed", "cancelled")
+FINISHED = frozenset({"done", "failed", "cancelled"})
 
 #: Runs a job may start; one found running after the server died this many times fails ``interrupted-by-restart``.
 MAX_RUNS = 2
-FINISHED = frozenset({"done", "failed", "cancelled"})
 
 JobOutput = tuple[bytes, str]
 
