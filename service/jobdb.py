@@ -217,6 +217,15 @@ def _decode(column: str, value: Any) -> Any:
     return value
 
 
+def data_dir_problem(data_dir: str | os.PathLike[str]) -> str | None:
+    """Why a server cannot keep its jobs in ``data_dir`` now (``None`` if it can): checked before it starts."""
+    try:
+        SqliteRecords(data_dir).close()
+    except RuntimeError as exc:
+        return str(exc)
+    return None
+
+
 def open_records(data_dir: str | None) -> JobRecords:
     """:class:`SqliteRecords` in ``data_dir``, or :class:`MemoryRecords` when it is ``None``."""
     return MemoryRecords() if data_dir is None else SqliteRecords(data_dir)

@@ -249,3 +249,28 @@ def test_without_a_data_dir_jobs_stay_in_memory_and_the_default_directory_is_the
     assert default_data_dir() == Path("/srv/data/kfio")
     monkeypatch.delenv("XDG_DATA_HOME")
     assert default_data_dir() == Path.home() / ".local" / "share" / "kfio"
+
+
+@pytest.mark.slow
+def test_kfio_serve_on_a_data_directory_another_server_holds_exits_6_naming_the_setting(tmp_path: Path) -> None:
+    import os
+    import subprocess
+    import sys
+
+    held = SqliteRecords(tmp_path)
+    try:
+        env = {**os.environ, "KFIO_DATA_DIR": str(tmp_path)}
+        done = subprocess.run(
+            [sys.executable, "-m", "kfio.service.cli", "serve", "--port", "0"],
+            env=env,
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
+    finally:
+        held.close()
+    assert done.returncode == 6, done.stderr
+    assert done.stderr.strip().splitlines() == [
+        f"kfio: the data directory {tmp_path} (KFIO_DATA_DIR) is in use by another kfio server; "
+        "give each server a directory of its own"
+    ]
