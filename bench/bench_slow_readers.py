@@ -13,7 +13,8 @@ second for ``--round-s`` seconds (45), then closes.  It samples the server
 process's resident memory (``VmRSS``; the workers are other processes) at
 the start, at the peak of each round, and ``--settle-s`` seconds (5) after
 each round's clients left, and counts the connections the server closed on
-the clients (a read that returned end of file or an error).  Every socket
+the clients (a read that returned end of file or an error, during the round
+or when the client drains its socket at the end).  Every socket
 has a timeout; everything stops by itself.
 
 On a Linux loopback the kernel's send buffer of each connection grows to
@@ -90,9 +91,22 @@ def one_round(port: int, pid: int, clients: int, round_s: float, path: str) -> t
         alive = still
         peak = max(peak, rss_mb(pid))
         time.sleep(1.0)
+    cut += sum(1 for s in alive if ended(s))
     for s in readers:
         s.close()
     return peak, cut
+
+
+def ended(s: socket.socket) -> bool:
+    """Drain what the socket holds: True if the server ended the connection (end of file or reset)."""
+    try:
+        while s.recv(1 << 16):
+            pass
+    except BlockingIOError:
+        return False  # still open: it would send more
+    except OSError:
+        return True
+    return True
 
 
 def sweep_result_path(url: str, points: int) -> str:
