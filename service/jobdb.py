@@ -169,8 +169,11 @@ class SqliteRecords:
                     raise
                 self._db.execute("COMMIT")
             except sqlite3.Error as exc:
-                if self._db.in_transaction:
-                    self._db.execute("ROLLBACK")
+                if self._db.in_transaction:  # a COMMIT that failed (a full disk): undo the whole write
+                    try:
+                        self._db.execute("ROLLBACK")
+                    except sqlite3.Error:
+                        pass  # SQLite rolls back itself when it cannot; the write is not committed either way
                 raise StoreUnavailable(str(exc)) from None
 
     def add(self, record: dict[str, Any]) -> None:

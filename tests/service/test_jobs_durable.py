@@ -158,6 +158,8 @@ class FullDisk:
         self.db, self.fail_on = db, fail_on
 
     def execute(self, sql: str, *args: Any) -> Any:
+        if sql.startswith(self.fail_on):
+            raise sqlite3.OperationalError("database or disk is full")
         return self.db.execute(sql, *args)
 
     def executemany(self, sql: str, rows: Any) -> Any:
@@ -173,11 +175,12 @@ class FullDisk:
         self.db.close()
 
 
-def test_a_write_that_fails_half_way_leaves_no_half_job(tmp_path: Path) -> None:
+@pytest.mark.parametrize("failing", ["UPDATE", "COMMIT"])
+def test_a_write_that_fails_half_way_leaves_no_half_job(tmp_path: Path, failing: str) -> None:
     records = SqliteRecords(tmp_path)
     records.add(stored_job("a", "queued", 0).record())
     real = records._db
-    records._db = FullDisk(real, "UPDATE")  # type: ignore[assignment]
+    records._db = FullDisk(real, failing)  # type: ignore[assignment]
     with pytest.raises(StoreUnavailable, match="disk is full"):
         records.update("a", status="done", content=b"x" * 1000, body=b"")
     records._db = real
