@@ -52,8 +52,12 @@ ENV PATH=/opt/kfio/bin:$PATH \
     KFIO_HOST=0.0.0.0 \
     KFIO_PORT=8000
 
-RUN useradd --create-home --uid 10001 --shell /usr/sbin/nologin kfio
+# The job database lives in kfio serve's default data directory (KFIO_DATA_DIR): a volume, so that
+# accepted jobs and their results outlive the container (docs/deployment.md).
+RUN useradd --create-home --uid 10001 --shell /usr/sbin/nologin kfio \
+    && install -d -o kfio -g kfio -m 700 /home/kfio/.local /home/kfio/.local/share /home/kfio/.local/share/kfio
 COPY --from=builder /opt/kfio /opt/kfio
+VOLUME ["/home/kfio/.local/share/kfio"]
 
 USER 10001
 WORKDIR /home/kfio

@@ -302,6 +302,30 @@ MUTANTS: tuple[Mutant, ...] = (
         ("tests/fit/test_fit_confidence.py",),
         "samples_needed with half-widths shrinking like 1/N instead of 1/sqrt(N)",
     ),
+    Mutant(
+        "lane-takes-one-state-more",
+        "service/lanes.py",
+        "len(matrix) > MAX_STATES:",
+        "len(matrix) > MAX_STATES + 1:",
+        ("tests/service/test_lanes.py",),
+        "the cheap lane takes a request one state past its size rule",
+    ),
+    Mutant(
+        "restart-runs-once-more",
+        "service/jobstore.py",
+        "if job.attempts >= MAX_RUNS:",
+        "if job.attempts > MAX_RUNS:",
+        ("tests/service/test_jobs_durable.py",),
+        "a job found running after MAX_RUNS server deaths is run again instead of failing interrupted-by-restart",
+    ),
+    Mutant(
+        "whole-body-to-slow-readers",
+        "service/connection_guard.py",
+        "            if len(body) <= self.chunk_bytes:\n",
+        "            if True:\n",
+        ("tests/service/test_slow_readers.py",),
+        "a large response body handed to the server whole: a slow reader holds all of it",
+    ),
 )
 
 

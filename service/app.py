@@ -22,6 +22,7 @@ from kfio.errors import AnalyzerError
 
 from .api import api_router, web
 from .api.schemas import COMPONENTS
+from .connection_guard import ChunkedResponses
 from .dispatch import Dispatcher
 from .host_check import HostCheck, parse_hosts
 from .jobstore import JobStore
@@ -54,7 +55,7 @@ Stability analysis of Kalman filters whose measurements travel over lossy packet
   `POST /v1/jobs/loop` and `POST /v1/jobs/fit` take the body of their command, and `POST /v1/sweeps` a sweep; each answers
   202 with a `Location` to poll; budgets up to an hour (`KFIO_JOB_TIME_BUDGET_S`), a separate lane of
   worker processes (`KFIO_JOB_WORKERS`), at most `KFIO_MAX_JOBS` waiting (429 beyond), `DELETE` cancels.
-  Jobs live in the server's memory: a restart forgets them.
+  `kfio serve` keeps jobs in an embedded database (`KFIO_DATA_DIR`): they run and answer after a restart.
 * Requests are answered only for the host names the deployment trusts (`KFIO_TRUSTED_HOSTS`, loopback names
   by default); any other `Host` header is 421 `misdirected-request` (a defence against DNS rebinding).
 * A web page for all of this is at `/`; these docs and the page load nothing from other hosts.
@@ -90,6 +91,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         title="kfio", version=API_VERSION, description=DESCRIPTION, lifespan=lifespan, docs_url=None, redoc_url=None
     )
     app.add_middleware(HostCheck, hosts=parse_hosts(settings.trusted_hosts))  # 421 for untrusted Host names
+    app.add_middleware(ChunkedResponses)  # a slow reader holds a piece of a large response, not all of it
     app.include_router(api_router)
     web.install(app)  # /, /docs, /redoc: every asset from the package, none from another host
     for exc in (ProblemError, AnalyzerError, RequestValidationError, StarletteHTTPException, Exception):

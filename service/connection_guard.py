@@ -12,12 +12,26 @@ process's descriptors (then ``/healthz`` stops answering too).
   is closed then too.
 * **Body deadline** (``KFIO_BODY_TIMEOUT_S``): the body must be complete this
   long after the headers.
+* **Send deadline** (``KFIO_SEND_TIMEOUT_S``): a response whose client reads
+  so little that the transport's write buffer stays above its high-water mark
+  (asyncio's ``pause_writing``, 64 KiB) for this long is cut off: the
+  connection is aborted and its buffer dropped.
 * **Connection cap** (``KFIO_MAX_CONNECTIONS``, lowered to fit the process's
-  descriptor limit): a new connection past it takes the place of the oldest
-  connection that has not sent its request's headers yet (that one gets
-  ``408``); when every connection has, the new one is answered ``503 busy`` at
+  descriptor limit): every open connection counts, a response in flight
+  too.  A new connection past it takes the place of the oldest connection
+  that has not sent its request's headers yet (that one gets ``408``), else of
+  the oldest one whose response is stalled (its client is not reading: it is
+  aborted); when there is neither, the new one is answered ``503 busy`` at
   once and closed, without reading its request.  So clients that hold
-  connections without sending requests cannot lock out the ones that do.
+  connections without sending requests, or without reading answers, cannot
+  lock out the ones that do.
+
+Flow control: :class:`ChunkedResponses` (ASGI middleware) hands Uvicorn any
+response body larger than :data:`CHUNK_BYTES` in pieces of that size, and
+Uvicorn waits for the transport to drain below its high-water mark before each
+piece; so a connection buffers at most about two pieces, however large the
+response (the 1 MiB ReDoc bundle) and however slow its reader, instead of a
+whole copy of the body per connection.
 
 A deadline that passes before the response has started is answered ``408``
 (problem+json, ``Connection: close``); the connection is closed either way.
@@ -48,6 +62,9 @@ RESERVED_FDS = 64
 
 #: At most one log line per this many seconds for each kind of refusal.
 LOG_INTERVAL_S = 10.0
+
+#: Largest piece of a response body handed to the server at once (see :class:`ChunkedResponses`).
+CHUNK_BYTES = 64 * 1024
 
 _REASONS = {400: b"Bad Request", 408: b"Request Timeout", 503: b"Service Unavailable"}
 
@@ -115,14 +132,21 @@ def connection_cap(wanted: int, reserved: int = RESERVED_FDS) -> int:
 class Guard:
     """The rules shared by every connection of one server (see the module docstring)."""
 
-    def __init__(self, header_timeout_s: float, body_timeout_s: float, max_connections: int) -> None:
+    def __init__(
+        self, header_timeout_s: float, body_timeout_s: float, max_connections: int, send_timeout_s: float = 30.0
+    ) -> None:
         self.header_timeout_s = header_timeout_s
         self.body_timeout_s = body_timeout_s
+        self.send_timeout_s = send_timeout_s
         self.max_connections = max_connections
         self.open = 0
         self.log = RateLimitedLog()
         #: Connections still waiting for a request's headers, oldest first (a dict as an ordered set).
         self.waiting: dict[Any, None] = {}
+        #: Connections whose response cannot be written (the client is not reading), longest stalled first.
+        self.stalled: dict[Any, None] = {}
+        #: Connections aborted because their client read nothing for ``send_timeout_s`` or at the cap.
+        self.aborted = 0
 
 
 def guarded_protocol(base: type[asyncio.Protocol], guard: Guard) -> type[asyncio.Protocol]:
@@ -130,7 +154,9 @@ def guarded_protocol(base: type[asyncio.Protocol], guard: Guard) -> type[asyncio
 
     It relies on what Uvicorn's two HTTP protocols (h11 and httptools) share:
     ``self.cycle`` is the current request, created when its headers are
-    complete, and ``cycle.more_body`` turns false when its body is.
+    complete, and ``cycle.more_body`` turns false when its body is; and on
+    asyncio's public protocol methods ``pause_writing``/``resume_writing``,
+    which both forward to their flow control.
     """
 
     class GuardedProtocol(base):  # type: ignore[valid-type, misc]
@@ -138,10 +164,13 @@ def guarded_protocol(base: type[asyncio.Protocol], guard: Guard) -> type[asyncio
         _counted = False
         _deadline: asyncio.TimerHandle | None = None
         _waiting_for: str | None = None
+        _send_deadline: asyncio.TimerHandle | None = None
 
         def connection_made(self, transport: asyncio.BaseTransport) -> None:
             while guard.open >= guard.max_connections and guard.waiting:
                 next(iter(guard.waiting))._evict()  # the oldest connection still owing its headers makes room
+            while guard.open >= guard.max_connections and guard.stalled:
+                next(iter(guard.stalled))._abort("its client had read nothing when the connection cap was reached")
             if guard.open >= guard.max_connections:
                 self._refused = True
                 self.transport = transport
@@ -165,6 +194,7 @@ def guarded_protocol(base: type[asyncio.Protocol], guard: Guard) -> type[asyncio
 
         def connection_lost(self, exc: Exception | None) -> None:
             self._disarm()
+            self._unstall()
             if self._refused:
                 return
             if self._counted:
@@ -178,6 +208,37 @@ def guarded_protocol(base: type[asyncio.Protocol], guard: Guard) -> type[asyncio
             before = self.cycle
             super().data_received(data)
             self._follow(before)
+
+        def pause_writing(self) -> None:
+            super().pause_writing()
+            if self._send_deadline is None:
+                self._send_deadline = self.loop.call_later(
+                    guard.send_timeout_s, self._abort, f"its client read nothing for {guard.send_timeout_s:g} s"
+                )
+                guard.stalled[self] = None
+
+        def resume_writing(self) -> None:
+            self._unstall()
+            super().resume_writing()
+
+        def _unstall(self) -> None:
+            if self._send_deadline is not None:
+                self._send_deadline.cancel()
+                self._send_deadline = None
+            guard.stalled.pop(self, None)
+
+        def _abort(self, why: str) -> None:
+            """Drop this connection and what its transport still buffers (its response cannot be delivered)."""
+            self._unstall()
+            if self._counted:  # counted out now: a new connection may take its place at once
+                guard.open -= 1
+                self._counted = False
+            transport = cast("asyncio.Transport | None", self.transport)
+            if transport is None or (transport.is_closing() and not transport.get_write_buffer_size()):
+                return
+            guard.aborted += 1
+            guard.log.note(f"connection aborted with a response in flight: {why}")
+            transport.abort()  # close() would wait for the buffer to drain, which it does not
 
         def _follow(self, before: Any) -> None:
             """Arm or disarm the deadline after the parser has read new bytes."""
@@ -290,5 +351,36 @@ def uvicorn_options(settings: Any) -> dict[str, Any]:
     cap = connection_cap(settings.max_connections)
     if cap < settings.max_connections:
         log.warning("at most %d connections: the process's descriptor limit allows no more", cap)
-    guard = Guard(settings.header_timeout_s, settings.body_timeout_s, cap)
+    guard = Guard(settings.header_timeout_s, settings.body_timeout_s, cap, settings.send_timeout_s)
     return {"http": guarded_protocol(AutoHTTPProtocol, guard), "timeout_keep_alive": settings.keep_alive_s}
+
+
+class ChunkedResponses:
+    """ASGI middleware: a response body larger than :data:`CHUNK_BYTES` is sent in pieces of that size.
+
+    Uvicorn waits, before each ``send``, until the transport has drained below
+    its high-water mark; with the body in pieces a slow reader holds at most
+    a piece or two in the server, not a copy of the whole body.
+    """
+
+    def __init__(self, app: Any, chunk_bytes: int = CHUNK_BYTES) -> None:
+        self.app = app
+        self.chunk_bytes = chunk_bytes
+
+    async def __call__(self, scope: Any, receive: Any, send: Any) -> None:
+        if scope.get("type") != "http":
+            await self.app(scope, receive, send)
+            return
+
+        async def chunked_send(message: Any) -> None:
+            body = message.get("body", b"") if message.get("type") == "http.response.body" else b""
+            if len(body) <= self.chunk_bytes:
+                await send(message)
+                return
+            more = message.get("more_body", False)
+            for start in range(0, len(body), self.chunk_bytes):
+                piece = bytes(body[start : start + self.chunk_bytes])
+                last = start + self.chunk_bytes >= len(body)
+                await send({"type": "http.response.body", "body": piece, "more_body": more or not last})
+
+        await self.app(scope, receive, chunked_send)

@@ -26,6 +26,7 @@ from kfio import InvalidInput, load_json, load_request
 from .cache import AnswerCache, CachedAnswer, canonical_json
 from .io import requested_budget
 from .jobs import PRELOAD
+from .lanes import is_cheap
 from .pool import PoolBusy, PoolShuttingDown, WorkerPool
 from .problems import MEMORY_EXCEEDED, Problem, ProblemError, problem_from_exception
 from .settings import Settings
@@ -82,11 +83,12 @@ def require_json(content_type: str | None) -> None:
         )
 
 
-def request_key(job: str, body: bytes, params: Mapping[str, Any]) -> tuple[str, float | None]:
-    """Cache key of a request and its ``options.time_budget_s`` (CPU work: run it off the loop)."""
+def request_key(job: str, body: bytes, params: Mapping[str, Any]) -> tuple[str, float | None, bool]:
+    """Cache key of a request, its ``options.time_budget_s``, and whether it is cheap by size
+    (:func:`kfio.service.lanes.is_cheap`; CPU work: run it off the loop)."""
     tree = load_json(body)
     key = f"{job} {json.dumps(dict(params), sort_keys=True)} {canonical_json(tree)}"
-    return key, requested_budget(tree)
+    return key, requested_budget(tree), is_cheap(job, tree, len(body)) and not params
 
 
 def retire_worker(result: Any) -> bool:
@@ -94,10 +96,11 @@ def retire_worker(result: Any) -> bool:
     return isinstance(result, tuple) and result[0] == "problem" and result[1].get("kind") == MEMORY_EXCEEDED
 
 
-def job_pool(settings: Settings, size: int, max_waiting: int) -> WorkerPool:
+def job_pool(settings: Settings, size: int, max_waiting: int, reserved: int = 0) -> WorkerPool:
     """A pool of ``size`` worker processes running :func:`kfio.service.jobs.run_job` (preloaded, memory-limited).
 
-    The synchronous lane (:class:`Dispatcher`) and the job lane
+    The synchronous lane (:class:`Dispatcher`, with ``reserved`` workers for
+    cheap requests, :mod:`kfio.service.lanes`) and the job lane
     (:class:`kfio.service.jobstore.JobStore`) are two such pools.
     """
     return WorkerPool(
@@ -108,6 +111,8 @@ def job_pool(settings: Settings, size: int, max_waiting: int) -> WorkerPool:
         kill_grace_s=settings.kill_grace_s,
         memory_bytes=settings.memory_bytes(),
         retire=retire_worker,
+        reserved=reserved,
+        reserved_budget_s=settings.lane_budget_s,
     )
 
 
@@ -116,7 +121,7 @@ class Dispatcher:
 
     def __init__(self, settings: Settings) -> None:
         self.settings = settings
-        self.pool = job_pool(settings, settings.workers, settings.max_queue)
+        self.pool = job_pool(settings, settings.workers, settings.max_queue, reserved=settings.lane_workers)
         self._parser = ThreadPoolExecutor(PARSE_THREADS, thread_name_prefix="kfio-parse")
         self.cache = AnswerCache(settings.cache_entries, settings.cache_bytes)
         self._inflight: dict[str, asyncio.Task[CachedAnswer]] = {}
@@ -132,16 +137,16 @@ class Dispatcher:
             The body is not JSON (mapped to 422 by the app's handler).
         """
         if len(body) <= INLINE_PARSE_BYTES:
-            key, asked = request_key(job, body, params)
+            key, asked, cheap = request_key(job, body, params)
         else:
-            key, asked = await self._off_loop(request_key, job, body, params)
+            key, asked, cheap = await self._off_loop(request_key, job, body, params)
         hit = self.cache.get(key)
         if hit is not None:
             return Response(hit.content, media_type=hit.media_type, headers={"X-Cache": "hit"})
         task = self._inflight.get(key)
         if task is None:
             budget = min(self.settings.time_budget_s, asked or self.settings.time_budget_s)
-            task = asyncio.get_running_loop().create_task(self._compute(key, job, body, params, budget))
+            task = asyncio.get_running_loop().create_task(self._compute(key, job, body, params, budget, cheap))
             self._inflight[key] = task
             task.add_done_callback(lambda t: self._forget(key, t))
         # shield: a client that goes away does not cancel work others wait for
@@ -160,9 +165,11 @@ class Dispatcher:
         if not task.cancelled():
             task.exception()  # retrieved here: every waiter may have gone away
 
-    async def _compute(self, key: str, job: str, body: bytes, params: Mapping[str, Any], budget: float) -> CachedAnswer:
+    async def _compute(
+        self, key: str, job: str, body: bytes, params: Mapping[str, Any], budget: float, cheap: bool = False
+    ) -> CachedAnswer:
         try:
-            outcome = await self.pool.run((job, body, self.settings, dict(params)), budget)
+            outcome = await self.pool.run((job, body, self.settings, dict(params)), budget, cheap=cheap)
         except PoolBusy as exc:
             if not isinstance(exc, PoolShuttingDown):
                 await self._off_loop(self._validate, body, job)  # an invalid body is told so, not to retry

@@ -29,14 +29,26 @@ worker job (the three built in).  Submit with :meth:`JobStore.submit`, read with
 Bounds and lifetime
 -------------------
 At most ``max_jobs`` jobs wait; beyond that :meth:`JobStore.submit` raises a
-429 problem.  At most ``job_retention`` finished jobs are kept, the oldest
-forgotten first (then their id answers 404), and their results hold at most
-``job_retention_bytes`` (the first finished forgotten first; the newest is
-kept whatever its size).  Jobs live in the server's
-memory only: a restart forgets every job (queued and running ones are not
-resumed; their ids answer 404), and a job's worker dies with the server.
-A worker that crashes fails its job with a ``worker-crashed`` problem; the
-lane replaces the worker and goes on with the next job.
+429 problem.  A finished job is kept ``job_retention_s`` seconds (its
+``expires_at``); sooner, at most ``job_retention`` finished jobs are kept, the
+oldest forgotten first (then their id answers 404), and their results hold at
+most ``job_retention_bytes`` (the first finished forgotten first; the newest
+is kept whatever its size).  A worker that crashes fails its job with a
+``worker-crashed`` problem; the lane replaces the worker and goes on with the
+next job.
+
+Restarts
+--------
+Every change of a job is written through :mod:`kfio.service.jobdb` before it
+is answered (a 202 is sent once its job is on disk); a write that fails (a
+full disk) is a 503 ``store-unavailable`` and nothing is queued.  When the
+store starts it reads its jobs back: queued ones run, finished ones answer as
+before, and one found ``running`` (the server died under it) is queued
+again, since every kind is a pure function of its request.  A job that was
+running at :data:`MAX_RUNS` deaths of the server fails with
+``interrupted-by-restart`` instead, so a request that kills its server is not
+run for ever.  A graceful stop (SIGTERM) puts running jobs back in the queue
+without counting a run.
 
 Examples
 --------
@@ -70,6 +82,7 @@ from kfio import load_json
 
 from .dispatch import job_pool
 from .io import requested_budget
+from .jobdb import StoreUnavailable, open_records
 from .pool import PoolTimeout
 from .problems import Problem, ProblemError, problem_from_exception
 from .progress import PROGRESS_KEY, read_progress
@@ -80,6 +93,9 @@ log = logging.getLogger("kfio.service")
 
 STATUSES = ("queued", "running", "done", "failed", "cancelled")
 FINISHED = frozenset({"done", "failed", "cancelled"})
+
+#: Runs a job may start; one found running after the server died this many times fails ``interrupted-by-restart``.
+MAX_RUNS = 2
 
 JobOutput = tuple[bytes, str]
 
@@ -104,6 +120,8 @@ class Job:
     progress_file: Path | None = None
     options: Any = field(default=None, repr=False)  # the request's options, for progress estimates
     task: asyncio.Task[JobOutput] | None = field(default=None, repr=False)
+    attempts: int = 0  # runs started, across restarts of the server
+    retention_s: float | None = None  # how long the result is kept once finished
 
     def status_dict(self) -> dict[str, Any]:
         """The job's state without its result (see :meth:`JobStore.document`)."""
@@ -116,11 +134,61 @@ class Job:
             "started_at": _iso(self.started),
             "finished_at": _iso(self.finished),
             "progress": self.progress,
+            "attempts": self.attempts,
+            "retention_s": self.retention_s,
+            "expires_at": _iso(self.expires),
             "links": {"self": f"/v1/jobs/{self.id}", "result": f"/v1/jobs/{self.id}/result"},
         }
         if self.problem is not None:
             doc["problem"] = self.problem.to_dict()
         return doc
+
+    @property
+    def expires(self) -> float | None:
+        """When the finished job is forgotten at the latest (Unix seconds; ``None`` until it finishes)."""
+        if self.finished is None or self.retention_s is None:
+            return None
+        return self.finished + self.retention_s
+
+    def record(self) -> dict[str, Any]:
+        """The job as a :mod:`kfio.service.jobdb` record."""
+        return {
+            "id": self.id,
+            "kind": self.kind,
+            "body": self.body,
+            "params": self.params,
+            "options": self.options,
+            "budget_s": self.budget_s,
+            "status": self.status,
+            "created": self.created,
+            "started": self.started,
+            "finished": self.finished,
+            "attempts": self.attempts,
+            "content": self.content,
+            "media_type": self.media_type,
+            "problem": None if self.problem is None else self.problem.as_plain(),
+        }
+
+    @classmethod
+    def from_record(cls, record: Mapping[str, Any]) -> Job:
+        """The job a :mod:`kfio.service.jobdb` record holds."""
+        problem = record.get("problem")
+        return cls(
+            id=record["id"],
+            kind=record["kind"],
+            body=record["body"] or b"",
+            params=dict(record["params"] or {}),
+            budget_s=record["budget_s"],
+            status=record["status"],
+            created=record["created"],
+            started=record["started"],
+            finished=record["finished"],
+            content=record["content"],
+            media_type=record["media_type"],
+            problem=None if problem is None else Problem.from_dict(problem),
+            options=record["options"],
+            attempts=record["attempts"],
+        )
 
 
 class JobContext:
@@ -231,6 +299,8 @@ class JobStore:
         self._queue: asyncio.Queue[Job] = asyncio.Queue()
         self._queued = 0
         self._runners: list[asyncio.Task[None]] = []
+        self._closing = False
+        self.records = open_records(settings.data_dir)  # a directory another server holds fails here
         self._dir = Path(tempfile.mkdtemp(prefix="kfio-jobs-"))
         for kind in BUILTIN_KINDS:
             self.register(kind)
@@ -242,22 +312,57 @@ class JobStore:
     # -- life cycle -------------------------------------------------------
 
     async def start(self) -> None:
-        """Start the lane's workers and one runner per worker."""
+        """Read back the jobs a previous run kept, start the lane's workers and one runner per worker."""
+        self._recover()
         self._runners = [asyncio.create_task(self._runner()) for _ in range(self.settings.job_workers)]
         await self.pool.start()
 
+    def _recover(self) -> None:
+        """Jobs of a previous run: queued ones queue again, running ones too (or fail past :data:`MAX_RUNS`)."""
+        for record in self.records.load():
+            job = Job.from_record(record)
+            job.retention_s = self.settings.job_retention_s
+            job.progress_file = self._dir / f"{job.id}.progress"
+            if job.status == "running":
+                if job.attempts >= MAX_RUNS:
+                    job.problem = interrupted(job.attempts)
+                    self._finish(job, "failed")
+                else:
+                    job.status, job.started = "queued", None
+                    self._write(job, "status", "started")
+            if job.kind not in self.kinds and job.status not in FINISHED:
+                job.problem = Problem(404, "unknown-job-kind", "Unknown kind of job", f"no job kind {job.kind!r}")
+                self._finish(job, "failed")
+            self._jobs[job.id] = job
+            if job.status == "queued":
+                self._queued += 1
+                self._queue.put_nowait(job)
+        if self._jobs:
+            log.info("job store: %d jobs read back, %d queued", len(self._jobs), self._queued)
+        self._evict()
+
     async def close(self) -> None:
-        """Cancel every job still queued or running, kill the lane, drop the progress files."""
+        """Stop running jobs, kill the lane, drop the progress files, close the records.
+
+        With durable records, jobs still queued or running stay queued there
+        (a running one without counting its run): the next start runs them.
+        """
         for runner in self._runners:
             runner.cancel()
         for job in self._jobs.values():
+            if job.status == "running":
+                job.status, job.started, job.attempts = "queued", None, max(0, job.attempts - 1)
+                self._write(job, "status", "started", "attempts")
+        self._closing = True  # from here on nothing is written: the records keep these jobs queued
+        for job in self._jobs.values():
             if job.status not in FINISHED:
-                self._finish(job, "cancelled")
+                job.status, job.finished = "cancelled", time.time()
                 if job.task is not None:
                     job.task.cancel()
         await asyncio.gather(*self._runners, return_exceptions=True)
         await self.pool.close()
         shutil.rmtree(self._dir, ignore_errors=True)
+        self.records.close()
 
     def stats(self) -> dict[str, int]:
         """Counters for ``/readyz``: jobs by status, and the lane's size."""
@@ -302,9 +407,15 @@ class JobStore:
         limit = self.settings.job_time_budget_s
         budget = min(limit, requested_budget(tree) or limit)
         job = Job(secrets.token_urlsafe(12), kind, body, dict(params or {}), budget)
+        job.retention_s = self.settings.job_retention_s
         job.progress_file = self._dir / f"{job.id}.progress"
         if self.kinds[kind].fraction is not None and isinstance(tree, dict):
             job.options = tree.get("options")
+        try:
+            self.records.add(job.record())  # on disk before anyone is told it was accepted
+        except StoreUnavailable as exc:
+            log.error("job store: cannot keep a new job: %s", exc)
+            raise ProblemError(store_unavailable(str(exc))) from None
         self._jobs[job.id] = job
         self._queued += 1
         self._queue.put_nowait(job)
@@ -313,10 +424,13 @@ class JobStore:
 
     def get(self, job_id: str) -> Job:
         """The job ``job_id`` with its progress refreshed (404 problem if unknown or forgotten)."""
+        self._evict()  # past its expires_at a job is gone even when nothing else finished since
         job = self._jobs.get(job_id)
         if job is None:
             raise ProblemError(
-                Problem(404, "unknown-job", "No such job", f"no job {job_id!r} (jobs are forgotten on restart)")
+                Problem(
+                    404, "unknown-job", "No such job", f"no job {job_id!r} (never accepted, or its retention ended)"
+                )
             )
         if job.status == "running" and job.progress_file is not None:
             self._refresh_progress(job)
@@ -362,6 +476,8 @@ class JobStore:
                 continue
             self._queued -= 1
             job.status, job.started = "running", time.time()
+            job.attempts += 1
+            self._write(job, "status", "started", "attempts")
             ctx = JobContext(self, job, time.monotonic() + job.budget_s)
             job.task = asyncio.create_task(self.kinds[job.kind].run(ctx))
             await asyncio.wait([job.task])
@@ -392,6 +508,21 @@ class JobStore:
     def _finish(self, job: Job, status: str) -> None:
         job.status, job.finished = status, time.time()
         job.body = b""  # the request is no longer needed
+        self._write(job, "status", "finished", "body", "content", "media_type", "problem")
+
+    def _write(self, job: Job, *members: str) -> None:
+        """Write ``members`` of ``job`` through the records (not while closing: the records keep it queued).
+
+        A failed write leaves the record as it was: the job goes on in memory,
+        and a restart finds it where the record says (queued or running: it runs again).
+        """
+        if self._closing:
+            return
+        record = job.record()
+        try:
+            self.records.update(job.id, **{member: record[member] for member in members})
+        except StoreUnavailable as exc:
+            log.error("job store: cannot write job %s (%s): %s", job.id, ", ".join(members), exc)
 
     def _refresh_progress(self, job: Job) -> None:
         assert job.progress_file is not None
@@ -410,15 +541,49 @@ class JobStore:
         job.progress = progress
 
     def _evict(self) -> None:
-        """Forget finished jobs, the first finished first, until at most ``job_retention`` are kept
-        and their results hold at most ``job_retention_bytes`` (the newest is kept whatever its size)."""
+        """Forget finished jobs past their ``expires_at``; then the first finished first, until at most
+        ``job_retention`` are kept and their results hold at most ``job_retention_bytes`` (the newest is
+        kept whatever its size)."""
+        now = time.time()
         finished = sorted((job for job in self._jobs.values() if job.status in FINISHED), key=_finish_order)
         kept, held = len(finished), sum(_held_bytes(job) for job in finished)
+        gone = []
         for job in finished[:-1]:  # job_retention >= 1: the newest is never over the count
-            if kept <= self.settings.job_retention and held <= self.settings.job_retention_bytes:
+            expired = job.expires is not None and job.expires <= now
+            if not expired and kept <= self.settings.job_retention and held <= self.settings.job_retention_bytes:
                 break
-            del self._jobs[job.id]
+            gone.append(job)
             kept, held = kept - 1, held - _held_bytes(job)
+        if finished and finished[-1].expires is not None and finished[-1].expires <= now:
+            gone.append(finished[-1])
+        for job in gone:
+            del self._jobs[job.id]
+        if gone and not self._closing:
+            try:
+                self.records.remove(job.id for job in gone)
+            except StoreUnavailable as exc:  # they are forgotten here; the next start forgets them again
+                log.error("job store: cannot forget %d finished jobs: %s", len(gone), exc)
+
+
+def store_unavailable(reason: str) -> Problem:
+    """The 503 of a job that could not be written (nothing was queued)."""
+    return Problem(
+        503,
+        "store-unavailable",
+        "Job store unavailable",
+        f"the job could not be stored ({reason}); nothing was queued; retry later",
+        retry_after=30,
+    )
+
+
+def interrupted(runs: int) -> Problem:
+    """The problem of a job that was running each of the ``runs`` times its server died."""
+    return Problem(
+        503,
+        "interrupted-by-restart",
+        "Job interrupted by restarts",
+        f"the server stopped while this job was running, {runs} times; it is not run again",
+    )
 
 
 def _finish_order(job: Job) -> float:

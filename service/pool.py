@@ -11,6 +11,13 @@ Workers are forked from a *forkserver* that has imported :mod:`kfio.service.jobs
 (and with it :mod:`kfio`, NumPy and SymPy) once, so a replacement worker
 is ready in milliseconds, and no worker inherits the server's threads.
 
+A pool may hold *reserved* workers beside its ``size`` ones (the cheap lane,
+:mod:`kfio.service.lanes`): a task marked ``cheap`` takes a free regular
+worker when one is free and nobody waits for one, else a reserved worker; a
+cheap task that outlasts ``reserved_budget_s`` there is stopped and runs again
+on a regular worker with what is left of its budget.  Other tasks never use
+reserved workers, so a few long tasks cannot hold every process.
+
 The worker protocol is pickled messages over the pipe.  A new worker says
 ``"ready"`` once its imports are done, and only then joins the idle queue (a
 worker still importing does not read, and a large request written to it
@@ -66,6 +73,10 @@ class WorkerOutOfMemory(WorkerCrashed):
 _MEMORY_SIGNALS = (signal.SIGABRT, signal.SIGSEGV, signal.SIGBUS)
 
 
+class _LaneOverrun(PoolError):
+    """A cheap task outlasted the reserved workers' budget (it runs again on a regular worker)."""
+
+
 class PoolShuttingDown(PoolBusy):
     """The server is shutting down: the task was refused, or stopped when the grace period ended."""
 
@@ -111,6 +122,7 @@ class _Worker:
     process: Any  # multiprocessing.Process of the pool's context
     conn: Connection
     keep_alive: Connection  # write end of the worker's lifeline
+    reserved: bool = False  # one of the cheap lane's workers
 
     def kill(self) -> None:
         for end in (self.conn, self.keep_alive):
@@ -152,6 +164,10 @@ class WorkerPool:
     retire:
         Predicate on a task's result: when true the worker is replaced after
         answering (e.g. it ran out of memory and its heap may be fragmented).
+    reserved:
+        Worker processes beside ``size`` that only tasks run with ``cheap=True`` use.
+    reserved_budget_s:
+        Longest a cheap task may run on a reserved worker before it is moved to a regular one.
 
     Examples
     --------
@@ -174,8 +190,13 @@ class WorkerPool:
         start_timeout_s: float = 60.0,
         memory_bytes: int | None = None,
         retire: Callable[[Any], bool] | None = None,
+        reserved: int = 0,
+        reserved_budget_s: float = 2.0,
     ) -> None:
         self.size = size
+        self.reserved = reserved
+        self.reserved_budget_s = reserved_budget_s
+        self.moved = 0  # cheap tasks moved from a reserved worker to a regular one
         self.runner = runner
         self.max_waiting = max_waiting
         self.kill_grace_s = kill_grace_s
@@ -191,6 +212,8 @@ class WorkerPool:
         if start_method == "forkserver" and preload:
             self._ctx.set_forkserver_preload(list(preload))
         self._idle: asyncio.Queue[_Worker] | None = None
+        self._spare: asyncio.Queue[_Worker] = asyncio.Queue()  # idle reserved workers
+        self._spare_waiting = 0
         self._all: set[_Worker] = set()
         self._waiting = 0
         self._busy = 0
@@ -253,13 +276,14 @@ class WorkerPool:
         self._idle = asyncio.Queue()
         one_thread_per_process()  # workers processes use workers cores (set before the forkserver starts)
         try:
-            workers = await asyncio.gather(*(self._new_worker() for _ in range(self.size)))
-            for worker in workers:
+            workers = await asyncio.gather(*(self._new_worker() for _ in range(self.size + self.reserved)))
+            for index, worker in enumerate(workers):
                 if self._closed:
                     await self._in_thread(worker.kill)
                     continue
+                worker.reserved = index >= self.size
                 self._all.add(worker)
-                self._idle.put_nowait(worker)
+                self._release(worker)
         except Exception as exc:
             log.error("the worker pool could not start", exc_info=exc)
             self._start_error = exc
@@ -311,12 +335,23 @@ class WorkerPool:
         """Counters for ``/readyz``."""
         return {
             "size": self.size,
-            "alive": sum(1 for w in self._all if w.process.is_alive()),
+            "alive": sum(1 for w in self._all if not w.reserved and w.process.is_alive()),
             "busy": self._busy,
-            "waiting": self._waiting,
+            "waiting": self._waiting + self._spare_waiting,
             "completed": self.completed,
             "replaced": self.replaced,
+            "reserved": self.reserved,
+            "reserved_alive": sum(1 for w in self._all if w.reserved and w.process.is_alive()),
+            "moved": self.moved,
         }
+
+    def _release(self, worker: _Worker) -> None:
+        """Put an idle worker back in its queue (the reserved ones in their own)."""
+        if worker.reserved:
+            self._spare.put_nowait(worker)
+        else:
+            assert self._idle is not None
+            self._idle.put_nowait(worker)
 
     async def _replace(self, worker: _Worker) -> None:
         self._all.discard(worker)
@@ -328,9 +363,9 @@ class WorkerPool:
         if self._closed:
             await self._in_thread(fresh.kill)
             return
+        fresh.reserved = worker.reserved
         self._all.add(fresh)
-        assert self._idle is not None
-        self._idle.put_nowait(fresh)
+        self._release(fresh)
 
     def _replace_soon(self, worker: _Worker) -> None:
         task = asyncio.get_running_loop().create_task(self._replace(worker))
@@ -338,13 +373,17 @@ class WorkerPool:
 
     # -- running tasks ----------------------------------------------------
 
-    async def _checkout(self, deadline: float) -> _Worker:
+    async def _checkout(self, deadline: float, cheap: bool = False) -> _Worker:
         if self._draining:
             raise PoolShuttingDown("the server is shutting down and takes no new work")
         task = asyncio.current_task()
         assert task is not None
         self._queued.add(task)
         try:
+            if cheap:
+                spare = await self._wait_for_spare(deadline)
+                if spare is not None:
+                    return spare
             return await self._wait_for_worker(deadline)
         except asyncio.CancelledError:
             if not self._draining:
@@ -353,6 +392,44 @@ class WorkerPool:
             raise PoolShuttingDown("the server is shutting down; the request was refused before it ran") from None
         finally:
             self._queued.discard(task)
+
+    def _free_regular(self) -> _Worker | None:
+        """A free regular worker that nobody is waiting for, if there is one."""
+        while self._idle is not None and self._waiting == 0 and not self._idle.empty():
+            worker = self._idle.get_nowait()
+            if worker.process.is_alive():
+                return worker
+            self._replace_soon(worker)  # died while idle (e.g. OOM killer)
+        return None
+
+    async def _wait_for_spare(self, deadline: float) -> _Worker | None:
+        """For a cheap task: a free regular worker, else a reserved one (waited for within ``deadline``).
+
+        ``None`` sends the task to the regular queue: the pool has no reserved
+        workers, or too many cheap tasks wait already.
+        """
+        if not self._ready.is_set():
+            return None  # _wait_for_worker waits for the start and says why it failed
+        regular = self._free_regular()
+        if regular is not None or not self.reserved or self._closed:
+            return regular
+        if self._spare.empty() and self._spare_waiting >= self.max_waiting:
+            return None
+        self._spare_waiting += 1
+        try:
+            while True:
+                remaining = deadline - time.monotonic()
+                if remaining <= 0:
+                    raise PoolBusy("no worker became free within the time budget")
+                try:
+                    worker = await asyncio.wait_for(self._spare.get(), remaining)
+                except TimeoutError:
+                    raise PoolBusy("no worker became free within the time budget") from None
+                if worker.process.is_alive():
+                    return worker
+                self._replace_soon(worker)
+        finally:
+            self._spare_waiting -= 1
 
     async def _wait_for_worker(self, deadline: float) -> _Worker:
         if not self._ready.is_set():
@@ -364,11 +441,9 @@ class WorkerPool:
             raise PoolBusy("the worker pool is not running")
         if self._idle.empty() and self._waiting >= self.max_waiting:
             raise PoolBusy(f"{self._waiting} requests are already waiting for a worker")
-        while self._waiting == 0 and not self._idle.empty():  # a free worker, nobody before us: no timer, no task
-            worker = self._idle.get_nowait()
-            if worker.process.is_alive():
-                return worker
-            self._replace_soon(worker)  # died while idle (e.g. OOM killer)
+        worker = self._free_regular()  # a free worker, nobody before us: no timer, no task
+        if worker is not None:
+            return worker
         self._waiting += 1
         try:
             while True:
@@ -385,12 +460,13 @@ class WorkerPool:
         finally:
             self._waiting -= 1
 
-    async def run(self, args: tuple[Any, ...], budget_s: float) -> Any:
+    async def run(self, args: tuple[Any, ...], budget_s: float, cheap: bool = False) -> Any:
         """Run ``runner(*args, remaining_budget)`` in a worker.
 
         The budget covers waiting for a worker *and* running: the worker is
         told what is left when it starts, and is killed ``kill_grace_s``
-        after that.
+        after that.  A ``cheap`` task may run on a reserved worker (see the
+        module docstring).
 
         Raises
         ------
@@ -401,9 +477,18 @@ class WorkerPool:
         WorkerCrashed
             The worker died during the task; it was replaced.
         """
-        start = time.monotonic()
-        deadline = start + budget_s
-        worker = await self._checkout(deadline)
+        deadline = time.monotonic() + budget_s
+        if cheap and self.reserved:
+            try:
+                return await self._run_once(args, budget_s, deadline, cheap=True)
+            except _LaneOverrun:
+                self.moved += 1  # its reserved worker was killed; a regular one takes the task
+        return await self._run_once(args, budget_s, deadline)
+
+    async def _run_once(self, args: tuple[Any, ...], budget_s: float, deadline: float, cheap: bool = False) -> Any:
+        worker = await self._checkout(deadline, cheap)
+        # on a reserved worker the task may run reserved_budget_s, then it moves to a regular one
+        limit = min(deadline, time.monotonic() + self.reserved_budget_s) if worker.reserved else deadline
         self._busy += 1
         ok = False
         task = asyncio.current_task()
@@ -416,8 +501,13 @@ class WorkerPool:
             except (OSError, EOFError, ValueError):
                 raise WorkerCrashed("the worker died before it could take the task") from None
             try:
-                await _readable(worker.conn, remaining + self.kill_grace_s)
+                if limit < deadline:
+                    await _readable(worker.conn, max(0.0, limit - time.monotonic()))
+                else:
+                    await _readable(worker.conn, remaining + self.kill_grace_s)
             except TimeoutError:
+                if limit < deadline:
+                    raise _LaneOverrun("the task outlasted the reserved workers' budget") from None
                 raise PoolTimeout(f"the computation did not finish within {budget_s:g} s; it was stopped") from None
             except asyncio.CancelledError:
                 if not self._draining:
@@ -444,8 +534,7 @@ class WorkerPool:
             self._busy -= 1
             self._running.discard(task)
             if ok:
-                assert self._idle is not None
-                self._idle.put_nowait(worker)
+                self._release(worker)
             else:  # timed out, crashed, or the request was cancelled mid-task
                 self._replace_soon(worker)
 

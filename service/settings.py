@@ -102,6 +102,22 @@ class Settings(BaseSettings):
         Comma-separated host names the server answers for (``*.example.org``
         for subdomains, ``*`` for any); any other ``Host`` is answered 421
         (:mod:`kfio.service.host_check`, against DNS rebinding).
+    data_dir:
+        Directory of the job database (:mod:`kfio.service.jobdb`); ``None``
+        keeps jobs in memory only.  ``kfio serve`` sets it to
+        :func:`kfio.service.jobdb.default_data_dir` when it is not given.
+    job_retention_s:
+        How long a finished job's result is kept (``job_retention`` and
+        ``job_retention_bytes`` may forget the oldest sooner).
+    lane_workers:
+        Worker processes of the cheap lane (:mod:`kfio.service.lanes`): small
+        requests run there when every worker of ``workers`` is busy; 0: no lane.
+    lane_budget_s:
+        Longest a request may run in the cheap lane; past it, it is moved to
+        the main pool with what is left of its budget.
+    send_timeout_s:
+        A response whose client reads nothing for this long is cut off
+        (:mod:`kfio.service.connection_guard`).
     """
 
     model_config = SettingsConfigDict(env_prefix="KFIO_", frozen=True, extra="ignore", allow_inf_nan=False)
@@ -136,6 +152,12 @@ class Settings(BaseSettings):
     keep_alive_s: float = Field(5.0, gt=0, le=600)
     max_connections: int = Field(1000, ge=1, le=100_000)
     trusted_hosts: str = Field(LOOPBACK_HOSTS, max_length=4096, pattern=r"[^\s,]")  # at least one name
+    # durable jobs, the cheap lane and slow readers (docs/service.md)
+    data_dir: str | None = Field(None, min_length=1, max_length=4096)
+    job_retention_s: float = Field(7 * 86400.0, gt=0, le=366 * 86400)
+    lane_workers: int = Field(1, ge=0, le=16)
+    lane_budget_s: float = Field(2.0, gt=0, le=60)
+    send_timeout_s: float = Field(30.0, gt=0, le=3600)
 
     def memory_bytes(self) -> int | None:
         """:attr:`memory_mb` in bytes, ``None`` for no limit."""

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import tempfile
 from typing import Any
 
 import pytest
@@ -13,6 +14,10 @@ from kfio import load_request
 # Starlette's TestClient sends "Host: testserver": the tests trust it beside the loopback names
 # (a deployment trusts only these by default, kfio.service.host_check).
 os.environ.setdefault("KFIO_TRUSTED_HOSTS", "localhost,127.0.0.1,[::1],testserver")
+
+# `kfio serve` keeps its jobs under $XDG_DATA_HOME/kfio unless KFIO_DATA_DIR says otherwise: one started
+# by a test uses a directory of this run (of this xdist worker), never the user's (docs/service.md).
+os.environ["XDG_DATA_HOME"] = tempfile.mkdtemp(prefix="kfio-tests-data-")
 
 
 def make_request(A: Any, C: Any, channel: Any = None, **system: Any):

@@ -41,6 +41,19 @@ JOB_STATUS_SCHEMA: dict[str, Any] = {
         "started_at": {"type": ["string", "null"], "format": "date-time"},
         "finished_at": {"type": ["string", "null"], "format": "date-time"},
         "progress": {"type": ["object", "null"]},
+        "attempts": {
+            "type": "integer",
+            "description": "runs started so far (a restart of the server may re-run a job)",
+        },
+        "retention_s": {
+            "type": ["number", "null"],
+            "description": "how long the result is kept once the job finishes (`KFIO_JOB_RETENTION_S`)",
+        },
+        "expires_at": {
+            "type": ["string", "null"],
+            "format": "date-time",
+            "description": "when the finished job is forgotten at the latest (null until it finishes)",
+        },
         "links": {"type": "object", "properties": {"self": {"type": "string"}, "result": {"type": "string"}}},
         "result": {"type": "object", "description": "the report, exactly as the synchronous endpoint returns it"},
         "problem": {"$ref": "#/components/schemas/Problem"},
@@ -156,7 +169,9 @@ def _submit_route(kind: str) -> None:
             "limits (a simulation job may do `KFIO_JOB_MAX_TRAJECTORY_STEPS` trajectory-steps, 10^8 by default, "
             "where a request may do 10^6); option values that only the computation checks end the job `failed` "
             "with a 422 problem.  "
-            "Jobs are kept in memory: a restart forgets them."
+            "A `kfio serve` keeps its jobs in an embedded database (`KFIO_DATA_DIR`): queued and running jobs "
+            "run after a restart, and the 202 says how long the result is kept (`retention_s`).  "
+            "503 `store-unavailable` when the job cannot be written (a full disk): nothing was queued."
         ),
         response_class=Response,
         responses={

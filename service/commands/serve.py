@@ -79,6 +79,15 @@ def _run(args: argparse.Namespace) -> int:
     except ValidationError as exc:
         print(f"kfio: {setting_error(exc, overrides)}", file=sys.stderr)
         return exitcodes.INVALID_INPUT
+    from ..jobdb import data_dir_problem, default_data_dir
+
+    # the served app keeps its jobs on disk (an app built in a test, without data_dir, in memory)
+    data_dir = settings.data_dir or str(default_data_dir())
+    settings = settings.model_copy(update={"data_dir": data_dir})
+    reason = data_dir_problem(data_dir)
+    if reason is not None:  # another server holds it, or it cannot be written: say so, naming the setting
+        print(f"kfio: {reason}", file=sys.stderr)
+        return exitcodes.CANNOT_SERVE
     if settings.port != 0:
         reason = port_in_use(settings.host, settings.port)
         if reason is not None:  # checked before the worker pool starts, for a clear message

@@ -85,6 +85,12 @@ class LiveServer:
         if workers is not None:
             self.argv += ["--workers", str(workers)]
         self.env = {**os.environ, **(env or {})}
+        self.own_data_dir: Path | None = None
+        if "KFIO_DATA_DIR" not in self.env:  # a job database of its own, never the user's (removed on exit)
+            import tempfile
+
+            self.own_data_dir = Path(tempfile.mkdtemp(prefix="kfio-data-"))
+            self.env["KFIO_DATA_DIR"] = str(self.own_data_dir)
         self.cwd = cwd or REPO
         self.ready_timeout = ready_timeout
         self.proc: subprocess.Popen[bytes] | None = None
@@ -123,6 +129,10 @@ class LiveServer:
         self.stop()
         if self.log_path is not None:
             self.log_path.unlink(missing_ok=True)
+        if self.own_data_dir is not None:
+            import shutil
+
+            shutil.rmtree(self.own_data_dir, ignore_errors=True)
 
 
 #: Endpoint that :func:`slow_request` bodies are meant for.
