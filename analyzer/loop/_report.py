@@ -41,7 +41,7 @@ def _matrix(m: Any) -> list[list[str]]:
     return [[fraction_text(x) for x in row] for row in m]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class LoopReport(Report):
     """The report of :func:`loop`: ``to_dict()`` is the JSON of ``kfio loop --json`` and ``POST /v1/loop``.
 

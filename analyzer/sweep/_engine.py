@@ -22,7 +22,7 @@ import os
 import threading
 import time
 from dataclasses import dataclass, field
-from typing import Any, Callable, Generator, Iterable, Iterator, Sequence
+from typing import Any, Callable, ClassVar, Generator, Iterable, Iterator, Sequence
 
 from .._reporting import Report, ReportPart
 from ..errors import InvalidInput, MissingDependency
@@ -61,9 +61,11 @@ class SweepRow(ReportPart):
     fields: dict[str, Any]
 
 
-@dataclass
+@dataclass(repr=False)
 class SweepResult(Report):
     """All rows of a sweep, in index order, with how it ran."""
+
+    _repr_fields: ClassVar[tuple[str, ...]] = ("engine", "workers", "chunks", "seconds", "stopped")
 
     spec: SweepSpec
     rows: list[SweepRow]
@@ -73,6 +75,9 @@ class SweepResult(Report):
     seconds: float
     stopped: str | None = None
     stats: dict[str, Any] = field(default_factory=dict)
+
+    def _repr_items(self) -> list[tuple[str, Any]]:
+        return [("command", self.spec.command), ("points", len(self.rows)), *super()._repr_items()]
 
     @classmethod
     def collect(cls, spec: SweepSpec, rows: list[SweepRow], info: dict[str, Any], seconds: float) -> SweepResult:
