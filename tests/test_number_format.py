@@ -238,3 +238,34 @@ def test_reprs_of_reports_of_float_data() -> None:
     assert len(repr(loop)) < 160 and len(repr(swept)) < 160  # before: every field, 11,000 characters
     assert repr(loop).startswith("LoopReport(verdict='stable', spectral_radius=0.97824, cost=")
     assert "points=2" in repr(swept)
+
+
+@pytest.mark.slow
+def test_sweep_csv_of_a_float_plant_names_the_kind_jsonl_keeps_the_text(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import csv
+
+    from kfio.sweep._table import CSV_EXACT_CAP
+
+    sweep = {
+        "command": "analyze",
+        "base": json.loads(PENDULUM.read_text()),
+        "axes": [{"pointer": "/channel/arrival_probability", "values": ["1/2", "9/10"]}],
+    }
+    path = tmp_path / "sweep.json"
+    path.write_text(json.dumps(sweep))
+    table, lines = tmp_path / "t.csv", tmp_path / "t.jsonl"
+    assert main(["sweep", str(path), "--quiet", "--serial", "--out", str(table)]) == 0
+    assert main(["sweep", str(path), "--quiet", "--serial", "--out", str(lines)]) == 0
+    capsys.readouterr()
+    _clean(table.read_text())
+    rows = list(csv.DictReader(table.open()))
+    whole = [json.loads(x) for x in lines.read_text().splitlines()]
+    for row, full in zip(rows, whole):
+        assert (
+            len(full["critical_arrival_probability_exact"]) > CSV_EXACT_CAP
+            and "CRootOf" in full["critical_arrival_probability_exact"]
+        )
+        assert row["critical_arrival_probability_exact"].startswith("from float data (the exact text: ")
+        assert float(row["critical_arrival_probability"]) == full["critical_arrival_probability"]
