@@ -146,7 +146,7 @@ function renderFields(fields) {
     err.setAttribute("role", "alert");
     err.hidden = true;
     area.setAttribute("aria-describedby", err.id);
-    area.addEventListener("input", () => clearError(div));
+    area.addEventListener("input", () => { clearError(div); if (pointer === "/channel") updateButtons(); });
     div.append(label, area, err);
     list.append(div);
   });
@@ -176,6 +176,10 @@ function unfitReason(endpoint, have = pointers()) {
   if (kind === "filter" && endpoint === "loop") {
     return "Loop takes a closed-loop request: this one has no /system/B, /actuator_channel or /controller.";
   }
+  if (endpoint === "bounds" && channelIid() === false) {
+    return "Bounds assume i.i.d. (Bernoulli) packet losses (Sinopoli et al. 2004; Liu and Goldsmith 2004); "
+      + "this channel has memory: use Analyze for its exact verdict, or Simulate.";
+  }
   if (endpoint !== "analyze") {
     const missing = ["/system/Q", "/system/R"].filter((p) => !have.has(p));
     if (missing.length) {
@@ -183,6 +187,36 @@ function unfitReason(endpoint, have = pointers()) {
     }
   }
   return null;
+}
+
+/** A number of the request's JSON (a number, "3/10" or "0.3"), as a double: only to read the channel's shape. */
+function approx(v) {
+  if (typeof v === "number") return v;
+  const m = /^\s*(-?[\d.eE+-]+)\s*(?:\/\s*([\d.eE+-]+))?\s*$/.exec(String(v));
+  return m ? Number(m[1]) / (m[2] === undefined ? 1 : Number(m[2])) : NaN;
+}
+
+/** Whether the /channel field's packets are i.i.d. (what the bounds assume); null when it cannot be read. */
+function channelIid() {
+  const div = document.querySelector('#field-list .field[data-pointer="/channel"]');
+  let ch;
+  try { ch = JSON.parse(div.querySelector("textarea").value); } catch (e) { return null; }
+  const iid = (c) => {
+    if (!c || typeof c !== "object") return null;
+    if (c.model === "bernoulli") return true;
+    if (c.model === "gilbert_elliott") return Math.abs(approx(c.failure_rate) + approx(c.recovery_rate) - 1) < 1e-12;
+    if (c.model === "markov") {
+      const table = c.arrival_probability && typeof c.arrival_probability === "object" ? c.arrival_probability : c;
+      const values = Object.keys(table).filter((k) => /^[01]+$/.test(k)).map((k) => approx(table[k]));
+      return values.every((v) => Math.abs(v - values[0]) < 1e-12);
+    }
+    if (c.model === "per_sensor" && c.channels) {
+      const all = Object.values(c.channels).map(iid);
+      return all.includes(null) ? null : all.every(Boolean);
+    }
+    return null;
+  };
+  return div ? iid(ch) : null;
 }
 
 /** The primary button is the command that fits the request; the others say why they cannot run it. */

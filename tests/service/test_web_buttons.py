@@ -19,6 +19,9 @@ from typing import Any
 import pytest
 from test_web_browser import browser_context, load, open_page, server, shot  # noqa: F401  (fixtures)
 
+from kfio import load_json
+from kfio.model import parse_number
+
 from support.live_server import REPO, LiveServer
 
 pytestmark = pytest.mark.slow
@@ -29,13 +32,26 @@ ENDPOINTS = ("analyze", "bounds", "simulate", "loop")
 LOOP_MEMBERS = ("actuator_channel", "controller")
 
 
+def iid(channel: dict[str, Any]) -> bool:
+    """Whether a channel's packets are i.i.d., with the validator's own model of it (the bounds need this)."""
+    if channel["model"] == "per_sensor":
+        return all(iid(c) for c in channel["channels"].values())
+    if channel["model"] == "bernoulli":
+        return True
+    if channel["model"] == "gilbert_elliott":
+        return parse_number(channel["failure_rate"], "p") + parse_number(channel["recovery_rate"], "q") == 1
+    table = channel.get("arrival_probability", channel)  # a Markov channel's probabilities per history
+    values = {parse_number(v, k) for k, v in table.items() if set(k) <= {"0", "1"}}
+    return len(values) == 1
+
+
 def expected_fit(request: dict[str, Any]) -> dict[str, bool]:
     """Which commands can run ``request``, from its members (as the server's validators require)."""
     is_loop = any(k in request for k in LOOP_MEMBERS) or "B" in request["system"]
     noise = {"Q", "R"} <= set(request["system"])
     return {
         "analyze": not is_loop,
-        "bounds": not is_loop and noise,
+        "bounds": not is_loop and noise and iid(request["channel"]),
         "simulate": not is_loop and noise,
         "loop": is_loop and noise,
     }
@@ -53,7 +69,7 @@ def test_each_button_runs_or_says_why(
     page.on("request", lambda r: sent.append(r.url.split("?")[0]) if "/v1/" in r.url else None)
     page.select_option("#example", example["id"])
     load(page, lambda: page.click("#load-example"))
-    request = json.loads((REQUESTS / f"{example['id']}.json").read_text())
+    request = load_json((REQUESTS / f"{example['id']}.json").read_text())  # numbers exact, as the server reads them
     fit = expected_fit(request)
     primary = page.eval_on_selector("fieldset.run button.primary", "b => b.dataset.endpoint")
     if not fit["analyze"] and fit["loop"]:
@@ -94,4 +110,31 @@ def test_each_button_runs_or_says_why(
             assert all(s >= 0.74 for s in scales), scales
         assert page.evaluate("document.documentElement.scrollWidth") <= width
     shot(page, f"buttons-{example['id']}-{width}")
+    assert outside == []
+
+
+def test_a_request_without_noise_gets_fields_to_add_then_bounds_runs(
+    server: LiveServer, browser_context: tuple[Any, list[str]]
+) -> None:
+    """The boundary example has no Q and R: Bounds says so; the added identity fields make it runnable."""
+    context, outside = browser_context
+    outside.clear()
+    page = open_page(context, server.url + "/", width=400)
+    page.select_option("#example", "boundary")
+    load(page, lambda: page.click("#load-example"))
+    bounds = page.locator("fieldset.run button[data-endpoint=bounds]")
+    assert "needs /system/Q and /system/R (no default)" in (bounds.get_attribute("title") or "")
+    label = page.locator('#field-list .field[data-pointer="/system/A"] label').inner_text()
+    assert "/system/A" in label
+    for pointer in ("/system/Q", "/system/R"):
+        load(page, lambda pointer=pointer: page.click(f'#add-fields button[data-add="{pointer}"]'))
+        area = page.locator(f'#field-list .field[data-pointer="{pointer}"] textarea')
+        assert area.input_value() == "[[1]]"  # the identity of the plant's size (A is 1 x 1, C has 1 row)
+        help_text = page.locator(f'#field-list .field[data-pointer="{pointer}"] label').inner_text()
+        assert "bounds, simulate and loop need it" in help_text and "default identity" not in help_text
+    assert page.locator("#add-fields button").count() == 0
+    assert bounds.get_attribute("aria-disabled") is None
+    bounds.click()
+    page.wait_for_selector("#verdict", timeout=180_000)
+    assert page.inner_text("#status") == "Done: bounds."
     assert outside == []
