@@ -167,23 +167,28 @@ const LABEL = { analyze: "Analyze", bounds: "Bounds", simulate: "Simulate", loop
 
 /** Why ``endpoint`` cannot run the loaded request (said before any request is sent), or null. */
 function unfitReason(endpoint, have = pointers()) {
+  const why = unfitWhy(endpoint, have);
+  return why === null ? null : `${LABEL[endpoint]}: ${why}`;
+}
+
+/** The reason without the button's name, so that the note under the buttons says it once for several. */
+function unfitWhy(endpoint, have) {
   const kind = requestKind(have);
-  const name = LABEL[endpoint];
   if (kind === "loop" && endpoint !== "loop") {
     const parts = ["/system/B", "/actuator_channel", "/controller"].filter((p) => have.has(p)).join(", ");
-    return `${name} takes a filter request (system and channel); this is a closed-loop request (it has ${parts}): use Loop.`;
+    return `for filter requests (system and channel); this is a closed-loop request (it has ${parts}): use Loop.`;
   }
   if (kind === "filter" && endpoint === "loop") {
-    return "Loop takes a closed-loop request: this one has no /system/B, /actuator_channel or /controller.";
+    return "for closed-loop requests; this one has no /system/B, /actuator_channel or /controller.";
   }
   if (endpoint === "bounds" && channelIid() === false) {
-    return "Bounds assume i.i.d. (Bernoulli) packet losses (Sinopoli et al. 2004; Liu and Goldsmith 2004); "
+    return "for i.i.d. (Bernoulli) packet losses (Sinopoli et al. 2004; Liu and Goldsmith 2004); "
       + "this channel has memory: use Analyze for its exact verdict, or Simulate.";
   }
   if (endpoint !== "analyze") {
     const missing = ["/system/Q", "/system/R"].filter((p) => !have.has(p));
     if (missing.length) {
-      return `${name} needs ${missing.join(" and ")} (no default): add ${missing.length > 1 ? "them" : "it"} with the button below the fields.`;
+      return `needs ${missing.join(" and ")} (no default): add ${missing.length > 1 ? "them" : "it"} with the button below the fields.`;
     }
   }
   return null;
@@ -222,7 +227,7 @@ function channelIid() {
 /** The primary button is the command that fits the request; the others say why they cannot run it. */
 function updateButtons() {
   const have = pointers();
-  const reasons = [];
+  const reasons = new Map(); // the reason -> the buttons it holds for
   const preferred = requestKind(have) === "loop" ? "loop" : state.preferred && !unfitReason(state.preferred, have) ? state.preferred : "analyze";
   document.querySelectorAll("fieldset.run button[data-endpoint]").forEach((b) => {
     const endpoint = b.dataset.endpoint;
@@ -232,14 +237,15 @@ function updateButtons() {
     if (why) {
       b.setAttribute("aria-disabled", "true");
       b.title = why;
-      reasons.push(why);
+      const tail = unfitWhy(endpoint, have);
+      reasons.set(tail, [...(reasons.get(tail) || []), LABEL[endpoint]]);
     } else {
       b.removeAttribute("aria-disabled");
       b.removeAttribute("title");
     }
   });
-  $("run-note").textContent = reasons.join(" ");
-  $("run-note").hidden = reasons.length === 0;
+  $("run-note").textContent = [...reasons].map(([tail, names]) => `${names.join(", ")}: ${tail}`).join(" ");
+  $("run-note").hidden = reasons.size === 0;
   state.primary = preferred;
 }
 

@@ -82,7 +82,10 @@ def test_each_button_runs_or_says_why(
         if not fit[endpoint]:
             assert button.get_attribute("aria-disabled") == "true"
             reason = button.get_attribute("title")
-            assert reason and reason in page.inner_text("#run-note")
+            assert reason and reason.startswith(f"{endpoint.capitalize()}: ")
+            name, why = reason.split(": ", 1)
+            note = page.inner_text("#run-note")
+            assert why in note and name in note.split(why)[0]  # said once, after the buttons it holds for
             button.click(force=True)  # aria-disabled: Playwright would wait for "enabled"; a person can press it
             status = page.inner_text("#status")
             assert status == f"Not sent: {reason}"
@@ -123,7 +126,7 @@ def test_a_request_without_noise_gets_fields_to_add_then_bounds_runs(
     page.select_option("#example", "boundary")
     load(page, lambda: page.click("#load-example"))
     bounds = page.locator("fieldset.run button[data-endpoint=bounds]")
-    assert "needs /system/Q and /system/R (no default)" in (bounds.get_attribute("title") or "")
+    assert (bounds.get_attribute("title") or "").startswith("Bounds: needs /system/Q and /system/R (no default)")
     label = page.locator('#field-list .field[data-pointer="/system/A"] label').inner_text()
     assert "/system/A" in label
     for pointer in ("/system/Q", "/system/R"):
