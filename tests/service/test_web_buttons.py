@@ -40,6 +40,7 @@ def iid(channel: dict[str, Any]) -> bool:
         return True
     if channel["model"] == "gilbert_elliott":
         return parse_number(channel["failure_rate"], "p") + parse_number(channel["recovery_rate"], "q") == 1
+    assert channel["model"] == "markov", f"a new channel model in the examples: teach iid() {channel['model']!r}"
     table = channel.get("arrival_probability", channel)  # a Markov channel's probabilities per history
     values = {parse_number(v, k) for k, v in table.items() if set(k) <= {"0", "1"}}
     return len(values) == 1
