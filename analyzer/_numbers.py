@@ -18,6 +18,7 @@ Only the display changes: nothing here feeds back into a decision.  Exact texts 
 
 from __future__ import annotations
 
+import functools
 import math
 import re
 from dataclasses import dataclass
@@ -208,6 +209,21 @@ def readable_measure(text: str, *, cap: int = EXACT_CAP) -> str:
         if shown.decimal != text or shown.exact or shown.note:
             return shown.text
     return text
+
+
+@functools.lru_cache(maxsize=256)
+def kind_of(exact: str) -> str:
+    """What a long exact text is, for a table cell in its place: ``from float data``, ``algebraic, degree 3``, ...
+
+    Cached: a sweep's rows repeat the same exact texts (a critical probability of one plant).
+
+    Examples
+    --------
+    >>> kind_of("2501225941561293/2500000000000000"), kind_of("1 - 1/sqrt(2)")
+    ('from float data', 'algebraic, degree 2')
+    """
+    shown = show(exact, cap=0)
+    return shown.note or shown.exact
 
 
 def clip(text: str, width: int) -> str:
@@ -435,6 +451,7 @@ __all__ = [
     "decimal_text",
     "exact_value",
     "finite",
+    "kind_of",
     "looks_like_float_data",
     "number_text",
     "readable_measure",

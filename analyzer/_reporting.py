@@ -71,6 +71,10 @@ class ReportPart:
         return tuple(sorted(n.removesuffix("_exact") for n in dir(self) if n.endswith("_exact")))
 
 
+#: A text or fraction longer than this is shown in a ``repr`` as kfio's number format reads it.
+_LONG_TEXT = 40
+
+
 class ShortRepr(ReportPart):
     """A ``repr`` of a few telling attributes instead of every field."""
 
@@ -132,6 +136,10 @@ def terminal_text(text: str) -> str:
 def _short(value: Any) -> str:
     if isinstance(value, float):
         return f"{value:.6g}"
+    if isinstance(value, (str, Fraction)) and len(str(value)) > _LONG_TEXT:
+        from ._numbers import readable_measure  # a 60-digit fraction or a CRootOf: its decimal and kind
+
+        return repr(readable_measure(str(value)))
     if isinstance(value, tuple) and value and not isinstance(value[0], ShortRepr):
         return "(" + ", ".join(_short(v) for v in value) + ("," if len(value) == 1 else "") + ")"
     return repr(value)

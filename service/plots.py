@@ -38,23 +38,73 @@ def png_bytes(fig: Any) -> bytes:
     return buf.getvalue()
 
 
-def figure_headline(fig: Any, text: str, fontsize: float = 10.0) -> Any:
-    """The figure's title (the exact verdict first), shrunk until every line fits the figure's width.
+#: The smallest text of a figure, in points at :data:`_DPI`: the page shows a plot at no less than
+#: about 3/4 of its pixels (narrower screens scroll it), so this stays about 8 CSS pixels or more.
+MIN_FONT_PT = 8.5
+#: Legend text, in points.
+LEGEND_FONT_PT = 9.0
 
-    A figure title, not an axes title: it is centred on the figure, so a legend
-    beside the axes cannot push it past the left edge.
+
+def figure_headline(fig: Any, text: str, fontsize: float = 10.5) -> Any:
+    """The figure's title (the exact verdict first): every line fits the figure's width.
+
+    A figure title, not an axes title: it is centred on the figure.  A line too
+    wide is first set smaller, down to :data:`MIN_FONT_PT`, then wrapped at
+    word boundaries, so no text becomes too small to read.
     """
+    import textwrap
+
     title = fig.suptitle(text, fontsize=fontsize, parse_math=False)
     renderer = fig.canvas.get_renderer()
-    while title.get_window_extent(renderer).width > 0.98 * fig.bbox.width and title.get_fontsize() > 5:
-        title.set_fontsize(title.get_fontsize() - 0.5)
+    limit = 0.98 * fig.bbox.width
+    while title.get_window_extent(renderer).width > limit and title.get_fontsize() > MIN_FONT_PT:
+        title.set_fontsize(max(MIN_FONT_PT, title.get_fontsize() - 0.5))
+    width = title.get_window_extent(renderer).width
+    if width > limit:
+        longest = max(len(line) for line in text.splitlines())
+        chars = max(20, int(longest * limit / width))
+        title.set_text("\n".join(textwrap.fill(line, chars) for line in text.splitlines()))
     return title
 
 
-def legend_beside(ax: Any, handles: Any = None, fontsize: str = "x-small") -> Any:
-    """The legend right of the axes (outside them): it never covers data."""
+def legend_outside(ax: Any, handles: Any = None, fontsize: float = LEGEND_FONT_PT) -> Any:
+    """The legend above the axes (outside them, under the title), in columns: it never covers data.
+
+    Above rather than beside: beside the axes it took a third of the width, and a
+    page on a phone then showed the plot and its legend at a few pixels a letter.
+    """
     kwargs: dict[str, Any] = {} if handles is None else {"handles": handles}
-    return ax.legend(fontsize=fontsize, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, **kwargs)
+    n = len(handles) if handles is not None else len(ax.get_legend_handles_labels()[0])
+    return ax.legend(
+        fontsize=max(MIN_FONT_PT, fontsize),
+        loc="lower center",
+        bbox_to_anchor=(0.5, 1.02),
+        borderaxespad=0.0,
+        ncols=2 if n > 2 else max(1, n),
+        frameon=False,
+        **kwargs,
+    )
+
+
+#: The name the loop and sweep plots import.
+legend_beside = legend_outside
+
+
+_SUPERSCRIPT = str.maketrans("0123456789-", "\u2070\u00b9\u00b2\u00b3\u2074\u2075\u2076\u2077\u2078\u2079\u207b")
+
+
+def pretty_powers(text: str) -> str:
+    """``(1 - p)**2*q`` as ``(1 - p)\u00b2\u00b7q``: powers as superscripts, products as a dot (a plot's label).
+
+    Examples
+    --------
+    >>> pretty_powers("(1 - p)**2*q**(-1) = 1")
+    '(1 - p)\u00b2\u00b7q\u207b\u00b9 = 1'
+    """
+    import re
+
+    text = re.sub(r"\*\*\((-?\d+)\)|\*\*(\d+)", lambda m: (m.group(1) or m.group(2)).translate(_SUPERSCRIPT), text)
+    return re.sub(r"\s*\*\s*", "\u00b7", text)
 
 
 def _verdict_text(verdict: str | None) -> str:
@@ -165,7 +215,7 @@ def simulation_figure(report: Mapping[str, Any], request: Request) -> Any:
         f"{exact}: n = {request.system.n}, {_channel_text(request)}\n"
         f"{sample}; {report['trajectories']} trajectories, seed {report['seed']}",
     )
-    legend_beside(ax)
+    legend_outside(ax)
     ax.grid(alpha=0.3)
     return fig
 
@@ -256,7 +306,7 @@ def phase_transition(request: Request, budget: Budget, params: Mapping[str, Any]
         f"{_verdict_text(crit['verdict'])} at lambda = {lam0:.4g}\n"
         "Phase transition of lim E[P_t]: bounds (Sinopoli et al. 2004) and exact lambda_c",
     )
-    legend_beside(ax)
+    legend_outside(ax)
     ax.grid(alpha=0.3, which="both")
     return png_bytes(fig)
 
@@ -363,7 +413,7 @@ def region_figure(
         "Two sensors: bounds (colours, Liu and Goldsmith 2004); exact (markers, line: kfio extension of "
         "Rohr, Marelli and Fu 2014)",
     )
-    legend_beside(ax, handles)
+    legend_outside(ax, handles)
     return fig
 
 
@@ -439,7 +489,8 @@ def ge_region_figure(region: Any, verdict: str, request: Request) -> Any:
             (drawn,) = ax.plot(q[lo:end], p[lo:end], color=colours[k % len(colours)], lw=1.8, gid=GE_BOUNDARY_GID)
             if k not in labelled:
                 piece = patterns[k].describe()
-                drawn.set_label(_shorten(f"block {', '.join(piece['eigenvalues'])}: {piece['equation']}", 60))
+                label = pretty_powers(f"block {', '.join(piece['eigenvalues'])}: {piece['equation']}")
+                drawn.set_label(_shorten(label, 60))
                 labelled[k] = drawn
     handles.extend(labelled.values())
     p0, q0 = 1 - float(request.channel.table[1]), float(request.channel.table[0])  # type: ignore[union-attr]
@@ -461,7 +512,7 @@ def ge_region_figure(region: Any, verdict: str, request: Request) -> Any:
         f"Gilbert-Elliott region, n = {request.system.n}: {len(rates)} x {len(rates)} cells of {step:.3g}, "
         "exact per cell; lines: exact boundary",
     )
-    legend_beside(ax, handles, fontsize="xx-small")
+    legend_outside(ax, handles)
     return fig
 
 

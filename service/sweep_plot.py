@@ -2,7 +2,11 @@
 
 Everything drawn comes from the sweep's rows and from
 :func:`kfio.sweep._boundary.exact_boundary` (library calls); this module only draws.
-Axis labels are the sweep's axis names, drawn as plain text (no mathtext).
+Axis labels are the sweep's axis names, drawn as plain text (no mathtext).  Every
+point is drawn with its verdict: a point without a value to plot (an unstable
+loop's cost is unbounded) sits on the top edge of the axes, a point with an
+error on the bottom edge.  Numbers in labels are in kfio's one format
+(:func:`kfio._numbers.number_text`).
 """
 
 from __future__ import annotations
@@ -11,9 +15,9 @@ from typing import Any
 
 import numpy as np
 
+from kfio._numbers import number_text
 from kfio.errors import InvalidInput
 from kfio.model import parse_number
-from kfio.structure import readable
 from kfio.sweep import SweepResult, exact_boundary
 
 from .plots import GE_BOUNDARY_GID, figure_headline, legend_beside, new_figure, png_bytes
@@ -40,6 +44,17 @@ def _label(command: str, fields: dict[str, Any]) -> str | None:
 
 
 #: What each command's colours are: only ``analyze`` computes the exact verdict.
+#: What a point without a plotted value means, per command (its marker sits on the top edge).
+_NO_VALUE = {
+    "analyze": "no rate",
+    "bounds": "no V_bar",
+    "simulate": "no final mean",
+    "loop": "cost unbounded",
+}
+#: Gids that tests find the drawn parts by.
+THRESHOLD_GID = "sweep-threshold"
+_BARE_GID = "sweep-edge-points"
+
 _WHAT = {
     "analyze": "exact verdict per point (Rohr, Marelli and Fu 2014, Theorem 1)",
     "bounds": "verdict of the bounds per point (Sinopoli et al. 2004); no exact verdict computed",
@@ -80,16 +95,28 @@ def sweep_figure(result: SweepResult) -> Any:
         )
         labels = [_label(cmd, r.fields) for r in result.rows]
         ax.plot(x, y, color="#555555", lw=1, zorder=1)
+        from matplotlib.transforms import blended_transform_factory
+
+        edge = blended_transform_factory(ax.transData, ax.transAxes)  # x in data, y as a fraction of the axes
         for lab in ("stable", "boundary", "unstable", None):
             sel = np.array([lb == lab for lb in labels])
-            if sel.any():
+            valued = sel & ~np.isnan(y)
+            if valued.any():
+                ax.scatter(x[valued], y[valued], s=14, color=_COLORS[lab], zorder=2, label=lab or "error")
+            bare = sel & np.isnan(y)
+            if bare.any():
+                # no value to plot (an unstable loop's cost): on the top edge, or on the bottom one for an error
                 ax.scatter(
-                    x[sel],
-                    np.where(np.isnan(y[sel]), 0, y[sel]),
-                    s=14,
+                    x[bare],
+                    np.full(int(bare.sum()), 0.97 if lab else 0.03),
+                    s=22,
+                    marker="^" if lab else "x",
                     color=_COLORS[lab],
-                    zorder=2,
-                    label=lab or "error / no value",
+                    zorder=3,
+                    transform=edge,
+                    clip_on=False,
+                    label=f"{lab}, {_NO_VALUE[cmd]}" if lab else "error (no value)",
+                    gid=_BARE_GID,
                 )
         if cmd == "analyze":
             ax.axhline(1.0, color="black", lw=0.8, ls="--", label="rate = 1")
@@ -98,10 +125,16 @@ def sweep_figure(result: SweepResult) -> Any:
                 boundary["value"],
                 color="#264653",
                 lw=1.2,
-                label=f"exact critical probability {readable(boundary['exact'], boundary['value'])}",
+                label=f"exact critical probability {number_text(boundary['exact'], boundary['value'])}",
+                gid=THRESHOLD_GID,
             )
         if cmd != "analyze" and np.nanmin(np.where(y > 0, y, np.nan), initial=np.inf) < np.inf:
             ax.set_yscale("log")
+        span = (x.max() - x.min()) or 1.0
+        ax.set_xlim(x.min() - 0.03 * span, x.max() + 0.03 * span)  # every point, edge markers too
+        if np.isnan(y).all():  # nothing valued: the edge markers need a visible axis
+            ax.set_ylim(0, 1)
+            ax.set_yticks([])
         ax.set_xlabel(a.name, parse_math=False)
         ax.set_ylabel(
             {
@@ -155,4 +188,4 @@ def _edges(v: list[float]) -> np.ndarray:
     return np.concatenate([[c[0] - (mid[0] - c[0])], mid, [c[-1] + (c[-1] - mid[-1])]])
 
 
-__all__ = ["sweep_figure", "sweep_png"]
+__all__ = ["THRESHOLD_GID", "sweep_figure", "sweep_png"]

@@ -215,3 +215,59 @@ def test_check_table_markdown_and_junit_of_a_float_plant(tmp_path: Path, capsys:
     data = json.loads(capsys.readouterr().out)
     whole = [o["measured"] for o in data["outcomes"] if o["requirement"] == "critical_arrival_probability_at_most"]
     assert "CRootOf" in whole[0]  # the pipeline's JSON keeps the exact text
+
+
+@pytest.mark.slow
+def test_reprs_of_reports_of_float_data() -> None:
+    """A report's repr is a few telling fields in the same format, never every field of the dataclass."""
+    import kfio
+    from kfio.loop import analyze_loop, parse_loop_request
+    from kfio.sweep import load_sweep, run_sweep
+
+    loop = analyze_loop(parse_loop_request(json.loads(json.dumps(FLOAT_LOOP))))
+    assert len(str(loop.stationary_cost)) > 200  # the exact cost is a long fraction
+    analysis = kfio.analyze(kfio.load_request(PENDULUM.read_text()))
+    sweep = {
+        "command": "analyze",
+        "base": json.loads(PENDULUM.read_text()),
+        "axes": [{"pointer": "/channel/arrival_probability", "values": ["1/2", "9/10"]}],
+    }
+    swept = run_sweep(load_sweep(json.dumps(sweep)), engine="serial")
+    for report in (loop, analysis, swept):
+        text = repr(report)
+        _clean(text, cap=None)  # a repr is one line: as long as its fields, each short
+        assert text.startswith(type(report).__name__ + "(")
+    assert len(repr(loop)) < 160 and len(repr(swept)) < 160  # before: every field, 11,000 characters
+    assert repr(loop).startswith("LoopReport(verdict='stable', spectral_radius=0.97824, cost=")
+    assert "points=2" in repr(swept)
+
+
+@pytest.mark.slow
+def test_sweep_csv_of_a_float_plant_names_the_kind_jsonl_keeps_the_text(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import csv
+
+    from kfio.sweep._table import CSV_EXACT_CAP
+
+    sweep = {
+        "command": "analyze",
+        "base": json.loads(PENDULUM.read_text()),
+        "axes": [{"pointer": "/channel/arrival_probability", "values": ["1/2", "9/10"]}],
+    }
+    path = tmp_path / "sweep.json"
+    path.write_text(json.dumps(sweep))
+    table, lines = tmp_path / "t.csv", tmp_path / "t.jsonl"
+    assert main(["sweep", str(path), "--quiet", "--serial", "--out", str(table)]) == 0
+    assert main(["sweep", str(path), "--quiet", "--serial", "--out", str(lines)]) == 0
+    capsys.readouterr()
+    _clean(table.read_text())
+    rows = list(csv.DictReader(table.open()))
+    whole = [json.loads(x) for x in lines.read_text().splitlines()]
+    for row, full in zip(rows, whole):
+        assert (
+            len(full["critical_arrival_probability_exact"]) > CSV_EXACT_CAP
+            and "CRootOf" in full["critical_arrival_probability_exact"]
+        )
+        assert row["critical_arrival_probability_exact"].startswith("from float data (the exact text: ")
+        assert float(row["critical_arrival_probability"]) == full["critical_arrival_probability"]

@@ -16,7 +16,7 @@ import os
 import time
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any, Callable
+from typing import Any, Callable, ClassVar
 
 from .._budget import Budget
 from .._reporting import Report, ReportPart
@@ -54,9 +54,11 @@ class Outcome(ReportPart):
     error_kind: str | None = None
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class CheckResult(Report):
     """All outcomes of a check, in the file's order (entries, then requirements)."""
+
+    _repr_fields: ClassVar[tuple[str, ...]] = ("status", "tally", "seconds", "workers", "source")
 
     outcomes: tuple[Outcome, ...]
     seconds: float

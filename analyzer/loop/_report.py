@@ -47,7 +47,7 @@ def _enclosure(box: tuple[Fraction, Fraction] | None) -> list[str] | None:
     return None if box is None else list(decimal_enclosure(*box))
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class LoopReport(Report):
     """The report of :func:`kfio.loop`: ``to_dict()`` is the JSON of ``kfio loop --json`` and ``POST /v1/loop``.
 

@@ -20,11 +20,19 @@ from ..errors import AnalyzerError
 from ..model import json_pointer, parse_request
 from ._spec import SweepSpec
 
+#: Sensor probabilities on the exact boundary curve of a 2-D loop sweep (each vertex exact).
+LOOP_CURVE_POINTS = 40
+_SENSOR, _ACTUATOR = "/channel/arrival_probability", "/actuator_channel/arrival_probability"
+
 
 def exact_boundary(spec: SweepSpec) -> dict[str, Any] | None:
     """``{"kind": "curve", "x": [...], "y": [...], "axes": (name_x, name_y)}`` or
     ``{"kind": "threshold", "value": float, "exact": str, "axis": name}``, else ``None``."""
-    if spec.command != "analyze" or spec.requests is not None or spec.base is None:
+    if spec.requests is not None or spec.base is None:
+        return None
+    if spec.command == "loop":
+        return _loop_boundary(spec)
+    if spec.command != "analyze":
         return None
     channel = spec.base.get("channel", {})
     pointers = [a.pointer for a in spec.axes]
@@ -87,5 +95,56 @@ def exact_boundary(spec: SweepSpec) -> dict[str, Any] | None:
                 x, y = y, x
             return {"kind": "curve", "axes": (spec.axes[0].name, spec.axes[1].name), "x": x, "y": y}
     except AnalyzerError:  # e.g. the base request breaks Assumption 1: the plot draws the rows alone
+        return None
+    return None
+
+
+def _loop_boundary(spec: SweepSpec) -> dict[str, Any] | None:
+    """The exact boundary of a loop sweep over its links' Bernoulli arrival probabilities.
+
+    One axis: the base loop's exact critical arrival probability of that link, the other link
+    as in the base (Costa, Fragoso and Marques 2005, Thm 3.9; :func:`kfio.loop.analyze_loop`).
+    Two axes (sensor and actuator): the points ``(lam, nu_c(lam))`` of :func:`kfio.loop.region`,
+    each exactly on the curve where the loop changes verdict, and where the curve leaves the top
+    edge ``nu = 1`` (the critical sensor probability with every actuator packet arriving).
+    """
+    from .._budget import Budget
+    from ..loop import analyze_loop, parse_loop_request, region
+
+    pointers = [a.pointer for a in spec.axes]
+    try:
+        request = parse_loop_request(spec.base)
+        if len(spec.axes) == 1 and pointers[0] in (_SENSOR, _ACTUATOR):
+            link = "sensor" if pointers[0] == _SENSOR else "actuator"
+            report = analyze_loop(request, budget=Budget(seconds=spec.point_budget_s)).to_dict()
+            value = report.get(f"critical_{link}_arrival_probability")
+            if value is None:
+                return None
+            return {
+                "kind": "threshold",
+                "axis": spec.axes[0].name,
+                "value": value,
+                "exact": report.get(f"critical_{link}_arrival_probability_exact"),
+            }
+        if len(spec.axes) == 2 and sorted(pointers) == sorted([_SENSOR, _ACTUATOR]):
+            found = region(request, LOOP_CURVE_POINTS, Budget(seconds=spec.point_budget_s))
+            if found is None:
+                return None
+            rows = found.boundary
+            x = [r.sensor_arrival_probability for r in rows]
+            y = [r.critical_actuator_arrival_probability for r in rows]
+            first = next((k for k, v in enumerate(y) if v is not None), None)
+            if first is not None and first > 0:
+                # where the curve leaves the top edge: the critical sensor probability with every actuator packet
+                tree = {**spec.base, "actuator_channel": {"model": "bernoulli", "arrival_probability": 1}}
+                top = analyze_loop(parse_loop_request(tree), budget=Budget(seconds=spec.point_budget_s)).to_dict()
+                lam_top = top.get("critical_sensor_arrival_probability")
+                if lam_top is not None and lam_top <= x[first]:
+                    x[first:first] = [lam_top]
+                    y[first:first] = [1.0]
+            if pointers[0] == _ACTUATOR:  # the sweep's first axis is the actuator's
+                x, y = y, x
+            return {"kind": "curve", "axes": (spec.axes[0].name, spec.axes[1].name), "x": x, "y": y}
+    except AnalyzerError:  # a base the loop analysis refuses: the plot draws the rows alone
         return None
     return None

@@ -22,7 +22,7 @@ import os
 import threading
 import time
 from dataclasses import dataclass, field
-from typing import Any, Callable, Iterable, Iterator, Sequence
+from typing import Any, Callable, ClassVar, Generator, Iterable, Iterator, Sequence
 
 from .._reporting import Report, ReportPart
 from ..errors import InvalidInput, MissingDependency
@@ -40,6 +40,17 @@ TASKS_PER_WORKER = 8
 #: Tasks still running this long after the sweep's deadline are abandoned (each point also has its own budget).
 _GRACE_S = 5.0
 
+#: ``engine="auto"``: the in-process work (seconds, estimated from the first points) below which a
+#: sweep stays in this process.  The embedded cluster costs an overhead (start-up, its workers'
+#: imports, shut-down) before it divides the work by its ``W`` workers, so it wins once the work
+#: exceeds ``overhead x W / (W - 1)``: with 2 workers about 3 s on a quiet machine (overhead 1.5 s)
+#: and 7 s to 30 s on the shared 2-core machine under load (overhead 3.4 s median, up to 15 s).
+#: Measured by ``bench/bench_sweep_engine.py`` (docs/sweeps.md has the table).
+AUTO_SERIAL_WORK_S = 10.0
+#: ``engine="auto"`` times the first points in this process until this many seconds or points pass.
+AUTO_PROBE_S = 0.5
+AUTO_PROBE_POINTS = 16
+
 
 @dataclass(frozen=True)
 class SweepRow(ReportPart):
@@ -50,9 +61,11 @@ class SweepRow(ReportPart):
     fields: dict[str, Any]
 
 
-@dataclass
+@dataclass(repr=False)
 class SweepResult(Report):
     """All rows of a sweep, in index order, with how it ran."""
+
+    _repr_fields: ClassVar[tuple[str, ...]] = ("engine", "workers", "chunks", "seconds", "stopped")
 
     spec: SweepSpec
     rows: list[SweepRow]
@@ -62,6 +75,9 @@ class SweepResult(Report):
     seconds: float
     stopped: str | None = None
     stats: dict[str, Any] = field(default_factory=dict)
+
+    def _repr_items(self) -> list[tuple[str, Any]]:
+        return [("command", self.spec.command), ("points", len(self.rows)), *super()._repr_items()]
 
     @classmethod
     def collect(cls, spec: SweepSpec, rows: list[SweepRow], info: dict[str, Any], seconds: float) -> SweepResult:
@@ -174,7 +190,7 @@ def _canonical_axis(axis: Axis) -> dict[str, Any]:
 def iter_sweep(
     spec: SweepSpec,
     *,
-    engine: str = "dask",
+    engine: str = "auto",
     scheduler: str | None = None,
     workers: int | None = None,
     chunk_size: int | None = None,
@@ -190,7 +206,8 @@ def iter_sweep(
     Parameters
     ----------
     engine:
-        ``"dask"`` (an embedded LocalCluster, or ``scheduler``) or ``"serial"``.
+        ``"auto"`` (the default: chosen by the work, see :func:`_auto_probe`), ``"dask"`` (an
+        embedded LocalCluster, or ``scheduler``) or ``"serial"`` (this process).
     scheduler:
         Address of a running Dask scheduler, e.g. ``tcp://127.0.0.1:8786``.
     workers:
@@ -199,7 +216,8 @@ def iter_sweep(
         Keep FMO blocks and verdicts across points (see :mod:`kfio.sweep._evaluate`);
         ``False`` analyses every point from scratch (the benchmark's baseline).
     info:
-        Filled with ``engine``, ``workers``, ``chunks`` and ``stopped`` as the sweep runs.
+        Filled with ``engine``, ``workers``, ``chunks`` and ``stopped`` as the sweep runs, and
+        with ``engine_reason`` (why that engine) when ``engine="auto"`` chose it.
     limits:
         The size limits every point is validated with.
     validated:
@@ -212,11 +230,22 @@ def iter_sweep(
     deadline = None if spec.time_budget_s is None else time.time() + spec.time_budget_s
     info = info if info is not None else {}
     info.update(stopped=None)
+    first = 0
+    if engine == "auto":
+        if scheduler:
+            engine = "dask"
+            info["engine_reason"] = "a scheduler was named"
+        else:
+            probed: list[SweepRow] = []
+            engine = yield from _auto_probe(spec, text, deadline, reuse, probed, info, cancel)
+            first = len(probed)
+            if progress is not None and first:
+                progress(first, total)
     if engine == "serial":
         size = chunk_size_for(total, 1, chunk_size or spec.chunk_size)
-        info.update(engine="serial", workers=1, chunks=math.ceil(total / size))
-        done = 0
-        for start in range(0, total, size):
+        info.update(engine="serial", workers=1, chunks=math.ceil((total - first) / size) + (1 if first else 0))
+        done = first
+        for start in range(first, total, size):
             if cancel is not None and cancel.is_set():
                 info["stopped"] = "cancelled"
                 for i in range(start, total):
@@ -229,15 +258,66 @@ def iter_sweep(
                 progress(done, total)
         return
     if engine != "dask":
-        raise InvalidInput("/engine", "expected 'dask' or 'serial'")
-    yield from _iter_dask(spec, text, deadline, scheduler, workers, chunk_size, progress, cancel, reuse, info)
+        raise InvalidInput("/engine", "expected 'auto', 'dask' or 'serial'")
+    yield from _iter_dask(spec, text, deadline, scheduler, workers, chunk_size, progress, cancel, reuse, info, first)
+
+
+def _auto_probe(
+    spec: SweepSpec,
+    text: str,
+    deadline: float | None,
+    reuse: bool,
+    probed: list[SweepRow],
+    info: dict[str, Any],
+    cancel: threading.Event | None,
+) -> Generator[SweepRow, None, str]:
+    """Run the first points here, timed; return ``"serial"`` or ``"dask"`` for the rest (a generator's return).
+
+    The cost of a point is taken from the points after the first (the first pays this process's
+    imports and fills the per-plant memo that the rest reuse); the rest of the sweep is
+    ``cost x points left``.  Below :data:`AUTO_SERIAL_WORK_S` the sweep stays in this process;
+    above it the embedded cluster takes the points left.  ``info["engine_reason"]`` says which
+    and why, with the numbers.
+    """
+    total = spec.size
+    t0 = time.perf_counter()
+    stamps = [t0]
+    while len(probed) < min(total, AUTO_PROBE_POINTS):
+        if cancel is not None and cancel.is_set():
+            break
+        i = len(probed)
+        for j, fields in evaluate_chunk(text, range(i, i + 1), deadline, reuse):
+            row = _row(spec, j, fields)
+            probed.append(row)
+            yield row
+        stamps.append(time.perf_counter())
+        if len(probed) >= 2 and stamps[-1] - stamps[1] >= AUTO_PROBE_S:
+            break  # timed long enough after the first point (which pays the imports)
+    done = len(probed)
+    left = total - done
+    if left == 0 or (cancel is not None and cancel.is_set()):
+        info["engine_reason"] = f"in process: all {total} points ran while timing the first ones"
+        return "serial"
+    per_point = (stamps[-1] - stamps[1]) / (done - 1) if done >= 2 else stamps[-1] - stamps[0]
+    work = per_point * left
+    if work < AUTO_SERIAL_WORK_S:
+        info["engine_reason"] = (
+            f"in process: {left} points left x {1000 * per_point:.3g} ms = {work:.2g} s, "
+            f"below the {AUTO_SERIAL_WORK_S:g} s at which the embedded cluster pays off"
+        )
+        return "serial"
+    info["engine_reason"] = (
+        f"embedded cluster: {left} points left x {1000 * per_point:.3g} ms = {work:.2g} s, "
+        f"above the {AUTO_SERIAL_WORK_S:g} s at which it pays off"
+    )
+    return "dask"
 
 
 def _row(spec: SweepSpec, index: int, fields: dict[str, Any]) -> SweepRow:
     return SweepRow(index, coordinates_at(spec, index), fields)
 
 
-def _iter_dask(spec, text, deadline, scheduler, workers, chunk_size, progress, cancel, reuse, info):
+def _iter_dask(spec, text, deadline, scheduler, workers, chunk_size, progress, cancel, reuse, info, first=0):
     try:
         from distributed import Client, LocalCluster, as_completed
     except ImportError:  # a regular dependency: missing only in a broken install
@@ -263,8 +343,8 @@ def _iter_dask(spec, text, deadline, scheduler, workers, chunk_size, progress, c
             )
             client = Client(cluster)
         n_workers = max(1, len(client.scheduler_info().get("workers", {})) or (workers or 1))
-        size = chunk_size_for(total, n_workers, chunk_size or spec.chunk_size)
-        starts = list(range(0, total, size))
+        size = chunk_size_for(total - first, n_workers, chunk_size or spec.chunk_size)
+        starts = list(range(first, total, size))
         info.update(engine="dask", workers=n_workers, chunks=len(starts), scheduler=scheduler or "local")
         futures = {}
         for start in starts:
@@ -272,7 +352,7 @@ def _iter_dask(spec, text, deadline, scheduler, workers, chunk_size, progress, c
             fut = client.submit(evaluate_chunk, text, idx, deadline, reuse, pure=False, retries=1)
             futures[fut] = idx
         pending = set(futures)
-        done_points = 0
+        done_points = first
         seq = as_completed(list(futures), with_results=False)
         try:
             while pending:

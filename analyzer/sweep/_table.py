@@ -58,8 +58,24 @@ def _csv_rows(fh: IO[str], columns: Sequence[str], records: Iterable[dict[str, A
         w.writerow(_csv_record(columns, r))
 
 
+#: The widest ``_exact`` cell of a CSV table: a longer exact text (a float plant's 500-character
+#: ``CRootOf``) is replaced by what kind of number it is; the JSON Lines and Parquet tables keep it whole.
+CSV_EXACT_CAP = 64
+
+
 def _csv_record(columns: Sequence[str], r: dict[str, Any]) -> dict[str, Any]:
-    return {k: ("" if r.get(k) is None else r.get(k)) for k in columns}
+    out = {k: ("" if r.get(k) is None else r.get(k)) for k in columns}
+    for k in columns:
+        v = out[k]
+        if k.endswith("_exact") and isinstance(v, str) and len(v) > CSV_EXACT_CAP:
+            out[k] = _exact_cell(v)
+    return out
+
+
+def _exact_cell(text: str) -> str:
+    from .._numbers import kind_of
+
+    return f"{kind_of(text)} (the exact text: JSON Lines or Parquet table)"
 
 
 class TableWriter:
@@ -85,11 +101,16 @@ class TableWriter:
         # The header as csv.DictWriter writes it, then rows through the plain writer (the same bytes:
         # DictWriter only maps a record to its list of columns first).
         self._csv = _csv_writer(self._fh, self.columns).writer if self.fmt == "csv" else None
+        self._exact_columns = [i for i, c in enumerate(self.columns) if c.endswith("_exact")]
 
     def write(self, record: dict[str, Any]) -> None:
         """Append one record (the next index)."""
         if self._csv is not None:
-            self._csv.writerow(["" if (v := record.get(c)) is None else v for c in self.columns])
+            row = ["" if (v := record.get(c)) is None else v for c in self.columns]
+            for k in self._exact_columns:
+                if isinstance(row[k], str) and len(row[k]) > CSV_EXACT_CAP:
+                    row[k] = _exact_cell(row[k])
+            self._csv.writerow(row)
         else:
             self._fh.write(jsonl_line({c: record.get(c) for c in self.columns}) + "\n")
         self.rows += 1

@@ -38,8 +38,14 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--out", metavar="TABLE", help="write the table: .csv, .parquet or .jsonl")
     p.add_argument("--plot", metavar="PNG", help="write a plot of a 1-D or 2-D sweep")
     p.add_argument("--scheduler", metavar="ADDR", help="run on an existing Dask cluster, e.g. tcp://127.0.0.1:8786")
-    p.add_argument("--workers", type=int, metavar="N", help="worker processes of the embedded cluster (default: cores)")
-    p.add_argument("--serial", action="store_true", help="run in this process, without Dask")
+    p.add_argument(
+        "--workers", type=int, metavar="N", help="run on an embedded cluster of N worker processes (default: cores)"
+    )
+    p.add_argument(
+        "--serial",
+        action="store_true",
+        help="run in this process, without Dask (default: chosen by the work, in process for small sweeps)",
+    )
     p.add_argument("--chunk-size", type=int, metavar="K", help="points per task (default: balanced, at most 2000)")
     p.add_argument("--quiet", action="store_true", help="do not stream rows to standard output")
     prog = p.add_mutually_exclusive_group()
@@ -122,7 +128,7 @@ def _run(args: argparse.Namespace) -> int:
         try:
             rows = iter_sweep(
                 spec,
-                engine="serial" if args.serial else "dask",
+                engine="serial" if args.serial else ("dask" if args.scheduler or args.workers else "auto"),
                 scheduler=args.scheduler,
                 workers=args.workers,
                 chunk_size=args.chunk_size,
@@ -161,7 +167,8 @@ def _run(args: argparse.Namespace) -> int:
         rate = n / seconds if seconds > 0 else float("inf")
         print(
             f"kfio sweep: {n} points, {errors} with errors, engine {info.get('engine', '?')} "
-            f"({info.get('workers', 0)} workers, {info.get('chunks', 0)} tasks), {seconds:.2f} s, {rate:.1f} points/s",
+            f"({info.get('workers', 0)} workers, {info.get('chunks', 0)} tasks), {seconds:.2f} s, {rate:.1f} points/s"
+            + (f"; {info['engine_reason']}" if info.get("engine_reason") else ""),
             file=sys.stderr,
         )
         if info.get("stopped") == "budget-exceeded" or budget_rows:

@@ -5,7 +5,7 @@
 "use strict";
 
 const $ = (id) => document.getElementById(id);
-const state = { endpoint: null, report: null, reportText: null, requestText: null, job: null, examples: [] };
+const state = { endpoint: null, report: null, reportText: null, requestText: null, job: null, examples: [], preferred: null, primary: "analyze" };
 
 // ---------------------------------------------------------------- JSON with source spans
 
@@ -102,13 +102,15 @@ function setRequestText(text) {
 const FIELD_HELP = {
   "/system/A": "state matrix A (n x n)",
   "/system/C": "output matrix C (p x n)",
-  "/system/Q": "process noise covariance Q (n x n, positive semidefinite; default identity)",
-  "/system/R": "measurement noise covariance R (p x p, positive definite; default identity)",
+  "/system/Q": "process noise covariance Q (n x n, positive semidefinite): bounds, simulate and loop need it; "
+    + "analyze runs without it (given, it checks that (A, Q^1/2) is controllable)",
+  "/system/R": "measurement noise covariance R (p x p, positive definite): bounds, simulate and loop need it; "
+    + "analyze does not use it",
   "/system/sensors": "sensors: which rows of C each packet carries",
   "/channel": "packet channel: bernoulli, gilbert_elliott, markov, or per_sensor",
   "/system/B": "input matrix B (n x m; loop requests)",
   "/actuator_channel": "actuator packet channel of a loop: bernoulli, gilbert_elliott or markov",
-  "/controller": "loop controller: {\"gains\": {\"feedback\": F, \"estimator\": E}, \"form\": ...} (u = -F x_hat) or {\"lqg\": {\"W\": ..., \"U\": ...}}",
+  "/controller": "loop controller: fixed estimator and feedback gains, or {\"lqg\": {\"W\": ..., \"U\": ...}} (see the loop docs)",
   "/cost": "loop cost weights: x' W x + a' U a",
   "/options": "options (time_budget_s, bounds, simulate, loop, ...)",
 };
@@ -144,10 +146,149 @@ function renderFields(fields) {
     err.setAttribute("role", "alert");
     err.hidden = true;
     area.setAttribute("aria-describedby", err.id);
-    area.addEventListener("input", () => clearError(div));
+    area.addEventListener("input", () => { clearError(div); if (pointer === "/channel") updateButtons(); });
     div.append(label, area, err);
     list.append(div);
   });
+  offerMissingNoise();
+  updateButtons();
+}
+
+// ---------------------------------------------------------------- which command fits the request
+
+const pointers = () => new Set([...document.querySelectorAll("#field-list .field")].map((d) => d.dataset.pointer));
+
+/** "loop" when the request has a loop's members (input matrix, actuator channel or controller), else "filter". */
+function requestKind(have = pointers()) {
+  return ["/system/B", "/actuator_channel", "/controller"].some((p) => have.has(p)) ? "loop" : "filter";
+}
+
+const LABEL = { analyze: "Analyze", bounds: "Bounds", simulate: "Simulate", loop: "Loop" };
+
+/** Why ``endpoint`` cannot run the loaded request (said before any request is sent), or null. */
+function unfitReason(endpoint, have = pointers()) {
+  const why = unfitWhy(endpoint, have);
+  return why === null ? null : `${LABEL[endpoint]}: ${why}`;
+}
+
+/** The reason without the button's name, so that the note under the buttons says it once for several. */
+function unfitWhy(endpoint, have) {
+  const kind = requestKind(have);
+  if (kind === "loop" && endpoint !== "loop") {
+    const parts = ["/system/B", "/actuator_channel", "/controller"].filter((p) => have.has(p)).join(", ");
+    return `for filter requests (system and channel); this is a closed-loop request (it has ${parts}): use Loop.`;
+  }
+  if (kind === "filter" && endpoint === "loop") {
+    return "for closed-loop requests; this one has no /system/B, /actuator_channel or /controller.";
+  }
+  if (endpoint === "bounds" && channelIid() === false) {
+    return "for i.i.d. (Bernoulli) packet losses (Sinopoli et al. 2004; Liu and Goldsmith 2004); "
+      + "this channel has memory: use Analyze for its exact verdict, or Simulate.";
+  }
+  if (endpoint !== "analyze") {
+    const missing = ["/system/Q", "/system/R"].filter((p) => !have.has(p));
+    if (missing.length) {
+      return `needs ${missing.join(" and ")} (no default): add ${missing.length > 1 ? "them" : "it"} with the button below the fields.`;
+    }
+  }
+  return null;
+}
+
+/** A number of the request's JSON (a number, "3/10" or "0.3"), as a double: only to read the channel's shape. */
+function approx(v) {
+  if (typeof v === "number") return v;
+  const m = /^\s*(-?[\d.eE+-]+)\s*(?:\/\s*([\d.eE+-]+))?\s*$/.exec(String(v));
+  return m ? Number(m[1]) / (m[2] === undefined ? 1 : Number(m[2])) : NaN;
+}
+
+/** Whether the /channel field's packets are i.i.d. (what the bounds assume); null when it cannot be read. */
+function channelIid() {
+  const div = document.querySelector('#field-list .field[data-pointer="/channel"]');
+  let ch;
+  try { ch = JSON.parse(div.querySelector("textarea").value); } catch (e) { return null; }
+  const iid = (c) => {
+    if (!c || typeof c !== "object") return null;
+    if (c.model === "bernoulli") return true;
+    if (c.model === "gilbert_elliott") return Math.abs(approx(c.failure_rate) + approx(c.recovery_rate) - 1) < 1e-12;
+    if (c.model === "markov") {
+      const table = c.arrival_probability && typeof c.arrival_probability === "object" ? c.arrival_probability : c;
+      const values = Object.keys(table).filter((k) => /^[01]+$/.test(k)).map((k) => approx(table[k]));
+      return values.every((v) => Math.abs(v - values[0]) < 1e-12);
+    }
+    if (c.model === "per_sensor" && c.channels) {
+      const all = Object.values(c.channels).map(iid);
+      return all.includes(null) ? null : all.every(Boolean);
+    }
+    return null;
+  };
+  return div ? iid(ch) : null;
+}
+
+/** The primary button is the command that fits the request; the others say why they cannot run it. */
+function updateButtons() {
+  const have = pointers();
+  const reasons = new Map(); // the reason -> the buttons it holds for
+  const preferred = requestKind(have) === "loop" ? "loop" : state.preferred && !unfitReason(state.preferred, have) ? state.preferred : "analyze";
+  document.querySelectorAll("fieldset.run button[data-endpoint]").forEach((b) => {
+    const endpoint = b.dataset.endpoint;
+    const why = unfitReason(endpoint, have);
+    b.classList.toggle("primary", endpoint === preferred);
+    b.classList.toggle("unfit", why !== null);
+    if (why) {
+      b.setAttribute("aria-disabled", "true");
+      b.title = why;
+      const tail = unfitWhy(endpoint, have);
+      reasons.set(tail, [...(reasons.get(tail) || []), LABEL[endpoint]]);
+    } else {
+      b.removeAttribute("aria-disabled");
+      b.removeAttribute("title");
+    }
+  });
+  $("run-note").textContent = [...reasons].map(([tail, names]) => `${names.join(", ")}: ${tail}`).join(" ");
+  $("run-note").hidden = reasons.size === 0;
+  state.primary = preferred;
+}
+
+/** Buttons that add /system/Q or /system/R (identity of the right size) when the request has none. */
+function offerMissingNoise() {
+  const box = $("add-fields");
+  box.replaceChildren();
+  const have = pointers();
+  const size = (pointer) => {
+    const div = document.querySelector(`#field-list .field[data-pointer="${pointer}"]`);
+    if (!div) return null;
+    try {
+      const node = scanJson(div.querySelector("textarea").value);
+      return node.type === "array" ? node.items.length : null;
+    } catch (e) {
+      return null;
+    }
+  };
+  for (const [pointer, from, what] of [["/system/Q", "/system/A", "process noise covariance"], ["/system/R", "/system/C", "measurement noise covariance"]]) {
+    if (have.has(pointer) || !have.has(from)) continue;
+    const n = size(from);
+    if (!n) continue;
+    const b = el("button", `Add ${pointer} (${what}, identity ${n} x ${n} to edit)`);
+    b.type = "button";
+    b.dataset.add = pointer;
+    b.addEventListener("click", () => addField(pointer, identityText(n)));
+    box.append(b);
+  }
+  box.hidden = box.childElementCount === 0;
+}
+
+const identityText = (n) => "[" + Array.from({ length: n }, (_, i) => "[" + Array.from({ length: n }, (_, j) => (i === j ? "1" : "0")).join(", ") + "]").join(",\n ") + "]";
+
+/** Add a field (after the other /system/... fields), keeping every field's text as edited. */
+function addField(pointer, text) {
+  const fields = [...document.querySelectorAll("#field-list .field")].map((d) => ({ path: JSON.parse(d.dataset.path), text: d.querySelector("textarea").value }));
+  const path = pointer.slice(1).split("/");
+  const lastSystem = fields.map((f) => f.path.length === 2).lastIndexOf(true);
+  fields.splice(lastSystem + 1, 0, { path, text });
+  renderFields(fields);
+  const div = document.querySelector(`#field-list .field[data-pointer="${pointer}"]`);
+  if (div) div.querySelector("textarea").focus();
+  setStatus(`Added ${pointer}: edit it, then run.`);
 }
 
 /** The request body: the fields' texts put together (throws with the field that is not JSON). */
@@ -441,6 +582,7 @@ async function loadExample() {
   const meta = state.examples.find((e) => e.id === id);
   const text = await (await fetch(`/static/requests/${id}.json`)).text();
   $("example-note").textContent = meta ? meta.note : "";
+  state.preferred = meta ? meta.endpoint : null;
   loadText(text, `example "${meta ? meta.title : id}"`);
 }
 
@@ -455,16 +597,28 @@ async function init() {
   $("load-example").addEventListener("click", loadExample);
   $("upload").addEventListener("change", async (ev) => {
     const file = ev.target.files[0];
+    state.preferred = null;
     if (file) loadText(await file.text(), `file ${file.name}`);
   });
   $("trace-upload").addEventListener("change", async (ev) => {
     const file = ev.target.files[0];
     if (file) await loadTrace(await file.text(), file.name);
   });
-  $("use-paste").addEventListener("click", () => { if (loadText($("paste").value, "the pasted JSON")) $("paste-box").open = false; });
+  $("use-paste").addEventListener("click", () => {
+    state.preferred = null;
+    if (loadText($("paste").value, "the pasted JSON")) $("paste-box").open = false;
+  });
   $("fields").addEventListener("submit", (ev) => {
     ev.preventDefault();
-    const endpoint = ev.submitter ? ev.submitter.dataset.endpoint : "analyze";
+    const endpoint = ev.submitter && ev.submitter.dataset.endpoint ? ev.submitter.dataset.endpoint : state.primary || "analyze";
+    const why = unfitReason(endpoint);
+    if (why) {  // said here, before any round trip to the server
+      clearErrors();
+      $("general-error").textContent = why;
+      $("general-error").hidden = false;
+      setStatus(`Not sent: ${why}`);
+      return;
+    }
     run(endpoint);
   });
   $("job-cancel").addEventListener("click", cancelJob);

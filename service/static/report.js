@@ -24,14 +24,31 @@ const BOUNDS_MEANING = {
 
 function el(tag, text, cls) {
   const e = document.createElement(tag);
-  if (text !== undefined && text !== null) e.textContent = String(text);
+  if (text !== undefined && text !== null) prose(e, String(text), tag);
   if (cls) e.className = cls;
   return e;
 }
 
+/** ``text`` into ``e``: report texts mark code with Markdown backticks; those spans become <code>, no backtick shows. */
+function prose(e, text, tag) {
+  if (!text.includes("`") || ["code", "textarea", "option", "pre"].includes(tag)) {
+    e.textContent = text;
+    return;
+  }
+  text.split(/(`[^`]*`)/).forEach((part) => {
+    if (part.length > 1 && part.startsWith("`") && part.endsWith("`")) e.append(el("code", part.slice(1, -1)));
+    else if (part) e.append(part.replace(/`/g, ""));
+  });
+}
+
 /** Append strings and nodes to ``parent`` (null and undefined are skipped). */
 function put(parent, ...items) {
-  for (const i of items) if (i !== null && i !== undefined) parent.append(i instanceof Node ? i : String(i));
+  for (const i of items) {
+    if (i === null || i === undefined) continue;
+    if (i instanceof Node) parent.append(i);
+    else if (String(i).includes("`")) parent.append(el("span", String(i)));
+    else parent.append(String(i));
+  }
   return parent;
 }
 
@@ -56,21 +73,39 @@ function ratio(text) {
   return m ? Number(m[1]) / Number(m[2] || 1) : null;
 }
 
-/** Exact texts short enough to read at a glance ("9/25", "-5/4", "2"): shown beside the decimal. */
-const SHORT_EXACT = /^-?\d{1,6}(\/\d{1,6})?$/;
+/** Exact forms up to this many characters stand beside the decimal (the CLI's cap, kfio._numbers). */
+const EXACT_CAP = 24;
+
+/** What a long exact text is, as kfio._numbers.show says it: from float data, a long fraction, algebraic. */
+function exactNote(exact) {
+  if (/\d0{10,}(?!\d)/.test(exact) || /^0{10,}/.test(exact)) return "from float data";
+  const m = /^-?(\d+)\/(\d+)$/.exec(exact);
+  if (m) return `${Math.max(m[1].length, m[2].length)}-digit fraction`;
+  if (/log|exp|pi/.test(exact)) return "closed form";
+  const roots = exact.match(/CRootOf\(([^,]*),/g) || [];
+  if (roots.length === 1) {
+    const powers = (roots[0].match(/x\*\*(\d+)/g) || []).map((p) => Number(p.slice(3)));
+    return `algebraic, degree ${Math.max(1, ...powers)}`;
+  }
+  if (roots.length === 0 && (exact.match(/sqrt\(/g) || []).length === 1 && !exact.includes("**")) return "algebraic, degree 2";
+  return "algebraic";
+}
 
 /**
- * A number for people: the decimal as the main text, the exact text beside it when it is short
- * ("9/25 = 0.36"), otherwise behind a "exact" toggle (a <details>) and in the title.
+ * A number for people, as the CLI prints it: the decimal first, the exact form beside it when it is
+ * short ("0.36 = 9/25"), else what kind of number it is, with the exact text behind an "exact"
+ * toggle (a <details>) and in the tooltip.
  */
 function num(exact, value, digits = 6) {
   const span = el("span", null, "num");
-  const d = value === null || value === undefined ? null : dec(value, digits);
   const hasExact = typeof exact === "string" && exact !== "";
+  const known = value === null || value === undefined ? (hasExact ? ratio(exact) : null) : value;
+  const d = known === null ? null : dec(known, digits);
   if (hasExact) span.title = `exact: ${exact}`;
   if (!hasExact) return put(span, d === null ? "-" : d);
-  if (SHORT_EXACT.test(exact)) return put(span, d === null || d === exact ? exact : `${exact} = ${d}`);
-  put(span, el("span", d === null ? "exact expression" : d, "dec"), " ");
+  if (d === exact || (d !== null && /^-?\d+$/.test(exact) && Number(exact) === known)) return put(span, d);
+  if (exact.length <= EXACT_CAP) return put(span, d === null ? exact : `${d} = ${exact}`);
+  put(span, el("span", d === null ? "exact expression" : `${d} (${exactNote(exact)})`, "dec"), " ");
   const details = el("details", null, "exact");
   details.append(el("summary", "exact"), el("code", exact));
   return put(span, details);
@@ -401,6 +436,18 @@ function monteCarloLine(r) {
   return put(p, el("strong", "Monte Carlo: "), `${text}.`);
 }
 
+/** The CLI's agreement line: steps inside the 95% band, the zero-width ones (every trajectory alike) apart. */
+function agreementText(a) {
+  const fixed = a.deterministic_steps || 0;
+  const random = a.steps_compared - fixed;
+  let text = `${a.within_ci95} of ${random} ${fixed ? "random " : ""}exact steps inside the 95% band`;
+  if (fixed) {
+    const equal = a.deterministic_equal === fixed ? "equal to the exact value" : `${fixed - a.deterministic_equal} of them NOT equal to the exact value`;
+    text += `; ${fixed === 1 ? "1 step" : `${fixed} steps`} with a zero-width band (every trajectory alike) skipped: ${equal}`;
+  }
+  return text;
+}
+
 function renderSimulate(r, exact) {
   const out = document.createDocumentFragment();
   const last = (a) => (Array.isArray(a) && a.length ? a[a.length - 1] : null);
@@ -418,7 +465,7 @@ function renderSimulate(r, exact) {
     [st.mean_unreliable ? "sample mean at the last step (unreliable)" : "sample mean at the last step", dec(last(r.mean_trace))],
     [st.mean_unreliable ? "its 95% band (not to be trusted)" : "its 95% band", `${dec(last(r.ci95_low))} to ${dec(last(r.ci95_high))}`],
     ["diverged trajectories", r.diverged_trajectories],
-    ["exact agreement", r.checks && r.checks.exact_agreement ? `${r.checks.exact_agreement.within_ci95} of ${r.checks.exact_agreement.steps_compared} exact steps inside the 95% band` : undefined],
+    ["exact agreement", r.checks && r.checks.exact_agreement ? agreementText(r.checks.exact_agreement) : undefined],
   ]));
   if (Array.isArray(st.quantiles) && st.quantiles.length) {
     out.append(el("h3", `Quantiles of trace(P_${st.step}) over ${st.samples} trajectories (Kar, Sinopoli and Moura 2012)`));

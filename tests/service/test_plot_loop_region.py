@@ -59,7 +59,7 @@ def test_headline_is_the_reports_exact_verdict_cost_and_critical_values(drawn, r
     title = fig._suptitle.get_text()
     first = title.splitlines()[0]
     assert first.startswith(f"{report['verdict'].upper()} (exact")
-    assert "sensor arrival probability 0.8, actuator arrival probability 0.9" in first
+    assert "sensor arrival probability 0.8, actuator arrival probability 0.9" in " ".join(title.split())  # wrapped
     assert f"stationary cost {report['cost']:.6g}" in title
     assert f"critical sensor arrival probability {report['critical_sensor_arrival_probability_exact']}" in title
     assert f"critical actuator arrival probability {report['critical_actuator_arrival_probability_exact']}" in title

@@ -109,8 +109,8 @@ def test_seed004_2x2_example_is_stable_with_critical_probability_9_25(
     page.wait_for_selector("#verdict", timeout=60_000)
     assert page.inner_text("#verdict strong").lower() == "stable"
     report = page.inner_text("#report")
-    assert "9/25 = 0.36" in report  # the critical arrival probability, exact and float
-    assert "5/4 = 1.25" in report and "11/10 = 1.1" in report  # one row per block
+    assert "0.36 = 9/25" in report  # the critical arrival probability, decimal and exact
+    assert "1.25 = 5/4" in report and "1.1 = 11/10" in report  # one row per block
     # the phase-transition plot is drawn next to the numbers
     page.wait_for_selector("#plots img", timeout=120_000)
     assert page.eval_on_selector("#plots img", "img => img.naturalWidth") > 100
@@ -194,7 +194,7 @@ def test_long_work_as_a_job_shows_progress_and_can_be_cancelled(
     page.check("#as-job")
     page.click("button[data-endpoint=analyze]")  # the default example, through the job lane
     page.wait_for_selector("#verdict", timeout=60_000)
-    assert page.inner_text("#verdict strong").lower() == "stable" and "9/25 = 0.36" in page.inner_text("#report")
+    assert page.inner_text("#verdict strong").lower() == "stable" and "0.36 = 9/25" in page.inner_text("#report")
     # a simulation of minutes, pasted in: the job reports its progress, and Cancel stops it
     page.click("#paste-box summary")
     page.fill("#paste", slow_request(seed=21).decode())

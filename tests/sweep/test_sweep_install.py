@@ -47,12 +47,15 @@ def test_documented_example_runs_and_turns_stable_past_the_closed_form(tmp_path,
 
 def test_missing_dask_is_exit_9_and_names_a_command_that_works(monkeypatch, capsys):
     monkeypatch.setitem(sys.modules, "distributed", None)  # `import distributed` now raises ImportError
-    assert main(["sweep", str(EXAMPLE), "--quiet", "--no-progress"]) == exitcodes.MISSING_DEPENDENCY == 9
+    # the embedded cluster asked for (a small sweep's default engine stays in process, without Dask)
+    assert main(["sweep", str(EXAMPLE), "--workers", "2", "--quiet", "--no-progress"]) == 9
+    assert exitcodes.MISSING_DEPENDENCY == 9
     err = capsys.readouterr().err
     assert "missing dependency" in err and "kfio sweep --serial" in err
     assert "invalid input" not in err and "kfio[" not in err
-    # the command it names works
+    # the command it names works, and so does the default for a sweep this small
     assert main(["sweep", str(EXAMPLE), "--serial", "--quiet"]) == exitcodes.STABLE
+    assert main(["sweep", str(EXAMPLE), "--quiet", "--no-progress"]) == exitcodes.STABLE
 
 
 def test_missing_pyarrow_is_exit_9(monkeypatch, tmp_path, capsys):
