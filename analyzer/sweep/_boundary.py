@@ -131,7 +131,7 @@ def _loop_boundary(spec: SweepSpec) -> dict[str, Any] | None:
             if found is None:
                 return None
             rows = found.boundary
-            x = [r.sensor_arrival_probability for r in rows]
+            x: list[float | None] = [r.sensor_arrival_probability for r in rows]
             y = [r.critical_actuator_arrival_probability for r in rows]
             first = next((k for k, v in enumerate(y) if v is not None), None)
             if first is not None and first > 0:
