@@ -11,13 +11,14 @@ from ._channels import bernoulli, channel_tree, gilbert_elliott, markov, per_sen
 from ._coerce import Route, json_ready, python_tree, renamed
 from ._exact import (
     DECIMAL_PATTERN,
-    NUMBER_SPACE,
+    WITHHELD_TEXT,
     escaped,
     fraction_text,
     load_json,
     parse_integer,
     parse_number,
     value_text,
+    values_withheld,
 )
 from ._limits import DEFAULT_LIMITS, Limits
 from ._pointer import json_pointer, pointer_tokens
@@ -58,7 +59,6 @@ __all__ = [
     "MIN_TIME_BUDGET_S",
     "MarkovChannel",
     "Matrix",
-    "NUMBER_SPACE",
     "OPTION_KEYS",
     "Packet",
     "PerSensorChannel",
@@ -66,6 +66,7 @@ __all__ = [
     "Route",
     "Sensor",
     "SystemRecord",
+    "WITHHELD_TEXT",
     "bernoulli",
     "channel_tree",
     "check_keys",
@@ -96,4 +97,5 @@ __all__ = [
     "to_domain",
     "to_float",
     "value_text",
+    "values_withheld",
 ]
