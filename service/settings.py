@@ -14,9 +14,9 @@ from __future__ import annotations
 
 import os
 from functools import lru_cache
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Literal
 
-from pydantic import Field
+from pydantic import Field, SecretStr
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
 from kfio.model import Limits
@@ -102,6 +102,15 @@ class Settings(BaseSettings):
         Comma-separated host names the server answers for (``*.example.org``
         for subdomains, ``*`` for any); any other ``Host`` is answered 421
         (:mod:`kfio.service.host_check`, against DNS rebinding).
+    api_token, api_token_file:
+        Bearer tokens (:mod:`kfio.service.auth`): ``KFIO_API_TOKEN`` one token,
+        ``KFIO_API_TOKEN_FILE`` a file with one token per line (several
+        clients).  With any, every route but ``/healthz`` and the page's and
+        docs' files answers 401 without ``Authorization: Bearer <token>``.
+    auth:
+        ``auto``: tokens when configured, and a generated one when ``kfio serve``
+        binds beyond loopback without any; ``none``: no access control (a
+        reverse proxy in front authenticates).
     """
 
     model_config = SettingsConfigDict(env_prefix="KFIO_", frozen=True, extra="ignore", allow_inf_nan=False)
@@ -136,6 +145,10 @@ class Settings(BaseSettings):
     keep_alive_s: float = Field(5.0, gt=0, le=600)
     max_connections: int = Field(1000, ge=1, le=100_000)
     trusted_hosts: str = Field(LOOPBACK_HOSTS, max_length=4096, pattern=r"[^\s,]")  # at least one name
+    # Access control (kfio.service.auth), kept together here.
+    api_token: SecretStr | None = None
+    api_token_file: str | None = Field(None, max_length=4096)
+    auth: Literal["auto", "none"] = "auto"
 
     def memory_bytes(self) -> int | None:
         """:attr:`memory_mb` in bytes, ``None`` for no limit."""
