@@ -35,7 +35,7 @@ from sympy.polys.matrices import DomainMatrix
 from .._budget import Budget
 from .._reporting import ReportPart
 from ..errors import InvalidInput
-from ..model import MarkovChannel, PerSensorChannel, Request, pointer_tokens
+from ..model import MarkovChannel, PerSensorChannel, Request, pointer_tokens, value_text
 from ..search import Margins, SlotSpace, search
 from ..sigma import SigmaResult, compare_rate_markov, period_transfer_matrix
 from ..structure import FmoBlock, readable
@@ -103,7 +103,7 @@ def parse_parameter(request: Request, pointer: str) -> Parameter:
         if len(key) == chan.order and all(c in "01" for c in key):
             h = int(key, 2) if chan.order else 0
             return Parameter(pointer, group, (h,), False, chan.table[h])
-    raise InvalidInput(where, f"{pointer[:80]!r} names no arrival probability of this {chan.model} channel")
+    raise InvalidInput(where, f"{value_text(pointer, 80)} names no arrival probability of this {chan.model} channel")
 
 
 def _symbolic_group_matrix(channel: MarkovChannel, period: int, phases: set[int], param: Parameter | None) -> Any:

@@ -275,3 +275,24 @@ def test_the_action_refuses_a_path_out_and_keeps_the_secret_out_of_junit(world, 
     done = _action_step(tmp_path, kfio, env, repo)
     assert done.returncode == 2 and REFUSED in done.stderr and SECRET not in done.stdout + done.stderr
     assert not (tmp_path / "out.xml").exists()
+
+
+@pytest.mark.parametrize("workers", ["1", "2"])
+def test_a_run_time_error_does_not_quote_the_file_either(world, capsys, workers):
+    """A plant file valid as a request, whose option fails only when the analysis resolves it."""
+    repo = world["repo"]
+    plant = json.loads((EXAMPLE / "plants" / "scalar.json").read_text())
+    plant["channel"] = {"model": "bernoulli", "arrival_probability": "0.9"}
+    plant["options"] = {"analyze": {"critical_parameter": f"/channel/{SECRET}"}}
+    (repo / "plants" / "opt.json").write_text(json.dumps(plant))
+    (repo / "c.json").write_text(
+        json.dumps({"checks": [{"plant": "plants/opt.json", "requirements": {"verdict": "stable"}}]})
+    )
+    junit, md = repo / "out.xml", repo / "out.md"
+    code, out, err = run_cli(
+        capsys, str(repo / "c.json"), "--workers", workers, "--junit", str(junit), "--markdown", str(md)
+    )
+    assert code == exitcodes.UNSTABLE == 1, err
+    assert "/options/analyze/critical_parameter: <value not shown> names no arrival probability" in out
+    for text in (out, err, junit.read_text(), md.read_text()):
+        assert SECRET not in text
