@@ -234,14 +234,14 @@ def test_openapi_declares_the_bearer_scheme() -> None:
         assert closed and all({"bearerAuth": []} in op["security"] for op in closed)
 
 
-@pytest.mark.slow
-def test_kfio_serve_on_all_addresses_prints_a_token_and_requires_it(tmp_path: Path) -> None:
-    """The real server, as the container runs it: ``--host 0.0.0.0`` and no token configured."""
+@pytest.fixture(scope="module")
+def beyond_loopback(tmp_path_factory) -> Iterator[tuple[str, str, Path]]:
+    """``kfio serve --host 0.0.0.0`` with no token configured, as the container runs it: its URL, token and log."""
     port = free_port()
     env = {**os.environ, "KFIO_WORKERS": "1", "KFIO_JOB_WORKERS": "1", "KFIO_TRUSTED_HOSTS": "127.0.0.1"}
     for name in ("KFIO_API_TOKEN", "KFIO_API_TOKEN_FILE", "KFIO_AUTH"):
         env.pop(name, None)
-    log = tmp_path / "serve.log"
+    log = tmp_path_factory.mktemp("serve") / "serve.log"
     with open(log, "wb") as out:
         proc = subprocess.Popen(
             [sys.executable, "-m", "kfio.service.cli", "serve", "--host", "0.0.0.0", "--port", str(port)],
@@ -267,10 +267,7 @@ def test_kfio_serve_on_all_addresses_prints_a_token_and_requires_it(tmp_path: Pa
             except httpx.TransportError:
                 pass
             time.sleep(0.1)
-        assert httpx.get(f"{base}/healthz", timeout=5).status_code == 200
-        assert httpx.post(f"{base}/v1/analyze", json=BODY, timeout=30).status_code == 401
-        assert httpx.post(f"{base}/v1/analyze", json=BODY, headers=_bearer(token), timeout=30).status_code == 200
-        assert log.read_text().count(token) == 1  # printed once at start, never logged with a request
+        yield base, token, log
     finally:
         proc.terminate()
         try:
@@ -278,3 +275,38 @@ def test_kfio_serve_on_all_addresses_prints_a_token_and_requires_it(tmp_path: Pa
         except subprocess.TimeoutExpired:
             proc.kill()
             proc.wait()
+
+
+@pytest.mark.slow
+def test_kfio_serve_on_all_addresses_prints_a_token_and_requires_it(beyond_loopback) -> None:
+    base, token, log = beyond_loopback
+    assert httpx.get(f"{base}/healthz", timeout=5).status_code == 200
+    assert httpx.get(f"{base}/readyz", timeout=5).status_code == 401
+    assert httpx.post(f"{base}/v1/analyze", json=BODY, timeout=30).status_code == 401
+    assert httpx.post(f"{base}/v1/analyze", json=BODY, headers=_bearer(token), timeout=30).status_code == 200
+    assert log.read_text().count(token) == 1  # printed once at start, never logged with a request
+
+
+@pytest.mark.slow
+def test_the_page_asks_for_the_token_once_and_keeps_it_for_the_tab(beyond_loopback) -> None:
+    from playwright.sync_api import sync_playwright
+
+    base, token, _ = beyond_loopback
+    asked: list[str] = []
+    with sync_playwright() as pw:
+        browser = pw.chromium.launch(executable_path="/usr/bin/chromium", headless=True, args=["--no-sandbox"])
+        try:
+            page = browser.new_page()
+            page.on("dialog", lambda d: (asked.append(d.message), d.accept(token)))
+            page.goto(base + "/")  # the shell loads without a token
+            page.wait_for_function("Number(document.querySelector('#field-list').dataset.version) >= 1")
+            page.click("button[data-endpoint=analyze]")
+            page.wait_for_selector("#verdict", timeout=60_000)
+            assert len(asked) == 1 and "access token" in asked[0]
+            assert page.evaluate("sessionStorage.getItem('kfio-api-token')") == token
+            assert "Bearer $KFIO_API_TOKEN" in page.input_value("#curl-cmd") and token not in page.content()
+            with page.expect_response(lambda r: r.url.endswith("/v1/analyze"), timeout=60_000) as again:
+                page.click("button[data-endpoint=analyze]")  # the second run sends the kept token: no new prompt
+            assert again.value.status == 200 and len(asked) == 1
+        finally:
+            browser.close()
