@@ -186,11 +186,11 @@ def _read(path: Path, field_: str, what: str) -> bytes:
     try:
         data = _read_regular(str(path))
     except _NotRegular:
-        raise InvalidInput(field_, f"the {what} {value_text(str(path))} is not a regular file") from None
+        raise InvalidInput(field_, f"the {what} {value_text(str(path), 100)} is not a regular file") from None
     except OSError as exc:
-        raise InvalidInput(field_, f"cannot read the {what} {value_text(str(path))}: {exc.strerror}") from None
+        raise InvalidInput(field_, f"cannot read the {what} {value_text(str(path), 100)}: {exc.strerror}") from None
     if len(data) > MAX_FILE_BYTES:
-        raise InvalidInput(field_, f"the {what} {value_text(str(path))} is larger than {MAX_FILE_BYTES} bytes")
+        raise InvalidInput(field_, f"the {what} {value_text(str(path), 100)} is larger than {MAX_FILE_BYTES} bytes")
     return data
 
 
