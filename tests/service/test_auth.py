@@ -310,3 +310,14 @@ def test_the_page_asks_for_the_token_once_and_keeps_it_for_the_tab(beyond_loopba
             assert again.value.status == 200 and len(asked) == 1
         finally:
             browser.close()
+
+
+@pytest.mark.parametrize("path", ["/static/%2e%2e/readyz", "/docs-assets/%2e%2e/readyz", "/static/..%2fv1/jobs/x"])
+def test_an_open_prefix_does_not_open_a_route_behind_it(guarded: TestClient, path: str) -> None:
+    r = guarded.get(path)
+    assert r.status_code in (401, 404) and "pool" not in r.text  # never /readyz's counters
+
+
+def test_an_untrusted_host_is_421_before_any_token_is_asked(guarded: TestClient) -> None:
+    r = guarded.post("/v1/analyze", json=BODY, headers={"Host": "evil.example"})
+    assert r.status_code == 421
