@@ -33,6 +33,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="run the HTTP service",
         description="Serve the kfio HTTP API (docs at /docs). Every option also reads KFIO_<NAME> from the "
         "environment (KFIO_TIME_BUDGET_S, KFIO_MAX_QUEUE, KFIO_MEMORY_MB, ...); command-line options win. "
+        "Bound beyond loopback (--host 0.0.0.0) with no KFIO_API_TOKEN or KFIO_API_TOKEN_FILE, it generates an "
+        "access token and prints it (KFIO_AUTH=none serves without). "
         "Exit 2 when a setting is out of range (the message names it), 6 when the server cannot start (the port is in use, a worker pool cannot start).",
     )
     p.add_argument("--host", help="interface to listen on (default 127.0.0.1)")
