@@ -69,5 +69,11 @@ HEALTHCHECK --interval=30s --timeout=3s --start-period=30s --retries=3 \
 # container is published.  A deployment should name it, e.g. -e KFIO_TRUSTED_HOSTS=kfio.example.org
 # (any other Host header is then 421), which also keeps DNS-rebinding pages out (docs/service.md).
 ENV KFIO_TRUSTED_HOSTS="*"
+# Access: the server listens on all addresses, so with no token configured it generates one at start and
+# prints it in the container's log (docker logs ...: "Authorization: Bearer ..."), new at every start.
+# Choose the tokens: -e KFIO_API_TOKEN=... (one client), or KFIO_API_TOKEN_FILE=/run/secrets/kfio-tokens
+# (a mounted file, one token per line, several clients). KFIO_AUTH=none serves without any, for a reverse
+# proxy in front that authenticates. /healthz (and so the HEALTHCHECK) needs no token (docs/deployment.md).
+ENV KFIO_AUTH=auto
 # kfio serve reads KFIO_HOST and KFIO_PORT (and every other KFIO_ setting) from the environment.
 CMD ["kfio", "serve"]

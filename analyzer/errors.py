@@ -11,6 +11,46 @@ from __future__ import annotations
 
 from typing import Any
 
+#: Characters of one client value (a key, a string, a path) that an error message may quote.
+ECHO_LIMIT = 100
+#: Characters of an error's field pointer and of its rule: a message stays small whatever the request held.
+FIELD_LIMIT = 1000
+RULE_LIMIT = 2000
+
+
+def clip(text: str, limit: int = ECHO_LIMIT) -> str:
+    """``text`` cut to ``limit`` characters, an ellipsis marking the cut.
+
+    Examples
+    --------
+    >>> clip("abc", 5), clip("x" * 10, 5)
+    ('abc', 'xxxxx...')
+    """
+    return text if len(text) <= limit else text[:limit] + "..."
+
+
+def clip_pointer(pointer: str) -> str:
+    """A JSON pointer for a message: each reference token clipped (:func:`clip`), the whole at most
+    :data:`FIELD_LIMIT` characters (its start and its end kept, the middle elided).
+
+    A client's key may be a megabyte; the pointer that names it must not be.
+
+    Examples
+    --------
+    >>> clip_pointer("/system/" + "k" * 150)[:20], len(clip_pointer("/system/" + "k" * 150))
+    ('/system/kkkkkkkkkkkk', 111)
+    """
+    if len(pointer) <= ECHO_LIMIT:
+        return pointer
+    tokens = [clip(t) for t in pointer.split("/")]
+    # "~0"/"~1" are one escaped character: a cut must not leave half an escape at the end
+    tokens = [t[:-4] + "..." if t.endswith("~...") else t for t in tokens]
+    text = "/".join(tokens)
+    if len(text) > FIELD_LIMIT:
+        half = FIELD_LIMIT // 2
+        text = text[:half] + "/.../" + text[-half:]
+    return text
+
 
 class AnalyzerError(Exception):
     """Base class of every error raised by :mod:`kfio`."""
@@ -28,9 +68,10 @@ class InvalidInput(AnalyzerError, ValueError):
     """
 
     def __init__(self, field: str, rule: str) -> None:
-        self.field = field or "/"
-        self.rule = rule
-        super().__init__(f"{self.field}: {rule}")
+        # bounded here, once: every door (CLI line, problem document, check report) shows these two
+        self.field = clip_pointer(field or "/")
+        self.rule = clip(rule, RULE_LIMIT)
+        super().__init__(f"{self.field}: {self.rule}")
 
 
 class AssumptionViolation(InvalidInput):

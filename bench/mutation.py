@@ -326,6 +326,46 @@ MUTANTS: tuple[Mutant, ...] = (
         ("tests/service/test_slow_readers.py",),
         "a large response body handed to the server whole: a slow reader holds all of it",
     ),
+    Mutant(
+        "check-path-not-confined",
+        "analyzer/check/_spec.py",
+        "            if os.path.commonpath([real, root]) == root:\n",
+        "            if True:\n",
+        ("tests/check/test_check_confinement.py",),
+        "a check file reads any path it names: ../../etc/passwd, absolute paths and symlinks out must be refused",
+    ),
+    Mutant(
+        "values-not-withheld",
+        "analyzer/model/_exact.py",
+        "    if _WITHHELD.get():\n",
+        "    if False:\n",
+        ("tests/model/test_number_text.py", "tests/check/test_check_confinement.py"),
+        "errors about a check's plant, channel and loop files quote their values (a credential the path led to)",
+    ),
+    Mutant(
+        "echo-unclipped",
+        "analyzer/errors.py",
+        '    return text if len(text) <= limit else text[:limit] + "..."\n',
+        "    return text\n",
+        ("tests/model/test_number_text.py", "tests/service/test_error_bounds.py"),
+        "errors quote a client's value whole: a 1 MB key gives a 2 MB error body",
+    ),
+    Mutant(
+        "auth-first-token-only",
+        "service/auth.py",
+        "        return any([hmac.compare_digest(presented, t) for t in self._tokens])\n",
+        "        return hmac.compare_digest(presented, self._tokens[0])\n",
+        ("tests/service/test_auth.py",),
+        "only the first configured token is accepted: a token file's other clients get 401",
+    ),
+    Mutant(
+        "auth-readyz-open",
+        "service/auth.py",
+        'OPEN_PATHS = frozenset({"/healthz", "/", ',
+        'OPEN_PATHS = frozenset({"/healthz", "/readyz", "/", ',
+        ("tests/service/test_auth.py",),
+        "a route other than /healthz, the page and the docs answers without a token",
+    ),
 )
 
 

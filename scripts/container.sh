@@ -22,6 +22,8 @@ git diff --quiet HEAD -- 2>/dev/null || REVISION="$REVISION-dirty"   # uncommitt
 SOURCE="${SOURCE:-$(git config --get remote.origin.url 2>/dev/null || echo unknown)}"
 IMAGE="${IMAGE:-localhost/kfio:$VERSION}"
 URL="http://127.0.0.1:$PORT"
+# The image listens on all addresses, so kfio serve would generate an access token; this run sets its own.
+export KFIO_API_TOKEN="${KFIO_API_TOKEN:-$(python3 -c 'import secrets; print(secrets.token_urlsafe(32))')}"
 
 if [ "${STANDIN:-0}" = 1 ] && ! buildah inspect --type image "$BASE_IMAGE" >/dev/null 2>&1; then
     scripts/standin-base.sh "$BASE_IMAGE"
@@ -69,7 +71,7 @@ run python -c "import control, dask.distributed, pyarrow, tqdm, kfio; print('kfi
 echo "== kfio serve on port $PORT (KFIO_PORT)"
 # the image's CMD, as the container runtime would start it
 mapfile -t cmd < <(buildah inspect --type image --format '{{range .OCIv1.Config.Cmd}}{{println .}}{{end}}' "$IMAGE" | sed '/^$/d')
-buildah run --isolation chroot --env KFIO_PORT="$PORT" "$ctr" -- \
+buildah run --isolation chroot --env KFIO_PORT="$PORT" --env KFIO_API_TOKEN="$KFIO_API_TOKEN" "$ctr" -- \
     sh -c 'echo $$ > /tmp/kfio-serve.pid && exec "$@"' sh "${cmd[@]}" &
 server=$!
 python3 - "$URL" <<'PY'
@@ -88,13 +90,14 @@ run sh -c "$health" && echo "HEALTHCHECK command (run inside, KFIO_PORT=$PORT): 
 
 echo "== analyze and sweep over HTTP"
 python3 - "$URL" examples/seed004_scalar.json <<'PY'
-import json, sys, time, urllib.request
+import json, os, sys, time, urllib.request
 
 url, example = sys.argv[1], sys.argv[2]
+headers = {"Content-Type": "application/json", "Authorization": "Bearer " + os.environ["KFIO_API_TOKEN"]}
 
 def call(path, body=None):
     data = None if body is None else json.dumps(body).encode()
-    req = urllib.request.Request(path if path.startswith("http") else url + path, data=data, headers={"Content-Type": "application/json"})
+    req = urllib.request.Request(path if path.startswith("http") else url + path, data=data, headers=headers)
     with urllib.request.urlopen(req, timeout=120) as r:
         return r.status, json.loads(r.read())
 

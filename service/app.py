@@ -22,6 +22,7 @@ from kfio.errors import AnalyzerError
 
 from .api import api_router, web
 from .api.schemas import COMPONENTS
+from .auth import BearerAuth, configured_tokens, declare_security
 from .connection_guard import ChunkedResponses
 from .dispatch import Dispatcher
 from .host_check import HostCheck, parse_hosts
@@ -56,6 +57,9 @@ Stability analysis of Kalman filters whose measurements travel over lossy packet
   202 with a `Location` to poll; budgets up to an hour (`KFIO_JOB_TIME_BUDGET_S`), a separate lane of
   worker processes (`KFIO_JOB_WORKERS`), at most `KFIO_MAX_JOBS` waiting (429 beyond), `DELETE` cancels.
   `kfio serve` keeps jobs in an embedded database (`KFIO_DATA_DIR`): they run and answer after a restart.
+* When the deployment sets access tokens (`KFIO_API_TOKEN`, `KFIO_API_TOKEN_FILE`; `kfio serve` generates one
+  when it listens beyond loopback without any), every route but `/healthz`, the page and these docs needs
+  `Authorization: Bearer <token>`: 401 otherwise.
 * Requests are answered only for the host names the deployment trusts (`KFIO_TRUSTED_HOSTS`, loopback names
   by default); any other `Host` header is 421 `misdirected-request` (a defence against DNS rebinding).
 * A web page for all of this is at `/`; these docs and the page load nothing from other hosts.
@@ -90,6 +94,9 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app = FastAPI(
         title="kfio", version=API_VERSION, description=DESCRIPTION, lifespan=lifespan, docs_url=None, redoc_url=None
     )
+    tokens = configured_tokens(settings)
+    if tokens:  # 401 without a bearer token; inside HostCheck, so an untrusted Host is 421 first
+        app.add_middleware(BearerAuth, tokens=tokens)
     app.add_middleware(HostCheck, hosts=parse_hosts(settings.trusted_hosts))  # 421 for untrusted Host names
     app.add_middleware(ChunkedResponses)  # a slow reader holds a piece of a large response, not all of it
     app.include_router(api_router)
@@ -102,7 +109,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         if app.openapi_schema is None:
             schema = get_openapi(title=app.title, version=app.version, description=app.description, routes=app.routes)
             schema.setdefault("components", {}).setdefault("schemas", {}).update(COMPONENTS)
-            app.openapi_schema = schema
+            app.openapi_schema = declare_security(schema)
         return app.openapi_schema
 
     app.openapi = openapi  # type: ignore[method-assign]

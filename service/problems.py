@@ -45,6 +45,8 @@ from kfio.errors import (
     LimitExceeded,
     MissingDependency,
     NumericalFailure,
+    clip,
+    clip_pointer,
 )
 from kfio.model import escaped, json_pointer
 
@@ -54,6 +56,9 @@ log = logging.getLogger("kfio.service")
 
 MEDIA_TYPE = "application/problem+json"
 _PREFIX = "urn:kfio:problem:"
+#: Characters of each text member of a problem document at most: every error body stays small, whatever
+#: raised it (an ``InvalidInput`` bounds its field and rule itself; this also bounds every other message).
+TEXT_LIMIT = 4096
 
 
 @dataclass(frozen=True)
@@ -100,11 +105,11 @@ class Problem:
             "type": _PREFIX + self.kind,
             "title": self.title,
             "status": self.status,
-            "detail": escaped(self.detail),
+            "detail": clip(escaped(self.detail), TEXT_LIMIT),
         }
         for key in ("field", "rule"):
             if getattr(self, key) is not None:
-                doc[key] = escaped(getattr(self, key))
+                doc[key] = clip(escaped(getattr(self, key)), TEXT_LIMIT)
         if self.location is not None:
             doc["in"] = self.location
         if self.partial is not None:
@@ -229,14 +234,9 @@ async def problem_handler(request: Request, exc: Exception) -> JSONResponse:
         err = exc.errors()[0] if exc.errors() else {"loc": (), "msg": "invalid request"}
         loc = tuple(err.get("loc", ()))
         where, rest = (str(loc[0]), loc[1:]) if loc else ("body", ())
+        field, rule = clip_pointer(json_pointer(rest)), clip(str(err.get("msg")), TEXT_LIMIT // 2)
         problem = Problem(
-            422,
-            "invalid-input",
-            "Invalid request",
-            f"{json_pointer(rest)}: {err.get('msg')}",
-            field=json_pointer(rest),
-            rule=str(err.get("msg")),
-            location=where,
+            422, "invalid-input", "Invalid request", f"{field}: {rule}", field=field, rule=rule, location=where
         )
     elif isinstance(exc, StarletteHTTPException):
         problem = Problem(exc.status_code, f"http-{exc.status_code}", str(exc.detail), str(exc.detail))

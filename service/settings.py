@@ -14,9 +14,9 @@ from __future__ import annotations
 
 import os
 from functools import lru_cache
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Literal
 
-from pydantic import Field
+from pydantic import Field, SecretStr
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
 from kfio.model import Limits
@@ -118,6 +118,15 @@ class Settings(BaseSettings):
     send_timeout_s:
         A response whose client reads nothing for this long is cut off
         (:mod:`kfio.service.connection_guard`).
+    api_token, api_token_file:
+        Bearer tokens (:mod:`kfio.service.auth`): ``KFIO_API_TOKEN`` one token,
+        ``KFIO_API_TOKEN_FILE`` a file with one token per line (several
+        clients).  With any, every route but ``/healthz`` and the page's and
+        docs' files answers 401 without ``Authorization: Bearer <token>``.
+    auth:
+        ``auto``: tokens when configured, and a generated one when ``kfio serve``
+        binds beyond loopback without any; ``none``: no access control (a
+        reverse proxy in front authenticates).
     """
 
     model_config = SettingsConfigDict(env_prefix="KFIO_", frozen=True, extra="ignore", allow_inf_nan=False)
@@ -158,6 +167,10 @@ class Settings(BaseSettings):
     lane_workers: int = Field(1, ge=0, le=16)
     lane_budget_s: float = Field(2.0, gt=0, le=60)
     send_timeout_s: float = Field(30.0, gt=0, le=3600)
+    # Access control (kfio.service.auth), kept together here.
+    api_token: SecretStr | None = None
+    api_token_file: str | None = Field(None, max_length=4096)
+    auth: Literal["auto", "none"] = "auto"
 
     def memory_bytes(self) -> int | None:
         """:attr:`memory_mb` in bytes, ``None`` for no limit."""

@@ -21,7 +21,7 @@ from typing import Any, Callable, ClassVar
 from .._budget import Budget
 from .._reporting import Report, ReportPart
 from ..errors import AnalyzerError, BudgetExceeded, InvalidInput, MissingDependency, NumericalFailure
-from ..model import fraction_text
+from ..model import fraction_text, values_withheld
 from ._requirements import judge
 from ._spec import CheckSpec
 
@@ -184,6 +184,12 @@ def run_one(command: str, tree: dict[str, Any], seconds: float) -> tuple[str, An
     return "error", error, time.perf_counter() - t0
 
 
+def _run_quoting_nothing(command: str, tree: dict[str, Any], seconds: float) -> tuple[str, Any, float]:
+    """:func:`run_one` with the files' values withheld from its messages: they go to logs and JUnit."""
+    with values_withheld():
+        return run_one(command, tree, seconds)
+
+
 def _limit_memory(memory_bytes: int | None) -> None:
     if memory_bytes:
         import resource
@@ -239,7 +245,7 @@ def run_check(
             left = deadline - time.monotonic()
             if left <= 0:
                 break
-            results[(i, c)] = run_one(c, spec.entries[i].request_for(c), min(point, left))
+            results[(i, c)] = _run_quoting_nothing(c, spec.entries[i].request_for(c), min(point, left))
             if progress:
                 progress(k + 1, len(tasks))
     else:
@@ -247,7 +253,10 @@ def run_check(
         ctx = multiprocessing.get_context("fork")
         pool = ctx.Pool(n, initializer=_limit_memory, initargs=(memory_bytes,))
         try:
-            pending = {(i, c): pool.apply_async(run_one, (c, spec.entries[i].request_for(c), point)) for i, c in tasks}
+            pending = {
+                (i, c): pool.apply_async(_run_quoting_nothing, (c, spec.entries[i].request_for(c), point))
+                for i, c in tasks
+            }
             while pending and time.monotonic() < deadline:
                 for key in [k for k, r in pending.items() if r.ready()]:
                     try:

@@ -35,7 +35,7 @@ from sympy.polys.matrices import DomainMatrix
 from .._budget import Budget
 from .._reporting import ReportPart
 from ..errors import InvalidInput
-from ..model import MarkovChannel, PerSensorChannel, Request, pointer_tokens
+from ..model import MarkovChannel, PerSensorChannel, Request, pointer_tokens, value_text
 from ..search import Margins, SlotSpace, search
 from ..sigma import SigmaResult, compare_rate_markov, period_transfer_matrix
 from ..structure import FmoBlock, readable
@@ -94,7 +94,9 @@ def parse_parameter(request: Request, pointer: str) -> Parameter:
         chan = ch
     found = channel_parameter(chan, rest)
     if found is None:
-        raise InvalidInput(where, f"{pointer[:80]!r} names no arrival probability of this {chan.model} channel")
+        raise InvalidInput(
+            where, f"{value_text(pointer, 80)} names no arrival probability of this {chan.model} channel"
+        )
     entries, complement, value = found
     return Parameter(pointer, group, entries, complement, value)
 

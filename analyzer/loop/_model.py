@@ -51,6 +51,7 @@ from ..model import (
     parse_matrix,
     parse_number,
     parse_system,
+    value_text,
 )
 from ..model import SystemRecord as System
 
@@ -211,7 +212,7 @@ def parse_loop_request(obj: Any, limits: Limits = DEFAULT_LIMITS) -> LoopRequest
         estimator = _shaped(gains["estimator"], "/controller/gains/estimator", "estimator", n, p, limits)
         form = ctrl.get("form", "predictor")
         if form not in FORMS:
-            raise InvalidInput("/controller/form", f"form must be one of {', '.join(FORMS)}; got {form!r}")
+            raise InvalidInput("/controller/form", f"form must be one of {', '.join(FORMS)}; got {value_text(form)}")
         source = "gains"
         W, U = _identity(n), _zeros(m, m)
     if "cost" in obj:
@@ -231,10 +232,14 @@ def parse_loop_request(obj: Any, limits: Limits = DEFAULT_LIMITS) -> LoopRequest
             lo: Mapping[str, Any] = check_keys(opts["loop"], "/options/loop", _LOOP_OPTIONS, set())
             protocol = lo.get("protocol", "tcp")
             if protocol not in PROTOCOLS:
-                raise InvalidInput("/options/loop/protocol", f"protocol must be 'tcp' or 'udp'; got {protocol!r}")
+                raise InvalidInput(
+                    "/options/loop/protocol", f"protocol must be 'tcp' or 'udp'; got {value_text(protocol)}"
+                )
             on_loss = lo.get("on_loss", "zero")
             if on_loss not in ON_LOSS:
-                raise InvalidInput("/options/loop/on_loss", f"on_loss must be 'zero' or 'hold'; got {on_loss!r}")
+                raise InvalidInput(
+                    "/options/loop/on_loss", f"on_loss must be 'zero' or 'hold'; got {value_text(on_loss)}"
+                )
             if "region" in lo:
                 region = lo["region"]
                 if isinstance(region, bool) or not isinstance(region, int) or not 2 <= region <= MAX_REGION_POINTS:

@@ -12,7 +12,7 @@ from ._coerce import Route, json_ready, python_tree, renamed
 from ._exact import (
     DECIMAL_PATTERN,
     MAX_EXACT_DIGITS,
-    NUMBER_SPACE,
+    WITHHELD_TEXT,
     capped_fraction_text,
     decimal_enclosure,
     escaped,
@@ -22,6 +22,7 @@ from ._exact import (
     parse_integer,
     parse_number,
     value_text,
+    values_withheld,
 )
 from ._limits import DEFAULT_LIMITS, Limits
 from ._pointer import json_pointer, pointer_tokens
@@ -62,7 +63,6 @@ __all__ = [
     "MIN_TIME_BUDGET_S",
     "MarkovChannel",
     "Matrix",
-    "NUMBER_SPACE",
     "OPTION_KEYS",
     "Packet",
     "PerSensorChannel",
@@ -70,6 +70,7 @@ __all__ = [
     "Route",
     "Sensor",
     "SystemRecord",
+    "WITHHELD_TEXT",
     "bernoulli",
     "channel_tree",
     "check_keys",
@@ -104,4 +105,5 @@ __all__ = [
     "to_domain",
     "to_float",
     "value_text",
+    "values_withheld",
 ]

@@ -12,21 +12,23 @@ from __future__ import annotations
 import json
 import re
 import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
 from decimal import Decimal
 from fractions import Fraction
 from typing import Any
 
-from ..errors import InvalidInput, LimitExceeded
+from ..errors import ECHO_LIMIT, InvalidInput, LimitExceeded, clip
 
 # The grammar is ASCII: ``\d`` and ``str.isdigit`` would accept other scripts' digits
-# ("\u0661.\u0662\u0665" is 1.25 in Arabic-Indic digits) and ``\s`` would accept vertical tab and
-# form feed; only JSON's own whitespace (space, tab, LF, CR) may surround a number in a string.
+# ("\u0661.\u0662\u0665" is 1.25 in Arabic-Indic digits).  A string holds the number and nothing
+# else: no whitespace around it or around the slash, so a string the schema's pattern refuses is
+# never a number here either, and " 1" is not one.
 _DIGITS = "[0-9]"
-NUMBER_SPACE = r"[ \t\n\r]*"
 DECIMAL_PATTERN = rf"[+-]?(?:{_DIGITS}+(?:\.{_DIGITS}*)?|\.{_DIGITS}+)(?:[eE][+-]?{_DIGITS}+)?"
-_NUMBER_RE = re.compile(
-    rf"{NUMBER_SPACE}({DECIMAL_PATTERN}){NUMBER_SPACE}(?:/{NUMBER_SPACE}({DECIMAL_PATTERN}){NUMBER_SPACE})?", re.ASCII
-)
+#: A number in a string: a decimal, or a fraction of two decimals.
+_NUMBER_RE = re.compile(rf"({DECIMAL_PATTERN})(?:/({DECIMAL_PATTERN}))?", re.ASCII)
 _PARTS_RE = re.compile(rf"([+-]?)({_DIGITS}*)(?:\.({_DIGITS}*))?(?:[eE]([+-]?{_DIGITS}+))?", re.ASCII)
 #: Exponent digits kept by :func:`load_json`; a longer exponent is clamped (the value is far
 #: beyond every limit either way, and :mod:`decimal` refuses exponents above 10^18).
@@ -49,8 +51,13 @@ def _decimal_text_to_fraction(text: str, field: str, max_digits: int) -> Fractio
     mantissa = int(whole + frac) if (whole + frac) else 0
     e -= len(frac)
     value = Fraction(mantissa * 10**e) if e >= 0 else Fraction(mantissa, 10 ** (-e))
-    if len(str(value.numerator)) > max_digits or len(str(value.denominator)) > max_digits:
-        raise LimitExceeded(field, f"numbers may have at most {max_digits} digits")
+    for part, n in (("numerator", value.numerator), ("denominator", value.denominator)):
+        if len(str(n)) > max_digits:  # few digits, a far exponent: 1e-300 is 1/10^300
+            raise LimitExceeded(
+                field,
+                f"the exact value of this number has {len(str(n))} digits in its {part}; numerator and "
+                f"denominator may have at most {max_digits} digits each (an exponent adds digits: 1e-300 is 1/10^300)",
+            )
     return -value if sign == "-" else value
 
 
@@ -98,13 +105,13 @@ def parse_number(value: Any, field: str, max_digits: int = 200) -> Fraction:
     if not isinstance(value, str):
         raise InvalidInput(field, f"expected a number, got a {_json_type(value)}")
     if len(value) > 4 * max_digits + 16:
-        raise LimitExceeded(field, f"numbers may have at most {max_digits} digits")
+        raise LimitExceeded(field, f"the text of a number may have at most {4 * max_digits + 16} characters")
     m = _NUMBER_RE.fullmatch(value)
     if m is None:
         raise InvalidInput(
             field,
             f"{value_text(value)} is not a number (use an integer, a decimal such as "
-            "'1.1e-3', or a fraction such as '11/10')",
+            "'1.1e-3', or a fraction such as '11/10', with no spaces)",
         )
     num = _decimal_text_to_fraction(m.group(1), field, max_digits)
     if m.group(2) is None:
@@ -162,17 +169,55 @@ def parse_integer(value: Any, field: str, lo: int, hi: int | None = None, name: 
 _MAX_UNBOUNDED_DIGITS = 30
 
 
+#: Set while validating what a check file's plant, channel or loop file holds (:func:`values_withheld`).
+_WITHHELD: ContextVar[bool] = ContextVar("kfio_values_withheld", default=False)
+#: What :func:`value_text` shows for a withheld value.
+WITHHELD_TEXT = "<value not shown>"
+
+
+@contextmanager
+def values_withheld() -> Iterator[None]:
+    """Within it, :func:`value_text` shows no client value, only :data:`WITHHELD_TEXT`.
+
+    ``kfio check`` validates plant, channel and loop files inside it: those files
+    are named by a check file that may come from anyone (a pull request), and an
+    error about them goes to CI logs and JUnit.  The field and the rule still
+    say what is wrong; the value, which might be a credential the path led to,
+    is not repeated.
+
+    Examples
+    --------
+    >>> with values_withheld():
+    ...     value_text("hunter2")
+    '<value not shown>'
+    """
+    token = _WITHHELD.set(True)
+    try:
+        yield
+    finally:
+        _WITHHELD.reset(token)
+
+
 def value_text(value: Any, limit: int = 40) -> str:
     """A user value as it would appear in JSON, for messages: never a Python repr, never huge.
 
     Strings are JSON-quoted with non-ASCII escaped (so a lone surrogate prints
     as ``\\ud800``), numbers are their decimal text, containers are named.
+    Every message that quotes a client's value (a key, a name, a number's
+    text, an option's value) quotes it through here: at most ``limit``
+    characters (at most :data:`kfio.errors.ECHO_LIMIT`), and nothing at all
+    inside :func:`values_withheld`.
 
     Examples
     --------
     >>> value_text(Decimal("1E+999999")), value_text("x"), value_text(True), value_text([1])
     ('1e999999', '"x"', 'true', 'a JSON array')
+    >>> value_text("k" * 1000, 10)
+    '"kkkkkk...'
     """
+    limit = min(limit, ECHO_LIMIT)
+    if _WITHHELD.get():
+        return WITHHELD_TEXT
     if isinstance(value, Decimal):
         text = str(value).lower().replace("e+", "e")
     elif isinstance(value, int) and not isinstance(value, bool):
@@ -181,7 +226,7 @@ def value_text(value: Any, limit: int = 40) -> str:
         text = json.dumps(value, ensure_ascii=True)
     else:
         return f"a JSON {_json_type(value)}"
-    return text if len(text) <= limit else text[: limit - 3] + "..."
+    return text if len(text) <= limit else clip(text, limit - 3)
 
 
 def _json_type(value: Any) -> str:

@@ -12,11 +12,10 @@ from __future__ import annotations
 from typing import Any
 
 from kfio._version import __version__
-from kfio.model import DECIMAL_PATTERN, NUMBER_SPACE, OPTION_KEYS
+from kfio.model import DECIMAL_PATTERN, OPTION_KEYS
 
-#: The grammar of :func:`kfio.model.parse_number`, from its own pieces: JSON's four whitespace characters
-#: (not ``\s``, which also matches form feed and vertical tab) and ASCII digits.
-NUMBER_PATTERN = rf"^{NUMBER_SPACE}{DECIMAL_PATTERN}{NUMBER_SPACE}(?:/{NUMBER_SPACE}{DECIMAL_PATTERN}{NUMBER_SPACE})?$"
+#: The grammar of :func:`kfio.model.parse_number`, from its own pieces: ASCII digits, no whitespace.
+NUMBER_PATTERN = rf"^{DECIMAL_PATTERN}(?:/{DECIMAL_PATTERN})?$"
 
 
 _KFIO_VERSION = {"type": "string", "description": "The version of kfio that made the report", "examples": [__version__]}

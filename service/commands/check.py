@@ -8,6 +8,10 @@ analyze``, ``bounds`` or ``simulate``, the runs in parallel.  Prints a table
 ``--markdown`` writes a summary for a CI step.  Exit 0 every requirement
 holds, 1 one fails (or could not be judged), 2 the check file (or a plant or
 channel file) is invalid, naming the field, 4 the budget ran out first.
+
+The check file may name only regular files under its own directory (symlinks
+followed; ``--allow-outside DIR``, repeatable, allows another directory):
+a check file from a pull request must not read the CI runner's files.
 """
 
 from __future__ import annotations
@@ -52,6 +56,14 @@ def register(sub: argparse._SubParsersAction) -> None:
         "past it the workers are stopped, exit 4",
     )
     p.add_argument("--memory-mb", type=int, metavar="M", help="address-space limit of each worker in MiB (0: none)")
+    p.add_argument(
+        "--allow-outside",
+        action="append",
+        default=[],
+        metavar="DIR",
+        help="let the check file name files under DIR too (repeatable); by default it may name only regular files "
+        "under its own directory, symlinks followed",
+    )
     p.set_defaults(func=_run)
 
 
@@ -62,6 +74,16 @@ def _default_file() -> str:
         if Path(name).is_file():
             return name
     raise InvalidInput("FILE", f"no check file given and none of {list(DEFAULT_FILES)} in {os.getcwd()}")
+
+
+def _allowed_dirs(dirs: list[str]) -> list[str]:
+    """The ``--allow-outside`` directories, each an existing directory (these paths are the caller's own)."""
+    from kfio.errors import InvalidInput
+
+    for d in dirs:
+        if not os.path.isdir(d):
+            raise InvalidInput("--allow-outside", f"{d!r} is not a directory")
+    return dirs
 
 
 def _write(path: str, text: str, flag: str) -> None:
@@ -85,7 +107,7 @@ def _run(args: argparse.Namespace) -> int:
         if args.time_budget is not None and not 0.01 <= args.time_budget <= 86400:
             raise InvalidInput("--time-budget", "must be in [0.01, 86400] seconds")
         memory = memory_limit(args)
-        spec = load_check(args.file or _default_file())
+        spec = load_check(args.file or _default_file(), _allowed_dirs(args.allow_outside))
         result = run_check(spec, workers=args.workers, time_budget_s=args.time_budget, memory_bytes=memory)
         if args.junit:
             _write(args.junit, junit_xml(result), "--junit")

@@ -7,6 +7,10 @@ still running then is answered 503 ``shutting-down`` with ``Retry-After``
 (problem+json, never Uvicorn's bare ``500 text/plain``).  If the server cannot
 start (the port is taken, ``KFIO_DASK_SCHEDULER`` names a scheduler that
 cannot be reached, ...), the exit code is 6, ``CANNOT_SERVE``.
+
+Bound to an address beyond this machine with no access token configured, the
+server generates one and prints it first (:func:`kfio.service.auth.startup_tokens`);
+``KFIO_AUTH=none`` serves without.
 """
 
 from __future__ import annotations
@@ -29,6 +33,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="run the HTTP service",
         description="Serve the kfio HTTP API (docs at /docs). Every option also reads KFIO_<NAME> from the "
         "environment (KFIO_TIME_BUDGET_S, KFIO_MAX_QUEUE, KFIO_MEMORY_MB, ...); command-line options win. "
+        "Bound beyond loopback (--host 0.0.0.0) with no KFIO_API_TOKEN or KFIO_API_TOKEN_FILE, it generates an "
+        "access token and prints it (KFIO_AUTH=none serves without). "
         "Exit 2 when a setting is out of range (the message names it), 6 when the server cannot start (the port is in use, a worker pool cannot start).",
     )
     p.add_argument("--host", help="interface to listen on (default 127.0.0.1)")
@@ -70,6 +76,7 @@ def _run(args: argparse.Namespace) -> int:
     from pydantic import ValidationError
 
     from ..app import create_app
+    from ..auth import SettingError, startup_tokens
     from ..connection_guard import install_accept_error_log, uvicorn_options
     from ..settings import Settings
 
@@ -100,6 +107,13 @@ def _run(args: argparse.Namespace) -> int:
         if reason is not None:  # every sweep would fail: say so now, naming the setting
             print(f"kfio: setting KFIO_DASK_SCHEDULER: {reason}", file=sys.stderr)
             return exitcodes.CANNOT_SERVE
+    try:
+        settings, announcement = startup_tokens(settings)
+    except SettingError as exc:
+        print(f"kfio: invalid setting {exc.setting}: {exc.rule}", file=sys.stderr)
+        return exitcodes.INVALID_INPUT
+    if announcement is not None:  # as Jupyter does: the operator reads the token from the server's output
+        print(announcement, file=sys.stderr, flush=True)
     app = create_app(settings)
 
     class DrainingServer(uvicorn.Server):

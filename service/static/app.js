@@ -400,7 +400,26 @@ function setBusy(busy) {
   document.querySelectorAll("fieldset.run button").forEach((b) => { b.disabled = busy; });
 }
 
-const post = (path, body) => fetch(path, { method: "POST", headers: { "Content-Type": "application/json", Accept: "application/json" }, body });
+// A server with access tokens answers 401: ask for the token once, keep it for this tab (sessionStorage, never
+// localStorage: it goes when the tab closes) and send it as "Authorization: Bearer" with every API request.
+const TOKEN_KEY = "kfio-api-token";
+
+async function api(path, init = {}) {
+  for (let asked = 0; ; asked++) {
+    const headers = new Headers(init.headers || {});
+    const token = sessionStorage.getItem(TOKEN_KEY);
+    if (token) headers.set("Authorization", `Bearer ${token}`);
+    const response = await fetch(path, { ...init, headers });
+    if (response.status !== 401 || asked >= 3) return response;
+    const given = window.prompt(
+      token ? "That access token was refused. Access token of this kfio server:"
+        : "This kfio server needs an access token (its operator has it; kfio serve prints one at start):");
+    if (!given || !given.trim()) return response;
+    sessionStorage.setItem(TOKEN_KEY, given.trim());
+  }
+}
+
+const post = (path, body) => api(path, { method: "POST", headers: { "Content-Type": "application/json", Accept: "application/json" }, body });
 
 async function readAnswer(response) {
   const text = await response.text();
@@ -426,7 +445,7 @@ async function runJob(endpoint, body) {
   $("job-box").hidden = false;
   $("job-progress").removeAttribute("value");
   for (;;) {
-    const poll = await readAnswer(await fetch(location, { headers: { Accept: "application/json" } }));
+    const poll = await readAnswer(await api(location, { headers: { Accept: "application/json" } }));
     if (!poll.ok) { showProblem(poll.doc); break; }
     const job = poll.doc;
     const p = job.progress || {};
@@ -435,7 +454,7 @@ async function runJob(endpoint, body) {
     $("job-text").textContent = `job ${job.status}` + (p.stage ? `: ${p.stage}, ${p.steps} steps, ${p.elapsed_s} s${pct}` : "");
     setStatus(`Job ${job.id}: ${job.status}`);
     if (job.status === "done") {
-      const result = await fetch(`${location}/result`);
+      const result = await api(`${location}/result`);
       await showReport(endpoint, await result.text(), job.result, body);
       break;
     }
@@ -451,7 +470,7 @@ async function runJob(endpoint, body) {
 async function cancelJob() {
   if (!state.job) return;
   const location = state.job;
-  const answer = await readAnswer(await fetch(location, { method: "DELETE" }));
+  const answer = await readAnswer(await api(location, { method: "DELETE" }));
   setStatus(answer.ok ? "Cancelling..." : `Could not cancel: ${answer.doc ? answer.doc.detail : answer.status}`);
 }
 
@@ -517,7 +536,9 @@ const shellQuote = (s) => "'" + s.replace(/'/g, "'\\''") + "'";
 
 function showCommands(endpoint, body) {
   const compact = body.replace(/\s*\n\s*/g, " ").trim();
-  $("curl-cmd").value = `curl -s ${location.origin}/v1/${endpoint} -H 'Content-Type: application/json' --data-binary ${shellQuote(compact)}`;
+  // the token itself is not shown on the page: the command reads it from the shell's environment
+  const auth = sessionStorage.getItem(TOKEN_KEY) ? ` -H "Authorization: Bearer $KFIO_API_TOKEN"` : "";
+  $("curl-cmd").value = `curl -s ${location.origin}/v1/${endpoint} -H 'Content-Type: application/json'${auth} --data-binary ${shellQuote(compact)}`;
   $("kfio-cmd").value = `kfio ${endpoint} --json request.json`;
 }
 

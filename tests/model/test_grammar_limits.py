@@ -51,7 +51,7 @@ def test_non_ascii_digits_and_whitespace_are_refused(text: str) -> None:
 
 @pytest.mark.parametrize(
     ("text", "value"),
-    [(" 11/10 ", Fraction(11, 10)), ("\t-3/4\n", Fraction(-3, 4)), ("1.5e-3/2.5", Fraction(3, 5000)), ("+.5E+1", 5)],
+    [("11/10", Fraction(11, 10)), ("-3/4", Fraction(-3, 4)), ("1.5e-3/2.5", Fraction(3, 5000)), ("+.5E+1", 5)],
 )
 def test_ascii_grammar_still_reads_the_documented_forms(text: str, value: Fraction) -> None:
     assert parse_number(text, "/x") == value

@@ -89,7 +89,10 @@ def test_head_of_the_page_is_200(client: TestClient) -> None:
 
 
 def number_pattern() -> str:
-    return DOC["components"]["schemas"]["ExactNumber"]["anyOf"][1]["pattern"]
+    """The schema's pattern, read as JSON Schema reads it (ECMA-262: ``$`` is the end of the text;
+    Python's ``$`` also matches before a final newline, so it is written ``\\Z`` here)."""
+    pattern = DOC["components"]["schemas"]["ExactNumber"]["anyOf"][1]["pattern"]
+    return pattern.removesuffix("$") + r"\Z" if pattern.endswith("$") else pattern
 
 
 def test_exact_number_pattern_refuses_form_feed_and_vertical_tab() -> None:
