@@ -93,6 +93,23 @@ THREE_BERNOULLI = LoopSpec(
     on_loss="hold",
 )
 
+#: A scalar plant over two Gilbert-Elliott links, UDP with hold: ``det(I - T(x))`` of the
+#: actuator's recovery rate has a root near 0.02 inside the unstable stretch (an eigenvalue of
+#: ``T`` other than the spectral radius crossing 1) besides the critical value near 0.355.
+SCALAR_MERGED = LoopSpec(
+    A=mat([["6/5"]]),
+    B=mat([[1]]),
+    C=mat([[1]]),
+    Q=mat([[1]]),
+    R=mat([[1]]),
+    K=mat([["1/2"]]),
+    L=mat([["1/2"]]),
+    sensors=(Sensor("s", (0,), GilbertElliott(F(1, 10), F(7, 10))),),
+    actuator=GilbertElliott(F(1, 10), F(4, 5)),
+    protocol="udp",
+    on_loss="hold",
+)
+
 #: A scalar UDP loop whose estimator assumes the actuator arrives 3 times in 10: more arrivals
 #: than that make the estimator's input model wrong enough to destabilize the loop.
 UDP_INTERVAL = LoopSpec(
@@ -357,6 +374,12 @@ def test_cut_points_of_a_range_that_is_not_an_interval_and_a_merged_root():
     """The sensor ``a``: stable, unstable, stable; the actuator: a root inside the unstable stretch."""
     got = assert_critical_values_agree(THREE_BERNOULLI, grid=40)
     assert [i["verdict"] for i in got[0]["intervals"]] == ["stable", "unstable", "stable"]
+
+
+def test_an_unstable_stretch_holding_another_root_is_one_interval():
+    got = assert_critical_values_agree(SCALAR_MERGED)
+    assert [i["verdict"] for i in got[1]["intervals"]] == ["unstable", "stable"]
+    assert 0.3 < got[1]["value"] < 0.4
 
 
 @pytest.mark.parametrize("index", [0, 1])
