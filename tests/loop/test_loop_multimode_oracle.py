@@ -332,12 +332,17 @@ def _assert_pieces_agree(spec: LoopSpec, index: int, parameter: str, crit: dict,
 def assert_critical_values_agree(spec: LoopSpec, grid: int = 20) -> list[dict]:
     """Each link's critical value and the cut points of its range against bisection, to 1e-6.
 
-    Returns kfio's entries for the links' arrival probabilities and recovery rates, in link
-    order; a failure-rate entry, when kfio gives one, has its cut points compared too.
+    Returns kfio's entries for the links' arrival probabilities and recovery rates (a Markov
+    link's entry has no value), in link order; a failure-rate entry, when kfio gives one, has
+    its cut points compared too.
     """
     by_parameter = {c["parameter"]: c for c in kfio_report(spec, critical=True)["critical_values"]}
     main = []
     for index, link in enumerate(spec.links):
+        if isinstance(link, MarkovLink):  # no parameter to vary: the entry says so, without a value
+            assert by_parameter[lo.link_pointer(spec, index)]["value"] is None
+            main.append(by_parameter[lo.link_pointer(spec, index)])
+            continue
         names = [_parameter(link)] + (["failure_rate"] if isinstance(link, GilbertElliott) else [])
         for parameter in names:
             crit = by_parameter.get(f"{lo.link_pointer(spec, index)}/{parameter}")
@@ -367,6 +372,12 @@ def test_gilbert_elliott_recovery_rates_against_bisection_other_combinations(for
 def test_two_sensor_links_and_a_bernoulli_actuator_against_bisection():
     got = assert_critical_values_agree(TWO_SENSORS)
     assert got[0]["value"] > 0.1 and got[2]["value"] > 0.1  # the position sensor and the actuator matter
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", range(12))
+def test_random_loops_critical_values_against_bisection(seed):
+    assert_critical_values_agree(random_loop(seed))
 
 
 @pytest.mark.slow
