@@ -192,6 +192,34 @@ def test_the_oracles_chains_follow_the_channel_definitions():
     assert P[2] == pytest.approx(np.array([0.25, 0.75, 0, 0]), abs=1e-15) and arrived.tolist() == [0, 1, 0, 1]
 
 
+# -- definiteness -------------------------------------------------------------------------------------
+
+
+def _ldl(last: F, scale: F) -> flint.fmpq_mat:
+    """``scale L D L'`` with ``D = diag(2, 1/3, 5/7, last)``: its inertia is that of ``D`` (Sylvester)."""
+    L = [[F(1), 0, 0, 0], [F(3, 7), 1, 0, 0], [F(-2, 3), F(5, 11), 1, 0], [F(1, 2), F(-4, 9), F(7, 5), 1]]
+    D = [F(2), F(1, 3), F(5, 7), last]
+    X = [[scale * sum(L[i][k] * D[k] * L[j][k] for k in range(4)) for j in range(4)] for i in range(4)]
+    return flint.fmpq_mat([[flint.fmpq(x.numerator, x.denominator) for x in row] for row in X])
+
+
+@pytest.mark.parametrize("scale", [F(1), F(10) ** 40, F(1, 10**40)])
+@pytest.mark.parametrize(
+    "last,definite",
+    [
+        (F(1, 10**6), True),
+        (F(-1, 10**6), False),
+        (F(1, 10**14), True),
+        (F(-1, 10**14), False),
+        (F(1, 10**40), True),
+        (F(-1, 10**40), False),
+        (F(0), False),
+    ],
+)
+def test_definiteness_of_barely_definite_and_barely_indefinite_matrices(last, definite, scale):
+    assert positive_definite(_ldl(last, scale)) is definite
+
+
 # -- verdict, spectral radius and cost -------------------------------------------------------------
 
 
@@ -419,34 +447,6 @@ def test_a_udp_stable_set_that_does_not_reach_one():
     left, right = actuator["intervals"][1]["from"], actuator["intervals"][1]["to"]
     assert left < 0.3 < right < 1  # the request's own point is stable
     assert kfio_report(UDP_INTERVAL)["verdict"] == "stable"
-
-
-# -- definiteness -------------------------------------------------------------------------------------
-
-
-def _ldl(last: F, scale: F) -> flint.fmpq_mat:
-    """``scale L D L'`` with ``D = diag(2, 1/3, 5/7, last)``: its inertia is that of ``D`` (Sylvester)."""
-    L = [[F(1), 0, 0, 0], [F(3, 7), 1, 0, 0], [F(-2, 3), F(5, 11), 1, 0], [F(1, 2), F(-4, 9), F(7, 5), 1]]
-    D = [F(2), F(1, 3), F(5, 7), last]
-    X = [[scale * sum(L[i][k] * D[k] * L[j][k] for k in range(4)) for j in range(4)] for i in range(4)]
-    return flint.fmpq_mat([[flint.fmpq(x.numerator, x.denominator) for x in row] for row in X])
-
-
-@pytest.mark.parametrize("scale", [F(1), F(10) ** 40, F(1, 10**40)])
-@pytest.mark.parametrize(
-    "last,definite",
-    [
-        (F(1, 10**6), True),
-        (F(-1, 10**6), False),
-        (F(1, 10**14), True),
-        (F(-1, 10**14), False),
-        (F(1, 10**40), True),
-        (F(-1, 10**40), False),
-        (F(0), False),
-    ],
-)
-def test_definiteness_of_barely_definite_and_barely_indefinite_matrices(last, definite, scale):
-    assert positive_definite(_ldl(last, scale)) is definite
 
 
 # -- Monte Carlo --------------------------------------------------------------------------------------
