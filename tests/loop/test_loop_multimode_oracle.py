@@ -93,6 +93,23 @@ THREE_BERNOULLI = LoopSpec(
     on_loss="hold",
 )
 
+#: A scalar plant over two Gilbert-Elliott links, UDP with hold: ``det(I - T(x))`` of the
+#: actuator's recovery rate has a root near 0.02 inside the unstable stretch (an eigenvalue of
+#: ``T`` other than the spectral radius crossing 1) besides the critical value near 0.355.
+SCALAR_MERGED = LoopSpec(
+    A=mat([["6/5"]]),
+    B=mat([[1]]),
+    C=mat([[1]]),
+    Q=mat([[1]]),
+    R=mat([[1]]),
+    K=mat([["1/2"]]),
+    L=mat([["1/2"]]),
+    sensors=(Sensor("s", (0,), GilbertElliott(F(1, 10), F(7, 10))),),
+    actuator=GilbertElliott(F(1, 10), F(4, 5)),
+    protocol="udp",
+    on_loss="hold",
+)
+
 #: A scalar UDP loop whose estimator assumes the actuator arrives 3 times in 10: more arrivals
 #: than that make the estimator's input model wrong enough to destabilize the loop.
 UDP_INTERVAL = LoopSpec(
@@ -173,6 +190,34 @@ def test_the_oracles_chains_follow_the_channel_definitions():
     P, arrived = lo.link_chain(MarkovLink(2, table))
     # state (g[t-1], g[t]) -> (g[t], g[t+1]); from "10" the next packet arrives with probability 3/4
     assert P[2] == pytest.approx(np.array([0.25, 0.75, 0, 0]), abs=1e-15) and arrived.tolist() == [0, 1, 0, 1]
+
+
+# -- definiteness -------------------------------------------------------------------------------------
+
+
+def _ldl(last: F, scale: F) -> flint.fmpq_mat:
+    """``scale L D L'`` with ``D = diag(2, 1/3, 5/7, last)``: its inertia is that of ``D`` (Sylvester)."""
+    L = [[F(1), 0, 0, 0], [F(3, 7), 1, 0, 0], [F(-2, 3), F(5, 11), 1, 0], [F(1, 2), F(-4, 9), F(7, 5), 1]]
+    D = [F(2), F(1, 3), F(5, 7), last]
+    X = [[scale * sum(L[i][k] * D[k] * L[j][k] for k in range(4)) for j in range(4)] for i in range(4)]
+    return flint.fmpq_mat([[flint.fmpq(x.numerator, x.denominator) for x in row] for row in X])
+
+
+@pytest.mark.parametrize("scale", [F(1), F(10) ** 40, F(1, 10**40)])
+@pytest.mark.parametrize(
+    "last,definite",
+    [
+        (F(1, 10**6), True),
+        (F(-1, 10**6), False),
+        (F(1, 10**14), True),
+        (F(-1, 10**14), False),
+        (F(1, 10**40), True),
+        (F(-1, 10**40), False),
+        (F(0), False),
+    ],
+)
+def test_definiteness_of_barely_definite_and_barely_indefinite_matrices(last, definite, scale):
+    assert positive_definite(_ldl(last, scale)) is definite
 
 
 # -- verdict, spectral radius and cost -------------------------------------------------------------
@@ -315,12 +360,17 @@ def _assert_pieces_agree(spec: LoopSpec, index: int, parameter: str, crit: dict,
 def assert_critical_values_agree(spec: LoopSpec, grid: int = 20) -> list[dict]:
     """Each link's critical value and the cut points of its range against bisection, to 1e-6.
 
-    Returns kfio's entries for the links' arrival probabilities and recovery rates, in link
-    order; a failure-rate entry, when kfio gives one, has its cut points compared too.
+    Returns kfio's entries for the links' arrival probabilities and recovery rates (a Markov
+    link's entry has no value), in link order; a failure-rate entry, when kfio gives one, has
+    its cut points compared too.
     """
     by_parameter = {c["parameter"]: c for c in kfio_report(spec, critical=True)["critical_values"]}
     main = []
     for index, link in enumerate(spec.links):
+        if isinstance(link, MarkovLink):  # no parameter to vary: the entry says so, without a value
+            assert by_parameter[lo.link_pointer(spec, index)]["value"] is None
+            main.append(by_parameter[lo.link_pointer(spec, index)])
+            continue
         names = [_parameter(link)] + (["failure_rate"] if isinstance(link, GilbertElliott) else [])
         for parameter in names:
             crit = by_parameter.get(f"{lo.link_pointer(spec, index)}/{parameter}")
@@ -353,10 +403,22 @@ def test_two_sensor_links_and_a_bernoulli_actuator_against_bisection():
 
 
 @pytest.mark.slow
+@pytest.mark.parametrize("seed", range(12))
+def test_random_loops_critical_values_against_bisection(seed):
+    assert_critical_values_agree(random_loop(seed))
+
+
+@pytest.mark.slow
 def test_cut_points_of_a_range_that_is_not_an_interval_and_a_merged_root():
     """The sensor ``a``: stable, unstable, stable; the actuator: a root inside the unstable stretch."""
     got = assert_critical_values_agree(THREE_BERNOULLI, grid=40)
     assert [i["verdict"] for i in got[0]["intervals"]] == ["stable", "unstable", "stable"]
+
+
+def test_an_unstable_stretch_holding_another_root_is_one_interval():
+    got = assert_critical_values_agree(SCALAR_MERGED)
+    assert [i["verdict"] for i in got[1]["intervals"]] == ["unstable", "stable"]
+    assert 0.3 < got[1]["value"] < 0.4
 
 
 @pytest.mark.parametrize("index", [0, 1])
@@ -385,34 +447,6 @@ def test_a_udp_stable_set_that_does_not_reach_one():
     left, right = actuator["intervals"][1]["from"], actuator["intervals"][1]["to"]
     assert left < 0.3 < right < 1  # the request's own point is stable
     assert kfio_report(UDP_INTERVAL)["verdict"] == "stable"
-
-
-# -- definiteness -------------------------------------------------------------------------------------
-
-
-def _ldl(last: F, scale: F) -> flint.fmpq_mat:
-    """``scale L D L'`` with ``D = diag(2, 1/3, 5/7, last)``: its inertia is that of ``D`` (Sylvester)."""
-    L = [[F(1), 0, 0, 0], [F(3, 7), 1, 0, 0], [F(-2, 3), F(5, 11), 1, 0], [F(1, 2), F(-4, 9), F(7, 5), 1]]
-    D = [F(2), F(1, 3), F(5, 7), last]
-    X = [[scale * sum(L[i][k] * D[k] * L[j][k] for k in range(4)) for j in range(4)] for i in range(4)]
-    return flint.fmpq_mat([[flint.fmpq(x.numerator, x.denominator) for x in row] for row in X])
-
-
-@pytest.mark.parametrize("scale", [F(1), F(10) ** 40, F(1, 10**40)])
-@pytest.mark.parametrize(
-    "last,definite",
-    [
-        (F(1, 10**6), True),
-        (F(-1, 10**6), False),
-        (F(1, 10**14), True),
-        (F(-1, 10**14), False),
-        (F(1, 10**40), True),
-        (F(-1, 10**40), False),
-        (F(0), False),
-    ],
-)
-def test_definiteness_of_barely_definite_and_barely_indefinite_matrices(last, definite, scale):
-    assert positive_definite(_ldl(last, scale)) is definite
 
 
 # -- Monte Carlo --------------------------------------------------------------------------------------

@@ -12,17 +12,18 @@ import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
-LOOP_MUTANTS = {
-    "loop-operator-blocks-transposed": "analyzer/loop/_operator.py",
-    "loop-transition-transposed": "analyzer/loop/_operator.py",
-    "loop-noise-without-mode-weight": "analyzer/loop/_operator.py",
-    "loop-ge-table-swapped": "analyzer/loop/_critical.py",
-    "loop-cost-input-noise-dropped": "analyzer/loop/_cost.py",
-    "loop-definite-tolerance-sign": "analyzer/loop/_verdict.py",
-    "loop-definite-negative-as-positive": "analyzer/loop/_verdict.py",
-    "loop-interval-left-end-off-by-one": "analyzer/loop/_critical.py",
-    "loop-merged-right-end-off-by-one": "analyzer/loop/_critical.py",
-}
+#: Names only: an entry's file and text move with the code (the catalogue test keeps them applicable).
+LOOP_MUTANTS = (
+    "loop-operator-blocks-transposed",
+    "loop-transition-transposed",
+    "loop-noise-without-mode-weight",
+    "loop-ge-table-swapped",
+    "loop-cost-input-noise-dropped",
+    "loop-definite-tolerance-sign",
+    "loop-definite-negative-as-positive",
+    "loop-interval-left-end-off-by-one",
+    "loop-merged-right-end-off-by-one",
+)
 
 
 def _mutants():
@@ -36,7 +37,6 @@ def _mutants():
 
 def test_the_closed_loop_mutants_are_listed_with_the_oracle_tests():
     mutants = _mutants()
-    for name, path in LOOP_MUTANTS.items():
+    for name in LOOP_MUTANTS:
         assert name in mutants, name
-        assert mutants[name].path == path
         assert "tests/loop/test_loop_multimode_oracle.py" in mutants[name].tests

@@ -360,7 +360,13 @@ def mode_maps(
 
 @dataclass(frozen=True)
 class OracleResult:
-    """What the oracle computes for one loop."""
+    """What the oracle computes for one loop.
+
+    ``verdict`` is ``stable`` iff ``spectral_radius < 1`` (floats: no boundary); ``cost`` and
+    the mode-wise stationary moments ``X_j = E[z z' 1{theta = j}]`` are ``None`` unless
+    stable; ``modes`` counts the joint chain's states; ``radius_error`` bounds the float error
+    of ``spectral_radius`` to first order (``nan`` when only the radius was asked for).
+    """
 
     spectral_radius: float
     verdict: str
