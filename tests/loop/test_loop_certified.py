@@ -83,6 +83,7 @@ def _inside(x: flint.arb, box: tuple[Fraction, Fraction]) -> bool:
     return not (x < lo) and not (x > hi)
 
 
+@pytest.mark.slow
 def test_certified_route_agrees_with_the_exact_route_on_random_small_loops() -> None:
     seen = {"stable": 0, "unstable": 0}
     kinds = set()
@@ -282,6 +283,7 @@ def test_big_plants_answer_through_the_cli_and_http_with_the_same_bytes(big_repo
         assert r.json()["verdict"] == big_reports[10][1].verdict
 
 
+@pytest.mark.slow
 def test_exact_costs_past_200_digits_are_null_with_digits_and_an_enclosure() -> None:
     sys = loop_mjls(parse_loop_request(loop_plant_request(4, seed=4)))
     dec = decide(sys)
@@ -294,6 +296,7 @@ def test_exact_costs_past_200_digits_are_null_with_digits_and_an_enclosure() -> 
     assert lo <= cost <= hi and hi - lo <= cost * Fraction(1, 10**15)
 
 
+@pytest.mark.slow
 def test_the_ten_state_two_sensor_gilbert_elliott_loop_is_certified() -> None:
     sys = loop_mjls(parse_loop_request(ge_two_sensor_request(10)))
     assert sys.modes == 8 and sys.modes * sys.d * (sys.d + 1) // 2 == 1680
