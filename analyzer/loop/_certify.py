@@ -9,7 +9,12 @@ Marques 2005, Ch. 3 and Thm 3.9) turn float candidates into proofs:
   ``R = Y - T(Y)``, then ``rho(T) < 1`` (Thm 3.9);
 * **unstable**: if some ``Z`` has every ``Z_i > 0`` and ``T(Z) - r Z >= 0``
   with ``r > 1``, then ``rho(T) >= r > 1``: ``T^k(Z) >= r^k Z`` and, were
-  ``rho < r``, ``T^k(Z) / r^k -> 0`` would force ``Z <= 0``;
+  ``rho < r``, ``T^k(Z) / r^k -> 0`` would force ``Z <= 0``.  Perron
+  eigen-matrices of real loops are often singular to rounding, so the first
+  proof tried is another one (:func:`verify_indefinite`): were ``rho(T / s) < 1``,
+  the solution of ``Y - T(Y) / s = I`` would be ``>= I``, and a float solution
+  with a small enclosed residual that has a direction ``x' Y_i x < (1 - e) x' x``
+  proves ``rho(T) >= s`` (``s = 1 + 2^-40``);
 * **enclosure of rho** (Collatz-Wielandt): ``T(Z) >= r Z`` with ``Z > 0`` gives
   ``rho >= r``; ``T(Y) <= s Y`` with ``Y > 0`` gives ``rho <= s`` (every ``X`` is
   below ``c Y`` for some ``c``, so ``T^k(X) <= c s^k Y``).  With ``Y = I``:

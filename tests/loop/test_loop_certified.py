@@ -23,7 +23,16 @@ import numpy as np
 import pytest
 
 from kfio.loop import analyze_loop, decide, loop_mjls, parse_loop_request
-from kfio.loop._certify import _Balls, _Floats, certify, definite, verify_growth, verify_stable
+from kfio.loop._certify import (
+    INDEFINITE_SCALE,
+    _Balls,
+    _Floats,
+    certify,
+    definite,
+    verify_growth,
+    verify_indefinite,
+    verify_stable,
+)
 from kfio.loop._cost import stationary_cost
 from kfio.loop._critical import certified_bracket, critical_value, parameter_of
 from kfio.loop._operator import operator_matrix
@@ -166,12 +175,16 @@ def test_a_planted_wrong_certificate_is_rejected() -> None:
     assert verify_stable(balls, shrunk) is None
     # a Perron "certificate" of instability for a stable loop: T(Y) >= 1.0001 Y is false
     assert not verify_growth(balls, Y, Fraction(10001, 10000))
+    # nor does an indefinite candidate prove instability: its residual is far from small
+    assert not verify_indefinite(balls, bad, INDEFINITE_SCALE)
+    assert not verify_indefinite(balls, Y, INDEFINITE_SCALE)  # the true solution is >= I: nothing to find
     # and a Lyapunov certificate for an unstable loop does not exist: the float solve is rejected
     body = _ge_loop()
     body["system"]["A"] = [["1.6", "0.2"], ["0", "0.9"]]
     unstable = loop_mjls(parse_loop_request(body))
     assert decide(unstable, route="exact").verdict == "unstable"
     assert verify_stable(_Balls(unstable), _float_lyapunov(unstable)) is None
+    assert verify_indefinite(_Balls(unstable), _float_lyapunov(unstable), INDEFINITE_SCALE)
     assert certify(unstable).verdict == "unstable"
 
 
