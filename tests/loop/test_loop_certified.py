@@ -258,6 +258,13 @@ def test_python_control_plants_of_8_to_10_states_answer_with_certified_enclosure
         assert rlo <= Fraction(d["spectral_radius"]) * (1 + Fraction(1, 10**6)) and rhi < 1
     for c in d["critical_values"]:
         assert c["value"] is not None or c["value_bracket"] is not None or "no value" in c["note"]
+        if c["value_bracket"] is not None:  # both ends proved: the upper stable, the lower unstable
+            lo, hi = (Fraction(x) for x in c["value_bracket_exact"])
+            assert lo < hi and "unstable at" in c["note"]
+    alone = d["estimator_alone"]["critical_value"]
+    if alone is not None and alone["value_minimal_polynomial_digits"] is not None:
+        long = alone["value_minimal_polynomial_digits"] > 200
+        assert (alone["value_minimal_polynomial"] is None) == long and alone["value_minimal_polynomial_degree"] >= 1
     for text in _texts(d):
         assert len(text) <= 420  # every exact text is capped (200 digits each side of a fraction)
 
@@ -317,3 +324,20 @@ def test_the_ten_state_two_sensor_gilbert_elliott_loop_is_certified() -> None:
     assert dec.verdict == "stable" and dec.certified and dec.cost_enclosure is not None
     lo, hi = dec.cost_enclosure
     assert 0 < lo <= Fraction(dec.cost) <= hi and hi - lo <= hi * Fraction(1, 10**6)
+
+
+def test_capped_texts_count_digits_and_enclose_values_past_pythons_4300_digit_limit() -> None:
+    from kfio.model import capped_fraction_text, decimal_enclosure, fraction_digits
+
+    rng = random.Random(11)
+    for _ in range(300):
+        x = Fraction(rng.randint(-(10**60), 10**60), rng.randint(1, 10 ** rng.randint(1, 80)))
+        assert fraction_digits(x) == len(str(abs(x.numerator))) + (0 if x.denominator == 1 else len(str(x.denominator)))
+        lo, hi = decimal_enclosure(x, x)
+        assert Fraction(lo) <= x <= Fraction(hi) and Fraction(hi) - Fraction(lo) <= abs(x) / 10**15
+    huge = Fraction(7**6000, 3**5000 + 1)  # 5071 + 2386 digits: str() of either raises ValueError
+    text, digits, box = capped_fraction_text(huge)
+    assert text is None and digits == 5071 + 2386 and box is not None
+    lo, hi = (Fraction(v) for v in box)
+    assert lo <= huge <= hi
+    assert capped_fraction_text(Fraction(9, 25)) == ("9/25", 3, None)
