@@ -468,6 +468,26 @@ def _resolvent_upper(balls: _Balls, Tf: np.ndarray, fl: _Floats, rho: float, hi:
     return hi
 
 
+def _resolvent_lower(balls: _Balls, Tf: np.ndarray, fl: _Floats, rho: float, lo: Fraction) -> Fraction:
+    """A larger proved lower bound of ``rho``: a solution of ``Y - T(Y) / t = I`` that is not ``>= I``.
+
+    :func:`verify_indefinite` on ``T / t`` for ``t`` just below the float ``rho``; each try costs one dense solve.
+    """
+    size = Tf.shape[0]
+    ident = np.tile([1.0 if a == b else 0.0 for a, b in vech_index(fl.d)], fl.sys.modes)
+    for tau in (1e-6, 1e-3, 1e-2):
+        t = _fraction(rho * (1 - tau))
+        if t <= lo:
+            break
+        try:
+            y = np.linalg.solve(np.eye(size) - Tf / float(t), ident)
+        except np.linalg.LinAlgError:
+            continue
+        if np.all(np.isfinite(y)) and verify_indefinite(balls, list(fl.mats(y)), t):
+            return t
+    return lo
+
+
 def _perron_matrices(fl: _Floats, v: np.ndarray | None) -> list[np.ndarray] | None:
     """The eigenvector as mode matrices, signed to a positive trace and scaled to entries of order 1."""
     if v is None or not np.all(np.isfinite(v)):
@@ -612,6 +632,8 @@ def certify(sys: Mjls, *, enclose: bool = True) -> Certified:
             lo, hi = _radius_bounds(balls, rho, _candidates(fl, (True,))[1], lo, hi, upper=size > RESOLVENT_SIZE)
         if size <= RESOLVENT_SIZE and np.isfinite(rho) and hi > _fraction(rho) * (1 + Fraction(1, 10**9)):
             hi = _resolvent_upper(balls, Tf, fl, rho, hi)
+        if size <= RESOLVENT_SIZE and np.isfinite(rho) and rho > 0 and lo < _fraction(rho) * Fraction(99, 100):
+            lo = _resolvent_lower(balls, Tf, fl, rho, lo)
         refine = None
         if lu is not None:
             from scipy.linalg import lu_solve
