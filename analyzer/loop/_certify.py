@@ -9,7 +9,12 @@ Marques 2005, Ch. 3 and Thm 3.9) turn float candidates into proofs:
   ``R = Y - T(Y)``, then ``rho(T) < 1`` (Thm 3.9);
 * **unstable**: if some ``Z`` has every ``Z_i > 0`` and ``T(Z) - r Z >= 0``
   with ``r > 1``, then ``rho(T) >= r > 1``: ``T^k(Z) >= r^k Z`` and, were
-  ``rho < r``, ``T^k(Z) / r^k -> 0`` would force ``Z <= 0``;
+  ``rho < r``, ``T^k(Z) / r^k -> 0`` would force ``Z <= 0``.  Perron
+  eigen-matrices of real loops are often singular to rounding, so the first
+  proof tried is another one (:func:`verify_indefinite`): were ``rho(T / s) < 1``,
+  the solution of ``Y - T(Y) / s = I`` would be ``>= I``, and a float solution
+  with a small enclosed residual that has a direction ``x' Y_i x < (1 - e) x' x``
+  proves ``rho(T) >= s`` (``s = 1 + 2^-40``);
 * **enclosure of rho** (Collatz-Wielandt): ``T(Z) >= r Z`` with ``Z > 0`` gives
   ``rho >= r``; ``T(Y) <= s Y`` with ``Y > 0`` gives ``rho <= s`` (every ``X`` is
   below ``c Y`` for some ``c``, so ``T^k(X) <= c s^k Y``).  With ``Y = I``:
@@ -463,6 +468,26 @@ def _resolvent_upper(balls: _Balls, Tf: np.ndarray, fl: _Floats, rho: float, hi:
     return hi
 
 
+def _resolvent_lower(balls: _Balls, Tf: np.ndarray, fl: _Floats, rho: float, lo: Fraction) -> Fraction:
+    """A larger proved lower bound of ``rho``: a solution of ``Y - T(Y) / t = I`` that is not ``>= I``.
+
+    :func:`verify_indefinite` on ``T / t`` for ``t`` just below the float ``rho``; each try costs one dense solve.
+    """
+    size = Tf.shape[0]
+    ident = np.tile([1.0 if a == b else 0.0 for a, b in vech_index(fl.d)], fl.sys.modes)
+    for tau in (1e-6, 1e-3, 1e-2):
+        t = _fraction(rho * (1 - tau))
+        if t <= lo:
+            break
+        try:
+            y = np.linalg.solve(np.eye(size) - Tf / float(t), ident)
+        except np.linalg.LinAlgError:
+            continue
+        if np.all(np.isfinite(y)) and verify_indefinite(balls, list(fl.mats(y)), t):
+            return t
+    return lo
+
+
 def _perron_matrices(fl: _Floats, v: np.ndarray | None) -> list[np.ndarray] | None:
     """The eigenvector as mode matrices, signed to a positive trace and scaled to entries of order 1."""
     if v is None or not np.all(np.isfinite(v)):
@@ -607,6 +632,8 @@ def certify(sys: Mjls, *, enclose: bool = True) -> Certified:
             lo, hi = _radius_bounds(balls, rho, _candidates(fl, (True,))[1], lo, hi, upper=size > RESOLVENT_SIZE)
         if size <= RESOLVENT_SIZE and np.isfinite(rho) and hi > _fraction(rho) * (1 + Fraction(1, 10**9)):
             hi = _resolvent_upper(balls, Tf, fl, rho, hi)
+        if size <= RESOLVENT_SIZE and np.isfinite(rho) and rho > 0 and lo < _fraction(rho) * Fraction(99, 100):
+            lo = _resolvent_lower(balls, Tf, fl, rho, lo)
         refine = None
         if lu is not None:
             from scipy.linalg import lu_solve

@@ -47,9 +47,10 @@ from ._verdict import SHORT_DATA_BITS, data_bits, decide
 
 #: Largest operator size for which the exact critical value is computed.
 MAX_CRITICAL_SIZE = 200
-#: Operator sizes whose exact critical value is computed whatever the data (about a second for data
-#: read from floats, ``bench/bench_loop_certify.py``); beyond, only for short data (:data:`SHORT_DATA_BITS`).
-EXACT_CRITICAL_SIZE = 40
+#: Operator sizes whose exact critical value is computed whatever the data: for data read from floats
+#: 0.26 s at size 36, 0.53 s at 55, 2.2 s at 78 (a certified bracket: 0.1 s, docs/speed.md); beyond, only
+#: for short data (:data:`SHORT_DATA_BITS`).
+EXACT_CRITICAL_SIZE = 60
 #: Width at which the certified bisection stops (each step is one dense float solve and its proof).
 BRACKET_WIDTH = Fraction(1, 256)
 #: Operator size above which the bisection stops at :data:`WIDE_BRACKET_WIDTH` instead.

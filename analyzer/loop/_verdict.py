@@ -65,7 +65,11 @@ MAX_EXACT_RADIUS_SIZE = 24
 
 @dataclass(frozen=True)
 class Decision:
-    """The verdict, how it was reached, and the exact stationary moments when the loop is stable."""
+    """The verdict, how it was reached, and the exact stationary moments when the loop is stable.
+
+    On the certified route (``exact`` false) ``moments`` is ``None``; ``radius_enclosure`` and
+    ``cost_enclosure`` are then proved bounds (Fractions) and ``cost`` the float cost inside them.
+    """
 
     verdict: str
     exact: bool

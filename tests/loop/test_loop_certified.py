@@ -23,7 +23,16 @@ import numpy as np
 import pytest
 
 from kfio.loop import analyze_loop, decide, loop_mjls, parse_loop_request
-from kfio.loop._certify import _Balls, _Floats, certify, definite, verify_growth, verify_stable
+from kfio.loop._certify import (
+    INDEFINITE_SCALE,
+    _Balls,
+    _Floats,
+    certify,
+    definite,
+    verify_growth,
+    verify_indefinite,
+    verify_stable,
+)
 from kfio.loop._cost import stationary_cost
 from kfio.loop._critical import certified_bracket, critical_value, parameter_of
 from kfio.loop._operator import operator_matrix
@@ -83,6 +92,7 @@ def _inside(x: flint.arb, box: tuple[Fraction, Fraction]) -> bool:
     return not (x < lo) and not (x > hi)
 
 
+@pytest.mark.slow
 def test_certified_route_agrees_with_the_exact_route_on_random_small_loops() -> None:
     seen = {"stable": 0, "unstable": 0}
     kinds = set()
@@ -165,12 +175,16 @@ def test_a_planted_wrong_certificate_is_rejected() -> None:
     assert verify_stable(balls, shrunk) is None
     # a Perron "certificate" of instability for a stable loop: T(Y) >= 1.0001 Y is false
     assert not verify_growth(balls, Y, Fraction(10001, 10000))
+    # nor does an indefinite candidate prove instability: its residual is far from small
+    assert not verify_indefinite(balls, bad, INDEFINITE_SCALE)
+    assert not verify_indefinite(balls, Y, INDEFINITE_SCALE)  # the true solution is >= I: nothing to find
     # and a Lyapunov certificate for an unstable loop does not exist: the float solve is rejected
     body = _ge_loop()
     body["system"]["A"] = [["1.6", "0.2"], ["0", "0.9"]]
     unstable = loop_mjls(parse_loop_request(body))
     assert decide(unstable, route="exact").verdict == "unstable"
     assert verify_stable(_Balls(unstable), _float_lyapunov(unstable)) is None
+    assert verify_indefinite(_Balls(unstable), _float_lyapunov(unstable), INDEFINITE_SCALE)
     assert certify(unstable).verdict == "unstable"
 
 
@@ -244,6 +258,13 @@ def test_python_control_plants_of_8_to_10_states_answer_with_certified_enclosure
         assert rlo <= Fraction(d["spectral_radius"]) * (1 + Fraction(1, 10**6)) and rhi < 1
     for c in d["critical_values"]:
         assert c["value"] is not None or c["value_bracket"] is not None or "no value" in c["note"]
+        if c["value_bracket"] is not None:  # both ends proved: the upper stable, the lower unstable
+            lo, hi = (Fraction(x) for x in c["value_bracket_exact"])
+            assert lo < hi and "unstable at" in c["note"]
+    alone = d["estimator_alone"]["critical_value"]
+    if alone is not None and alone["value_minimal_polynomial_digits"] is not None:
+        long = alone["value_minimal_polynomial_digits"] > 200
+        assert (alone["value_minimal_polynomial"] is None) == long and alone["value_minimal_polynomial_degree"] >= 1
     for text in _texts(d):
         assert len(text) <= 420  # every exact text is capped (200 digits each side of a fraction)
 
@@ -282,6 +303,7 @@ def test_big_plants_answer_through_the_cli_and_http_with_the_same_bytes(big_repo
         assert r.json()["verdict"] == big_reports[10][1].verdict
 
 
+@pytest.mark.slow
 def test_exact_costs_past_200_digits_are_null_with_digits_and_an_enclosure() -> None:
     sys = loop_mjls(parse_loop_request(loop_plant_request(4, seed=4)))
     dec = decide(sys)
@@ -294,6 +316,7 @@ def test_exact_costs_past_200_digits_are_null_with_digits_and_an_enclosure() -> 
     assert lo <= cost <= hi and hi - lo <= cost * Fraction(1, 10**15)
 
 
+@pytest.mark.slow
 def test_the_ten_state_two_sensor_gilbert_elliott_loop_is_certified() -> None:
     sys = loop_mjls(parse_loop_request(ge_two_sensor_request(10)))
     assert sys.modes == 8 and sys.modes * sys.d * (sys.d + 1) // 2 == 1680
@@ -301,3 +324,20 @@ def test_the_ten_state_two_sensor_gilbert_elliott_loop_is_certified() -> None:
     assert dec.verdict == "stable" and dec.certified and dec.cost_enclosure is not None
     lo, hi = dec.cost_enclosure
     assert 0 < lo <= Fraction(dec.cost) <= hi and hi - lo <= hi * Fraction(1, 10**6)
+
+
+def test_capped_texts_count_digits_and_enclose_values_past_pythons_4300_digit_limit() -> None:
+    from kfio.model import capped_fraction_text, decimal_enclosure, fraction_digits
+
+    rng = random.Random(11)
+    for _ in range(300):
+        x = Fraction(rng.randint(-(10**60), 10**60), rng.randint(1, 10 ** rng.randint(1, 80)))
+        assert fraction_digits(x) == len(str(abs(x.numerator))) + (0 if x.denominator == 1 else len(str(x.denominator)))
+        lo, hi = decimal_enclosure(x, x)
+        assert Fraction(lo) <= x <= Fraction(hi) and Fraction(hi) - Fraction(lo) <= abs(x) / 10**15
+    huge = Fraction(7**6000, 3**5000 + 1)  # 5071 + 2386 digits: str() of either raises ValueError
+    text, digits, box = capped_fraction_text(huge)
+    assert text is None and digits == 5071 + 2386 and box is not None
+    lo, hi = (Fraction(v) for v in box)
+    assert lo <= huge <= hi
+    assert capped_fraction_text(Fraction(9, 25)) == ("9/25", 3, None)

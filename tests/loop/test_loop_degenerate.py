@@ -65,6 +65,7 @@ def test_a_link_with_no_effect_gives_boundary_and_no_critical_value(body) -> Non
         assert decide(loop_mjls(parse_loop_request(other))).verdict == "boundary"
 
 
+@pytest.mark.slow
 def test_the_cli_exits_3_and_http_answers_200_for_a_degenerate_loop(capsys, tmp_path: Path) -> None:
     body = DEGENERATE[0].values[0]
     path = tmp_path / "loop.json"
@@ -84,6 +85,7 @@ def test_the_cli_exits_3_and_http_answers_200_for_a_degenerate_loop(capsys, tmp_
         assert plot.status_code == 200 and plot.headers["content-type"] == "image/png"
 
 
+@pytest.mark.slow
 def test_the_region_plot_says_boundary_and_names_the_missing_critical_values() -> None:
     req = parse_loop_request(DEGENERATE[1].values[0])
     data = loop_region_data(req, 3)
