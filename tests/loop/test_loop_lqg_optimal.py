@@ -242,6 +242,7 @@ def _random_single_input_plant(rng: np.random.Generator) -> tuple[list[list[Frac
             return A, B
 
 
+@pytest.mark.slow  # four bisections over feedback searches: about 5 s together
 @pytest.mark.parametrize("seed", [1, 2, 3, 4])
 def test_elias_formula_agrees_with_a_bisection_on_the_existence_of_a_stabilizing_feedback(seed):
     rng = np.random.default_rng(seed)
@@ -319,6 +320,7 @@ def client() -> Iterator[TestClient]:
         yield c
 
 
+@pytest.mark.slow  # starts the service's worker pools
 def test_below_the_critical_value_is_exit_1_and_http_200(client, tmp_path, capsys):
     body = _scalar("1.2", "0.3", "0.9")
     path = tmp_path / "below.json"
