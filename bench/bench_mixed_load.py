@@ -62,7 +62,7 @@ def heavy_loop(k: int, n: int = 4) -> bytes:
         "system": {"A": A, "B": eye, "C": eye, "Q": eye, "R": eye},
         "channel": link,
         "actuator_channel": link,
-        "controller": {"gains": {"K": gain, "L": gain}, "form": "predictor"},
+        "controller": {"gains": {"estimator": gain, "feedback": gain}, "form": "predictor"},
         "cost": {"W": eye, "U": eye},
         "options": {"loop": {"protocol": "tcp", "on_loss": "zero"}, "time_budget_s": HEAVY_BUDGET_S},
     }
