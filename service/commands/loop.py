@@ -162,8 +162,8 @@ def _lqg_lines(report: dict) -> list[str]:
         return "n/a" if value is None else f"{value:.6g}"
 
     lines = [
-        f"LQG critical arrival probabilities (TCP-like; Schenato et al. 2007, Sec. V): "
-        f"optimal controller | these stationary gains ({form} form)",
+        f"LQG, TCP-like (Schenato, Sinopoli, Franceschetti, Poolla and Sastry 2007, Sec. V), critical "
+        f"probabilities: optimal | these gains ({form} form)",
         f"  sensor:   optimal {_optimal_sensor(optimal)} | stationary {stationary('sensor')}",
         f"  actuator: optimal {_optimal_actuator(optimal)} | stationary {stationary('actuator')}",
     ]
