@@ -239,7 +239,7 @@ MUTANTS: tuple[Mutant, ...] = (
     ),
     Mutant(
         "loop-definite-tolerance-sign",
-        "analyzer/loop/_verdict.py",
+        "analyzer/model/_request.py",
         "    if lam > tol:\n",
         "    if lam > -tol:\n",
         ("tests/loop/test_loop_multimode_oracle.py",),
@@ -248,7 +248,7 @@ MUTANTS: tuple[Mutant, ...] = (
     ),
     Mutant(
         "loop-definite-negative-as-positive",
-        "analyzer/loop/_verdict.py",
+        "analyzer/model/_request.py",
         "    if lam < -tol:\n        return -1\n",
         "    if lam < -tol:\n        return 1\n",
         ("tests/loop/test_loop_multimode_oracle.py",),

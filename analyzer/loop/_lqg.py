@@ -147,10 +147,10 @@ def _nu_c_bracket(req: Any) -> ActuatorCritical:
             R=[[fraction_text(x) for x in row] for row in req.U],
         )
         arrival = fraction_text(req.actuator.table[0])
-        rep = bounds(dual, {"model": "bernoulli", "arrival_probability": arrival}).to_dict()
-        upper = rep["critical_probability"]["upper"]["value"]
+        found = bounds(dual, {"model": "bernoulli", "arrival_probability": arrival}).critical[0].upper
+        upper = None if found.value is None else float(found.value)
         if upper is None:
-            why = f"no certified upper bound: {rep['critical_probability']['upper'].get('reason')}"
+            why = f"no certified upper bound: {found.reason}"
     except AnalyzerError as exc:
         why = f"no certified upper bound: {exc}"
     return ActuatorCritical(None, None, lower, upper, False, why, lower_exact=lower_exact)

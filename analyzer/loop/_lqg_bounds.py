@@ -101,27 +101,27 @@ def lqg_cost_bounds(req: Any, S: np.ndarray | None, budget: Any = None) -> LqgCo
     M = control_weight(A, B, W, U, S, nu)
     from .._api import bounds
 
-    cov = bounds(Request(system=req.system, channel=req.channel), budget=budget).to_dict()
+    rep = bounds(Request(system=req.system, channel=req.channel), budget=budget)
     base = float(np.trace(S @ Q))
     lower = upper = paper_upper = None
     lower_from = upper_from = None
-    s_bar = cov["covariance"]["S_bar"]
-    if s_bar["exists"]:
-        lower = cost_at(S, M, Q, (1 - lam) * np.array(s_bar["matrix"], dtype=float))
+    s_bar = rep.covariance.s_bar
+    if s_bar is not None:
+        lower = cost_at(S, M, Q, (1 - lam) * np.asarray(s_bar, dtype=float))
         lower_from = "(1 - lambda) S_bar <= liminf E[P(t|t)] (Sinopoli et al. 2004, Theorem 3)"
-    v_bar = cov["covariance"]["V_bar"]
-    if v_bar["exists"]:
-        paper_upper = cost_at(S, M, Q, filtered(np.array(v_bar["matrix"], dtype=float), C, R, lam))
+    v_bar = rep.covariance.v_bar.matrix
+    if v_bar is not None:
+        paper_upper = cost_at(S, M, Q, filtered(np.asarray(v_bar, dtype=float), C, R, lam))
         upper, upper_from = (
             paper_upper,
             "F(V_bar), V_bar the estimation MARE's fixed point (Sinopoli et al. 2004, Theorem 4)",
         )
-    for entry in (cov.get("p_hat") or {}).get("entries", []):
-        if entry.get("matrix") is None or entry["N"] == 1:
+    for entry in rep.p_hat.entries if rep.p_hat is not None else ():
+        if entry.matrix is None or entry.N == 1:
             continue
-        j = cost_at(S, M, Q, filtered(np.array(entry["matrix"], dtype=float), C, R, lam))
+        j = cost_at(S, M, Q, filtered(np.asarray(entry.matrix, dtype=float), C, R, lam))
         if upper is None or j < upper:
-            upper, upper_from = j, f"F(P_hat_{entry['N']}) (Rohr, Marelli and Fu 2010)"
+            upper, upper_from = j, f"F(P_hat_{entry.N}) (Rohr, Marelli and Fu 2010)"
     reason = None
     if lower is None:
         reason = "S_bar does not exist: (1 - lambda) rho(A)^2 >= 1, the optimal cost is unbounded"

@@ -37,7 +37,7 @@ import numpy as np
 
 from .._budget import Budget
 from ..errors import NumericalFailure
-from ..model import is_psd
+from ..model import is_positive_definite
 from ._algebraic import root_text
 from ._certify import certify
 from ._mjls import Mjls
@@ -88,37 +88,9 @@ def _fraction(x: flint.fmpq) -> Fraction:
     return Fraction(int(x.p), int(x.q))
 
 
-def _float_sign(X: flint.fmpq_mat) -> int | None:
-    """Sign of ``lambda_min(X)`` when float64 decides it (as :func:`kfio.model._request._float_filter`), else ``None``.
-
-    Each entry is rounded to float64 (relative error ``eps``), and by
-    Weyl's inequality the eigenvalues move by at most ``d eps``; a computed
-    ``|lambda_min| > 1e-9 ||X||_F`` is far outside that.
-    """
-    d = X.nrows()
-    M = np.array([[float(X[i, j]) for j in range(d)] for i in range(d)])
-    scale = float(np.max(np.abs(M)))
-    if scale == 0 or not np.isfinite(scale):
-        return None if scale else 0
-    M = M / scale
-    lam = float(np.linalg.eigvalsh(M)[0])
-    tol = 1e-9 * float(np.linalg.norm(M))
-    if lam > tol:
-        return 1
-    if lam < -tol:
-        return -1
-    return None
-
-
 def positive_definite(X: flint.fmpq_mat) -> bool:
-    """``X > 0`` exactly: a float filter decides clear cases (Weyl's inequality), else pivoted ``L D L'`` over ``Q``."""
-    if X.nrows() == 0:
-        return True
-    sign = _float_sign(X)
-    if sign is not None:
-        return sign > 0
-    m = tuple(tuple(_fraction(X[i, j]) for j in range(X.ncols())) for i in range(X.nrows()))
-    return is_psd(m, strict=True, exact=True)
+    """``X > 0`` exactly, by kfio's one definiteness test (:func:`kfio.model.is_positive_definite`)."""
+    return is_positive_definite(tuple(tuple(_fraction(X[i, j]) for j in range(X.ncols())) for i in range(X.nrows())))
 
 
 def _stacked(sys: Mjls, v: flint.fmpq_mat, col: int) -> list[flint.fmpq_mat]:

@@ -114,6 +114,28 @@ def _float_filter(m: Matrix) -> Optional[int]:
     return None
 
 
+def is_positive_definite(m: Matrix) -> bool:
+    """``m > 0`` for a symmetric rational matrix the analyzer built itself (a certificate), exactly.
+
+    The float filter (:func:`_float_filter`, Weyl's inequality) decides clear
+    cases; the rest take the exact pivoted ``L D L'`` of :func:`is_psd`, with no
+    size limit (the matrix is not the user's).  The one definiteness test of the
+    closed-loop certificates (Costa, Fragoso and Marques 2005, Thm 3.9).
+
+    Examples
+    --------
+    >>> from fractions import Fraction as F
+    >>> is_positive_definite(((F(2), F(1)), (F(1), F(1)))), is_positive_definite(((F(1), F(1)), (F(1), F(1))))
+    (True, False)
+    """
+    if not m:
+        return True
+    sign = _float_filter(m)
+    if sign is not None:
+        return sign > 0
+    return is_psd(m, strict=True, exact=True)
+
+
 def hadamard_bits(m: Matrix) -> int:
     """Bits of Hadamard's bound ``prod_i ||row_i||`` of the integer congruence ``D m D``.
 
