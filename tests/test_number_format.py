@@ -161,6 +161,47 @@ def test_cli_summaries_of_a_float_plant(command: str, capsys: pytest.CaptureFixt
     _clean(out + err)
 
 
+#: A plant with rational entries whose critical arrival probability is a long algebraic number:
+#: ``1 - 1/alpha^2`` for the largest root of ``x^3 - 3x - 1`` (the companion matrix's), degree 3.
+CUBIC = {
+    "system": {"A": [[0, 1, 0], [0, 0, 1], [1, 3, 0]], "C": [[1, 0, 0]]},
+    "channel": {"model": "bernoulli", "arrival_probability": "9/10"},
+}
+_CRITICAL_LINE = re.compile(r"critical arrival probability: (\S+)(?: = (\S+)| \(([^()]+)\))?")
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("plant", ["pendulum_c2d", "cubic"])
+def test_analyze_summary_uses_the_one_format(plant: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """``kfio analyze``: the decimal first, the kind of a long exact number, never its text or ``(exact: ...)``."""
+    path = PENDULUM if plant == "pendulum_c2d" else tmp_path / "cubic.json"
+    if plant == "cubic":
+        path.write_text(json.dumps(CUBIC))
+    assert main(["analyze", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert main(["analyze", "--json", str(path)]) == 0
+    report = json.loads(capsys.readouterr().out)
+    _clean(out)
+    assert "(exact: " not in out and "exact form" not in out and "JSON field" not in out
+    exact = report["critical_arrival_probability_exact"]
+    assert len(exact) > EXACT_CAP and "CRootOf" in exact  # long in the JSON, whole
+
+    (line,) = [x for x in out.splitlines() if x.startswith("critical arrival probability: ")]
+    m = _CRITICAL_LINE.fullmatch(line)
+    assert m and m.group(2) is None, line  # no exact text beside the decimal: it is too long
+    expr = sympy.sympify(exact)  # SymPy's own reading of the JSON text (the library never sympifies)
+    assert float(m.group(1)) == pytest.approx(float(sympy.N(expr, 20)), rel=1e-5)
+    assert m.group(1) == f"{report['critical_arrival_probability']:.6g}"
+    degree = sympy.degree(sympy.minimal_polynomial(expr, sympy.Symbol("x")))
+    from_float = ", from float data" if plant == "pendulum_c2d" else ""
+    assert m.group(3) == f"algebraic, degree {degree}{from_float}" and degree == 3
+
+    (tail,) = [x for x in out.splitlines() if x.startswith("tail exponent kappa = ")]
+    kappa = tail.removeprefix("tail exponent kappa = ").split(":")[0]
+    assert float(kappa.split(" ")[0]) == pytest.approx(report["tail"]["kappa"], rel=1e-5)
+    assert kappa == number_text(report["tail"]["kappa_exact"], report["tail"]["kappa"])
+
+
 @pytest.mark.slow
 def test_loop_summary_of_a_float_loop(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     path = tmp_path / "loop.json"
