@@ -9,6 +9,7 @@ wider than the cap.
 from __future__ import annotations
 
 import json
+import random
 import re
 import shutil
 from fractions import Fraction
@@ -200,6 +201,34 @@ def test_analyze_summary_uses_the_one_format(plant: str, tmp_path: Path, capsys:
     kappa = tail.removeprefix("tail exponent kappa = ").split(":")[0]
     assert float(kappa.split(" ")[0]) == pytest.approx(report["tail"]["kappa"], rel=1e-5)
     assert kappa == number_text(report["tail"]["kappa_exact"], report["tail"]["kappa"])
+
+
+@pytest.mark.slow
+def test_trace_region_label_of_a_float_plant(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The trace-region plot marks ``lambda_c`` in the one format, not with the JSON's exact text."""
+    from matplotlib.axes import Axes
+
+    from kfio import Budget, analyze, load_request
+    from kfio.fit._requests import DEFAULT_LIMITS
+    from kfio.service.fit_plot import trace_region
+
+    plant = json.loads(PENDULUM.read_text())
+    exact = analyze(load_request(json.dumps(plant)))
+    draws = random.Random(1)  # independent arrivals: BIC picks a Bernoulli model, drawn on one axis
+    plant["channel"] = {"model": "trace", "arrivals": [int(draws.random() < 0.3) for _ in range(500)]}
+    labels: list[str] = []
+    annotate = Axes.annotate
+
+    def spy(self: Axes, text: str, *args: object, **kwargs: object) -> object:
+        labels.append(text)
+        return annotate(self, text, *args, **kwargs)
+
+    monkeypatch.setattr(Axes, "annotate", spy)
+    trace_region(json.dumps(plant).encode(), DEFAULT_LIMITS, Budget(60), {})
+    (label,) = [t for t in labels if t.startswith("lambda_c = ")]
+    _clean(label)
+    shown = show(exact.critical_arrival_probability_exact, exact.critical_arrival_probability)
+    assert label == f"lambda_c = {shown.text}" and label.startswith(f"lambda_c = {shown.decimal} (")
 
 
 @pytest.mark.slow
