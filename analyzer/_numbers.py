@@ -177,6 +177,48 @@ def number_text(
     return show(exact, value, from_float=from_float, cap=cap).text
 
 
+_DEGREE_IN_TEXT = re.compile(r"\bdegree-(\d+) polynomial\b")
+_NOT_EXACT_PREFIXES = ("~", "root of ", "algebraic number")
+
+
+def summary_number(
+    exact: str | None,
+    value: complex | float | None = None,
+    *,
+    degree: int | None = None,
+    readable: str | None = None,
+    cap: int = EXACT_CAP,
+) -> str:
+    """:func:`number_text` for a report's summary line, using what the report knows besides the text.
+
+    ``readable`` is the report's own short form of ``exact`` (a radical kept whole, or
+    ``root of a degree-d polynomial, <value>``): when it is an exact form of at most ``cap``
+    characters it stands beside the decimal even where :func:`show` would not parse ``exact``;
+    its degree, or ``degree``, names a long algebraic number (``algebraic, degree 3``, and
+    ``from float data`` beside it when the text carries float data's digits).
+
+    Examples
+    --------
+    >>> summary_number("9/25", 0.36), summary_number("1", 1.0)
+    ('0.36 = 9/25', '1')
+    >>> long = "1 - 1/CRootOf(15625000000000000*x**3 - 31311332551810115*x + 1, 1)"
+    >>> summary_number(long, 0.126077, readable="root of a degree-3 polynomial, 0.126077")
+    '0.126077 (algebraic, degree 3, from float data)'
+    """
+    shown = show(exact, value, cap=cap)
+    if shown.exact or exact is None:
+        return shown.text
+    if readable is not None and len(readable) <= cap and readable != exact:
+        if not readable.startswith(_NOT_EXACT_PREFIXES) and _EXACT_CHARS.match(readable):
+            return f"{shown.decimal} = {readable}"
+    if degree is None and readable is not None and (m := _DEGREE_IN_TEXT.search(readable)):
+        degree = int(m.group(1))
+    if degree is not None and degree > 1 and shown.note in ("from float data", "closed form"):
+        note = f"algebraic, degree {degree}" + (", from float data" if shown.note == "from float data" else "")
+        return f"{shown.decimal} ({note})"
+    return shown.text
+
+
 _LEADING_WORDS = re.compile(r"^((?:[A-Za-z_][A-Za-z_0-9]* )+)(?=[-+(\d])")
 _DECIMAL_EQUALS = re.compile(r"^(-?\d+(?:\.\d*)?(?:[eE][-+]?\d+)?) = (.+)$")
 _EXACT_CHARS = re.compile(r"^[-+*/()., \w]+$")
@@ -456,4 +498,5 @@ __all__ = [
     "number_text",
     "readable_measure",
     "show",
+    "summary_number",
 ]

@@ -20,6 +20,7 @@ import dataclasses
 from typing import Any, Mapping
 
 from kfio import Budget
+from kfio._numbers import number_text
 from kfio.errors import InvalidInput
 
 from .plots import figure_headline, ge_region_figure, new_figure, png_bytes
@@ -98,7 +99,7 @@ def _bernoulli_figure(report: Any, block: Any) -> Any:
         ax.axvspan(crit, 1.0, color="#a0d0a0", label="stable (exact)")
         ax.axvline(crit, color="black", linewidth=1.0)
         ax.annotate(
-            f"lambda_c = {report.critical_arrival_probability_exact}",
+            f"lambda_c = {number_text(report.critical_arrival_probability_exact, crit)}",
             (crit, 0.92),
             xytext=(4, 0),
             textcoords="offset points",

@@ -9,6 +9,7 @@ wider than the cap.
 from __future__ import annotations
 
 import json
+import random
 import re
 import shutil
 from fractions import Fraction
@@ -159,6 +160,75 @@ def test_cli_summaries_of_a_float_plant(command: str, capsys: pytest.CaptureFixt
     assert code == 0, err
     assert "0.0544" in out  # the critical arrival probability's decimal is there
     _clean(out + err)
+
+
+#: A plant with rational entries whose critical arrival probability is a long algebraic number:
+#: ``1 - 1/alpha^2`` for the largest root of ``x^3 - 3x - 1`` (the companion matrix's), degree 3.
+CUBIC = {
+    "system": {"A": [[0, 1, 0], [0, 0, 1], [1, 3, 0]], "C": [[1, 0, 0]]},
+    "channel": {"model": "bernoulli", "arrival_probability": "9/10"},
+}
+_CRITICAL_LINE = re.compile(r"critical arrival probability: (\S+)(?: = (\S+)| \(([^()]+)\))?")
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("plant", ["pendulum_c2d", "cubic"])
+def test_analyze_summary_uses_the_one_format(plant: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """``kfio analyze``: the decimal first, the kind of a long exact number, never its text or ``(exact: ...)``."""
+    path = PENDULUM if plant == "pendulum_c2d" else tmp_path / "cubic.json"
+    if plant == "cubic":
+        path.write_text(json.dumps(CUBIC))
+    assert main(["analyze", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert main(["analyze", "--json", str(path)]) == 0
+    report = json.loads(capsys.readouterr().out)
+    _clean(out)
+    assert "(exact: " not in out and "exact form" not in out and "JSON field" not in out
+    exact = report["critical_arrival_probability_exact"]
+    assert len(exact) > EXACT_CAP and "CRootOf" in exact  # long in the JSON, whole
+
+    (line,) = [x for x in out.splitlines() if x.startswith("critical arrival probability: ")]
+    m = _CRITICAL_LINE.fullmatch(line)
+    assert m and m.group(2) is None, line  # no exact text beside the decimal: it is too long
+    expr = sympy.sympify(exact)  # SymPy's own reading of the JSON text (the library never sympifies)
+    assert float(m.group(1)) == pytest.approx(float(sympy.N(expr, 20)), rel=1e-5)
+    assert m.group(1) == f"{report['critical_arrival_probability']:.6g}"
+    degree = sympy.degree(sympy.minimal_polynomial(expr, sympy.Symbol("x")))
+    from_float = ", from float data" if plant == "pendulum_c2d" else ""
+    assert m.group(3) == f"algebraic, degree {degree}{from_float}" and degree == 3
+
+    (tail,) = [x for x in out.splitlines() if x.startswith("tail exponent kappa = ")]
+    kappa = tail.removeprefix("tail exponent kappa = ").split(":")[0]
+    assert float(kappa.split(" ")[0]) == pytest.approx(report["tail"]["kappa"], rel=1e-5)
+    assert kappa == number_text(report["tail"]["kappa_exact"], report["tail"]["kappa"])
+
+
+@pytest.mark.slow
+def test_trace_region_label_of_a_float_plant(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The trace-region plot marks ``lambda_c`` in the one format, not with the JSON's exact text."""
+    from matplotlib.axes import Axes
+
+    from kfio import Budget, analyze, load_request
+    from kfio.fit._requests import DEFAULT_LIMITS
+    from kfio.service.fit_plot import trace_region
+
+    plant = json.loads(PENDULUM.read_text())
+    exact = analyze(load_request(json.dumps(plant)))
+    draws = random.Random(1)  # independent arrivals: BIC picks a Bernoulli model, drawn on one axis
+    plant["channel"] = {"model": "trace", "arrivals": [int(draws.random() < 0.3) for _ in range(500)]}
+    labels: list[str] = []
+    annotate = Axes.annotate
+
+    def spy(self: Axes, text: str, *args: object, **kwargs: object) -> object:
+        labels.append(text)
+        return annotate(self, text, *args, **kwargs)
+
+    monkeypatch.setattr(Axes, "annotate", spy)
+    trace_region(json.dumps(plant).encode(), DEFAULT_LIMITS, Budget(60), {})
+    (label,) = [t for t in labels if t.startswith("lambda_c = ")]
+    _clean(label)
+    shown = show(exact.critical_arrival_probability_exact, exact.critical_arrival_probability)
+    assert label == f"lambda_c = {shown.text}" and label.startswith(f"lambda_c = {shown.decimal} (")
 
 
 @pytest.mark.slow

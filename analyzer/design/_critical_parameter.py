@@ -38,8 +38,8 @@ from ..errors import InvalidInput
 from ..model import MarkovChannel, PerSensorChannel, Request, pointer_tokens, value_text
 from ..search import Margins, SlotSpace, search
 from ..sigma import SigmaResult, compare_rate_markov, period_transfer_matrix
-from ..structure import FmoBlock, readable
-from ._line import Change, add_candidates, roots_in_unit, scan
+from ..structure import FmoBlock
+from ._line import Change, add_candidates, critical_text, roots_in_unit, scan
 
 X_SYM = sympy.Symbol("x")
 _SIGN = {-1: "stable", 0: "boundary", 1: "unstable"}
@@ -226,20 +226,8 @@ class CriticalParameter(ReportPart):
     def summary_lines(self) -> list[str]:
         if not self.crossings:
             return [f"critical value of {self.pointer}: none ({self.intervals[0][2]} on all of (0, 1))"]
-        parts = ", ".join(
-            f"{c.value:.6g}"
-            + (f" (exact: {_exact_shown(c.exact_text, c.value)})" if c.exact_text else "")
-            + f" [{c.left} below]"
-            for c in self.crossings
-        )
+        parts = ", ".join(f"{critical_text(c.exact_text, c.value)} [{c.left} below]" for c in self.crossings)
         return [f"critical value of {self.pointer}: {parts}  [{self.basis}]"]
-
-
-def _exact_shown(text: str, value: float) -> str:
-    """The exact text of a critical value when short; else the JSON field that keeps it (the decimal is beside it)."""
-    if readable(text, value) == text:
-        return text
-    return "JSON field critical_parameter.crossings[].value_exact"
 
 
 def critical_parameter(

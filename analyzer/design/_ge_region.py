@@ -45,7 +45,7 @@ from ..model import MarkovChannel
 from ..search import Margins, SlotSpace, search
 from ..sigma import SigmaResult
 from ..structure import FmoBlock, readable
-from ._line import Candidate, add_candidates, roots_in_unit, scan
+from ._line import Candidate, add_candidates, critical_text, roots_in_unit, scan
 
 P_SYM, Q_SYM = sympy.symbols("p q")
 LABELS = ("stable", "boundary", "unstable")
@@ -471,23 +471,11 @@ class GeRegion(ReportPart):
         for line, name in ((self.recovery, "recovery rate q"), (self.failure, "failure rate p")):
             fixed = f"at {'p' if line.variable == 'recovery_rate' else 'q'} = {readable(line.fixed)}"
             if line.crossings:
-                parts = ", ".join(
-                    f"{c.value:.6g}"
-                    + (f" (exact: {_exact_shown(c.value_exact, c.value, line.variable)})" if c.value_exact else "")
-                    + f" [{c.left} below]"
-                    for c in line.crossings
-                )
+                parts = ", ".join(f"{critical_text(c.value_exact, c.value)} [{c.left} below]" for c in line.crossings)
                 out.append(f"critical {name} {fixed}: {parts}")
             else:
                 out.append(f"critical {name} {fixed}: none ({line.status()})")
         return out
-
-
-def _exact_shown(text: str, value: float, variable: str) -> str:
-    """The exact text of a critical value when short; else the JSON field that keeps it (the decimal is beside it)."""
-    if readable(text, value) == text:
-        return text
-    return f"JSON field gilbert_elliott_region.critical_{variable}.crossings[].value_exact"
 
 
 def ge_region(

@@ -42,6 +42,14 @@ class Change(Generic[T]):
     tag: T | None
 
 
+def critical_text(text: str | None, value: float) -> str:
+    """A critical value in kfio's one number format: ``0.555556 = 5/9``, ``0.487428 (from float data)``."""
+    from .._numbers import summary_number
+    from ..structure import readable
+
+    return summary_number(text, value, readable=None if text is None else readable(text, value))
+
+
 def roots_in_unit(poly: Any, var: Any) -> list[Any]:
     """Real roots of ``poly`` (over ``Q``) strictly inside ``(0, 1)``, exact."""
     P = sympy.Poly(poly, var, domain=sympy.QQ)

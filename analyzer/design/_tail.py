@@ -144,17 +144,10 @@ class TailReport(ReportPart):
         """Lines for the terminal summary."""
         if self.kappa is None:
             return [f"tail: {self.statement}"]
-        from ..structure import SHORT_TEXT_CHARS
+        from .._numbers import summary_number
 
-        exact = ""
-        if self.kappa_exact and len(self.kappa_exact) > SHORT_TEXT_CHARS:
-            exact = " (exact form: JSON field tail.kappa_exact)"
-        elif self.kappa_exact:
-            exact = f" (exact: {self.kappa_exact})"
-        return [
-            f"tail exponent kappa = {self.kappa:.6g}{exact}: P(trace P > M) ~ M^-kappa; "
-            f"{self.statement}  [{self.basis}]"
-        ]
+        kappa = summary_number(self.kappa_exact, self.kappa)
+        return [f"tail exponent kappa = {kappa}: P(trace P > M) ~ M^-kappa; {self.statement}  [{self.basis}]"]
 
 
 def _rational_ratio(num: Fraction, den: Fraction) -> Fraction | None:

@@ -40,6 +40,7 @@ from decimal import ROUND_CEILING, ROUND_FLOOR, Context, Decimal
 from fractions import Fraction
 from typing import Any
 
+from .._numbers import number_text
 from .._reporting import ReportPart
 from ..errors import AssumptionViolation
 from ._fit import FitReport, channel_of
@@ -112,7 +113,7 @@ class ConfidenceVerdict(ReportPart):
         ]
         for name, (lo, hi) in self.intervals.items():
             lines.append(
-                f"  {name} = {float(f.estimates[name]):.6g} (exact: {f.parameters[name]}), box [{lo:.6g}, {hi:.6g}]"
+                f"  {name} = {number_text(f.parameters[name], float(f.estimates[name]))}, box [{lo:.6g}, {hi:.6g}]"
             )
         if self.samples_needed is not None:
             lines.append(

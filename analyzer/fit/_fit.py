@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import Any, ClassVar
 
+from .._numbers import number_text
 from .._reporting import Report
 from ..errors import InvalidInput
 from ..model import fraction_text, parse_number
@@ -132,7 +133,7 @@ class FitReport(Report):
         lines = [f"{head}  ({how}; {self.samples} packets from {self.source})"]
         for name, text in self.parameters.items():
             lo, hi = self.intervals[name]
-            lines.append(f"  {name} = {float(self.estimates[name]):.6g} (exact: {text})  [{lo:.6g}, {hi:.6g}]")
+            lines.append(f"  {name} = {number_text(text, float(self.estimates[name]))}  [{lo:.6g}, {hi:.6g}]")
         lines.append(f"intervals: {self.interval_method}")
         for s in self.scores:
             bic = "n/a (some history never occurs)" if s["bic"] is None else f"{s['bic']:.6g}"

@@ -151,6 +151,12 @@ class StabilityReport(Report):
     def _short(self, text: str, value: complex | float | None) -> str:
         return self.display.get(text) or readable(text, value)
 
+    def _number(self, text: str, value: float | None) -> str:
+        """kfio's one number format (:func:`kfio._numbers.summary_number`), with this report's short forms."""
+        from .._numbers import summary_number
+
+        return summary_number(text, value, readable=self._short(text, value))
+
     def _repr_items(self) -> list[tuple[str, Any]]:
         items = dict(super()._repr_items())
         exact = self.critical_arrival_probability_exact
@@ -162,10 +168,8 @@ class StabilityReport(Report):
         """Readable multi-line summary for the terminal."""
         lines = [f"verdict: {self.verdict.upper()}  (Rohr, Marelli and Fu 2014, Theorem 1)"]
         if self.critical_arrival_probability_exact is not None:
-            lines.append(
-                f"critical arrival probability: {self.critical_arrival_probability:.6g}"
-                f"  (exact: {self._short(self.critical_arrival_probability_exact, self.critical_arrival_probability)})"
-            )
+            crit = self._number(self.critical_arrival_probability_exact, self.critical_arrival_probability)
+            lines.append(f"critical arrival probability: {crit}")
         lines.append("finite multiplicative order (FMO) blocks, largest modulus first:")
         for b in self.blocks:
             eig = ", ".join(self._short(t, z) for t, z in zip(b.eigenvalues, b.eigenvalues_numeric))
@@ -181,8 +185,7 @@ class StabilityReport(Report):
             )
         for s in (self.regions or {}).get("sensors", []):
             if s.get("status") == "threshold":
-                exact = self._short(s["critical_arrival_probability_exact"], s["critical_arrival_probability"])
-                crit = f"{s['critical_arrival_probability']:.6g} (exact: {exact})"
+                crit = self._number(s["critical_arrival_probability_exact"], s["critical_arrival_probability"])
             else:
                 crit = {"zero": "0 (any arrival probability)", "none": "none: no arrival probability suffices"}.get(
                     s.get("status"), str(s.get("status"))

@@ -42,18 +42,13 @@ def register(sub: argparse._SubParsersAction) -> None:
 def _probability(value: float | None, exact: str | None, degree: int | None = None) -> str:
     """``0.5625 = 9/16``, ``0.453924 (algebraic, degree 2)`` or ``0.453924``: kfio's one number format.
 
-    :func:`kfio._numbers.show` decides from the exact text; a long algebraic value whose minimal
-    polynomial's degree the report knows is named by that degree (and, when its text carries the
-    digits of float data, says so too).
+    :func:`kfio._numbers.summary_number` decides from the exact text; a long algebraic value whose
+    minimal polynomial's degree the report knows is named by that degree (and, when its text
+    carries the digits of float data, says so too), as in ``kfio analyze``'s summary.
     """
-    from kfio._numbers import show
+    from kfio._numbers import summary_number
 
-    shown = show(exact, value)
-    long_algebraic = degree is not None and degree > 1 and exact != shown.decimal
-    if long_algebraic and not shown.exact and shown.note in ("", "from float data"):
-        note = f"algebraic, degree {degree}" + (", from float data" if shown.note else "")
-        return f"{shown.decimal} ({note})"
-    return shown.text
+    return summary_number(exact, value, degree=degree)
 
 
 def _link_name(critical: dict) -> str:

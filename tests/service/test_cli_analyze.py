@@ -40,7 +40,7 @@ def test_examples_exit_codes(example, code, verdict, capsys):
 
 def test_summary_is_readable(capsys):
     c, out, _ = run_cli(["analyze", str(EXAMPLES / "bounds_differ_2x2.json")], capsys=capsys)
-    assert c == 0 and "verdict: STABLE" in out and "exact: 9/25" in out
+    assert c == 0 and "verdict: STABLE" in out and "critical arrival probability: 0.36 = 9/25" in out
 
 
 def test_stdin(capsys, monkeypatch):

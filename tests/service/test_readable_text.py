@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import re
 from fractions import Fraction
 from pathlib import Path
 
@@ -100,10 +101,12 @@ def test_reprs_show_algebraic_numbers_as_decimals_with_their_degree(pendulum) ->
     assert d["blocks"][0]["eigenvalues"][0].startswith("root of x**3 - 29760910099694437*x**2/")
 
 
-def test_long_tail_exponent_names_its_json_field(pendulum) -> None:
+def test_long_tail_exponent_says_what_kind_of_number_it_is(pendulum) -> None:
     (line,) = [ln for ln in pendulum.summary().splitlines() if ln.startswith("tail exponent")]
-    assert "see --json" not in line
-    assert "tail exponent kappa = 12.3872 (exact form: JSON field tail.kappa_exact)" in line
+    assert "see --json" not in line and "(exact" not in line
+    m = re.match(r"tail exponent kappa = (\S+) \(from float data\): ", line)
+    assert m, line
+    assert float(m.group(1)) == pytest.approx(pendulum.tail.kappa, rel=1e-5) and m.group(1) == "12.3872"
     assert len(pendulum.to_dict()["tail"]["kappa_exact"]) > 40
 
 
@@ -139,7 +142,9 @@ def test_gilbert_elliott_summary_shows_long_exact_numbers_as_decimals() -> None:
     text = report.summary()
     assert not re.search(r"\d{13}", text), text  # no 13-digit numerators, denominators or coefficients
     assert "eigenvalues ~1.25049, ~-1.25049:" in text
-    assert "critical recovery rate q at p = ~0.300001: 0.487428 (exact: JSON field " in text
+    m = re.search(r"critical recovery rate q at p = ~0\.300001: (\S+) \(algebraic, degree 2, from float data\) ", text)
+    assert m, text
     crossing = report.to_dict()["gilbert_elliott_region"]["critical_recovery_rate"]["crossings"][0]
-    assert crossing["value"] == pytest.approx(0.487428, abs=1e-6) and "sqrt(" in crossing["value_exact"]
+    assert float(m.group(1)) == pytest.approx(crossing["value"], rel=1e-5) and m.group(1) == "0.487428"
+    assert "sqrt(" in crossing["value_exact"] and "(exact" not in text
     assert report.to_dict()["blocks"][0]["eigenvalues"][0] == "781556074673201/625000000000000"
