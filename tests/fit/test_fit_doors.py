@@ -13,10 +13,10 @@ import pytest
 from fastapi.testclient import TestClient
 
 import kfio
-from kfio.service.app import create_app
 from kfio.service.cli import main as cli_main
 from kfio.service.settings import Settings
 
+from support.app_client import ready_client
 from support.traces import simulate_chain
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -128,11 +128,7 @@ def test_cli_loop_trace(files: Path, capsys) -> None:
 
 @pytest.fixture(scope="module")
 def client() -> Iterator[TestClient]:
-    with TestClient(create_app(Settings(workers=1, time_budget_s=60))) as c:
-        deadline = time.monotonic() + 60
-        while c.get("/readyz").status_code != 200:
-            assert time.monotonic() < deadline, "the worker pool did not start"
-            time.sleep(0.05)
+    with ready_client(Settings(workers=1, time_budget_s=60)) as c:
         yield c
 
 

@@ -20,9 +20,10 @@ from fastapi.testclient import TestClient
 
 import kfio
 from kfio.loop import loop_request, parse_loop_request
-from kfio.service.app import create_app
 from kfio.service.cli import main as cli_main
 from kfio.service.settings import Settings
+
+from support.app_client import ready_client
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -57,11 +58,7 @@ def plant_request():
 @pytest.fixture(scope="module")
 def client() -> Iterator[TestClient]:
     settings = Settings(workers=1, job_workers=1, time_budget_s=60)
-    with TestClient(create_app(settings)) as c:
-        deadline = time.monotonic() + 60
-        while c.get("/readyz").status_code != 200:
-            assert time.monotonic() < deadline, "the worker pools did not start"
-            time.sleep(0.05)
+    with ready_client(settings) as c:
         yield c
 
 

@@ -12,7 +12,6 @@ search over static feedbacks for random single-input plants.
 from __future__ import annotations
 
 import json
-import time
 from collections.abc import Iterator
 from fractions import Fraction
 from pathlib import Path
@@ -25,9 +24,10 @@ from fastapi.testclient import TestClient
 from kfio.errors import InvalidInput
 from kfio.loop import analyze_loop, parse_loop_request
 from kfio.loop._lqg_critical import known_critical, schur_stable, unstable_modulus_product
-from kfio.service.app import create_app
 from kfio.service.cli import main as cli_main
 from kfio.service.settings import Settings
+
+from support.app_client import ready_client
 
 TWO_A = [["5/4", "1"], ["0", "11/10"]]
 TWO_B = [["0"], ["1"]]
@@ -312,11 +312,7 @@ def test_schur_cohn_and_the_unstable_product_against_numpy():
 @pytest.fixture(scope="module")
 def client() -> Iterator[TestClient]:
     settings = Settings(workers=1, job_workers=1, time_budget_s=60)
-    with TestClient(create_app(settings)) as c:
-        deadline = time.monotonic() + 60
-        while c.get("/readyz").status_code != 200:
-            assert time.monotonic() < deadline, "the worker pools did not start"
-            time.sleep(0.05)
+    with ready_client(settings) as c:
         yield c
 
 

@@ -3,16 +3,16 @@
 from __future__ import annotations
 
 import json
-import time
 from collections.abc import Iterator
 
 import pytest
 from fastapi.testclient import TestClient
 
 from kfio.service.api.schemas import REQUEST_EXAMPLES
-from kfio.service.app import create_app
 from kfio.service.cli import main as cli_main
 from kfio.service.settings import Settings
+
+from support.app_client import ready_client
 
 GE_BODY = REQUEST_EXAMPLES["seed001-degenerate-gilbert-elliott"]["value"]
 PNG = b"\x89PNG\r\n\x1a\n"
@@ -20,11 +20,7 @@ PNG = b"\x89PNG\r\n\x1a\n"
 
 @pytest.fixture(scope="module")
 def client() -> Iterator[TestClient]:
-    with TestClient(create_app(Settings(workers=1, time_budget_s=30))) as c:
-        deadline = time.monotonic() + 30
-        while c.get("/readyz").status_code != 200:
-            assert time.monotonic() < deadline, "the worker pool did not start"
-            time.sleep(0.05)
+    with ready_client(Settings(workers=1, time_budget_s=30), timeout=30) as c:
         yield c
 
 

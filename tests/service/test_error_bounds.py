@@ -9,7 +9,6 @@ problem member is bounded; the CLI prints one short line.
 from __future__ import annotations
 
 import json
-import time
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -18,10 +17,11 @@ from fastapi.testclient import TestClient
 
 from kfio.errors import ECHO_LIMIT
 from kfio.service import exitcodes
-from kfio.service.app import create_app
 from kfio.service.cli import main as cli_main
 from kfio.service.problems import TEXT_LIMIT, Problem
 from kfio.service.settings import Settings
+
+from support.app_client import ready_client
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 MB = 1_000_000
@@ -64,11 +64,7 @@ def _hostile() -> dict[str, tuple[str, dict, str]]:
 
 @pytest.fixture(scope="module")
 def client() -> Iterator[TestClient]:
-    with TestClient(create_app(Settings(workers=1, job_workers=1, time_budget_s=30))) as c:
-        deadline = time.monotonic() + 60
-        while c.get("/readyz").status_code != 200:
-            assert time.monotonic() < deadline, "the worker pool did not start"
-            time.sleep(0.05)
+    with ready_client(Settings(workers=1, job_workers=1, time_budget_s=30)) as c:
         yield c
 
 

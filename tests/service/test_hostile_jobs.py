@@ -18,8 +18,9 @@ import pytest
 from fastapi.testclient import TestClient
 
 from kfio.service.api.schemas import REQUEST_EXAMPLES
-from kfio.service.app import create_app
 from kfio.service.settings import Settings
+
+from support.app_client import ready_client
 
 SEED_2X2 = REQUEST_EXAMPLES["seed002-2x2"]["value"]  # Sinopoli et al. (2004)'s 2x2 system
 PROBLEM = "application/problem+json"
@@ -29,11 +30,7 @@ JSON = {"content-type": "application/json"}
 @pytest.fixture(scope="module")
 def client() -> Iterator[TestClient]:
     settings = Settings(workers=1, job_workers=1, max_jobs=4, time_budget_s=30, job_max_trajectory_steps=3_000_000)
-    with TestClient(create_app(settings)) as c:
-        deadline = time.monotonic() + 60
-        while c.get("/readyz").status_code != 200:
-            assert time.monotonic() < deadline, "the worker pools did not start"
-            time.sleep(0.05)
+    with ready_client(settings) as c:
         yield c
 
 
@@ -106,11 +103,7 @@ def test_kept_results_are_bounded_by_bytes_the_first_finished_forgotten_first():
 
 def test_a_finished_job_past_the_byte_bound_makes_room_over_http():
     settings = Settings(workers=1, job_workers=1, max_jobs=4, time_budget_s=30, job_retention_bytes=1)
-    with TestClient(create_app(settings)) as c:
-        deadline = time.monotonic() + 60
-        while c.get("/readyz").status_code != 200:
-            assert time.monotonic() < deadline
-            time.sleep(0.05)
+    with ready_client(settings) as c:
         locations = []
         for q in (20, 21):
             body = {**SEED_2X2, "system": {**SEED_2X2["system"], "Q": [[q, 0], [0, q]]}}

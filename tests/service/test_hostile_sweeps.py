@@ -19,10 +19,11 @@ from fastapi.testclient import TestClient
 
 import kfio.sweep._spec as spec_module
 from kfio.errors import LimitExceeded
-from kfio.service.app import create_app
 from kfio.service.cli import main
 from kfio.service.settings import Settings
 from kfio.sweep import RationalRange, load_sweep, parse_sweep, sweep_size
+
+from support.app_client import ready_client
 
 BASE = {
     "system": {"A": [[1.25, 0], [1, 1.1]], "C": [[1, 1]], "Q": [[20, 0], [0, 20]], "R": [[2.5]]},
@@ -54,11 +55,7 @@ def built(monkeypatch: pytest.MonkeyPatch) -> list[Any]:
 @pytest.fixture(scope="module")
 def client() -> Iterator[TestClient]:
     settings = Settings(workers=1, job_workers=1, max_jobs=4, time_budget_s=30)
-    with TestClient(create_app(settings)) as c:
-        deadline = time.monotonic() + 60
-        while c.get("/readyz").status_code != 200:
-            assert time.monotonic() < deadline, "the worker pools did not start"
-            time.sleep(0.05)
+    with ready_client(settings) as c:
         yield c
 
 

@@ -21,11 +21,11 @@ import httpx
 import pytest
 from fastapi.testclient import TestClient
 
-from kfio.service.app import create_app
 from kfio.service.jobdb import DB_NAME, MemoryRecords, SqliteRecords, StoreUnavailable, default_data_dir
 from kfio.service.jobstore import MAX_RUNS, Job, JobStore
 from kfio.service.settings import Settings
 
+from support.app_client import ready_client
 from support.live_server import JSON_HEADERS, LiveServer
 
 FINISHED = {"done", "failed", "cancelled"}
@@ -193,11 +193,7 @@ def test_a_write_that_fails_half_way_leaves_no_half_job(tmp_path: Path, failing:
 @pytest.fixture
 def durable_client(tmp_path: Path) -> Iterator[TestClient]:
     settings = Settings(workers=1, job_workers=1, lane_workers=0, max_jobs=4, data_dir=str(tmp_path))
-    with TestClient(create_app(settings)) as c:
-        deadline = time.monotonic() + 60
-        while c.get("/readyz").status_code != 200:
-            assert time.monotonic() < deadline, "the worker pools did not start"
-            time.sleep(0.05)
+    with ready_client(settings) as c:
         yield c
 
 

@@ -19,13 +19,13 @@ from typing import Any
 import pytest
 from fastapi.testclient import TestClient
 
-from kfio.service.app import create_app
 from kfio.service.dispatch import request_key
 from kfio.service.jobs import PRELOAD
 from kfio.service.lanes import MAX_BODY_BYTES, MAX_MARKOV_ORDER, MAX_STATES, is_cheap
 from kfio.service.pool import WorkerPool
 from kfio.service.settings import Settings
 
+from support.app_client import ready_client
 from support.live_server import JSON_HEADERS, SLOW_PATH, slow_request
 
 HERE = __name__  # the workers import this module to find the runner below
@@ -176,11 +176,7 @@ def test_without_reserved_workers_a_cheap_task_waits_for_a_regular_one() -> None
 @pytest.fixture(scope="module")
 def client() -> Iterator[TestClient]:
     settings = Settings(workers=1, lane_workers=1, job_workers=1, time_budget_s=30, cache_entries=0)
-    with TestClient(create_app(settings)) as c:
-        deadline = time.monotonic() + 60
-        while c.get("/readyz").status_code != 200:
-            assert time.monotonic() < deadline, "the worker pools did not start"
-            time.sleep(0.05)
+    with ready_client(settings) as c:
         yield c
 
 

@@ -13,10 +13,10 @@ import pytest
 from fastapi.testclient import TestClient
 
 from kfio.service.api.schemas import REQUEST_EXAMPLES
-from kfio.service.app import create_app
 from kfio.service.jobstore import simulation_fraction
 from kfio.service.settings import Settings
 
+from support.app_client import ready_client
 from support.live_server import slow_request
 
 SEED_2X2 = REQUEST_EXAMPLES["seed002-2x2"]["value"]  # Sinopoli et al. (2004)'s 2x2 system: stable, lambda_c = 9/25
@@ -26,11 +26,7 @@ PROBLEM = "application/problem+json"
 @pytest.fixture(scope="module")
 def client() -> Iterator[TestClient]:
     settings = Settings(workers=1, job_workers=1, max_jobs=1, job_retention=3, time_budget_s=30)
-    with TestClient(create_app(settings)) as c:
-        deadline = time.monotonic() + 60
-        while c.get("/readyz").status_code != 200:
-            assert time.monotonic() < deadline, "the worker pools did not start"
-            time.sleep(0.05)
+    with ready_client(settings) as c:
         yield c
 
 
