@@ -417,17 +417,7 @@ class WorkerPool:
             return None
         self._spare_waiting += 1
         try:
-            while True:
-                remaining = deadline - time.monotonic()
-                if remaining <= 0:
-                    raise PoolBusy("no worker became free within the time budget")
-                try:
-                    worker = await asyncio.wait_for(self._spare.get(), remaining)
-                except TimeoutError:
-                    raise PoolBusy("no worker became free within the time budget") from None
-                if worker.process.is_alive():
-                    return worker
-                self._replace_soon(worker)
+            return await self._next_alive(self._spare, deadline)
         finally:
             self._spare_waiting -= 1
 
@@ -446,19 +436,23 @@ class WorkerPool:
             return worker
         self._waiting += 1
         try:
-            while True:
-                remaining = deadline - time.monotonic()
-                if remaining <= 0:
-                    raise PoolBusy("no worker became free within the time budget")
-                try:
-                    worker = await asyncio.wait_for(self._idle.get(), remaining)
-                except TimeoutError:
-                    raise PoolBusy("no worker became free within the time budget") from None
-                if worker.process.is_alive():
-                    return worker
-                self._replace_soon(worker)  # died while idle (e.g. OOM killer)
+            return await self._next_alive(self._idle, deadline)
         finally:
             self._waiting -= 1
+
+    async def _next_alive(self, queue: asyncio.Queue[_Worker], deadline: float) -> _Worker:
+        """The next live worker put on ``queue`` before ``deadline``; a dead one (e.g. the OOM killer's) is replaced."""
+        while True:
+            remaining = deadline - time.monotonic()
+            if remaining <= 0:
+                raise PoolBusy("no worker became free within the time budget")
+            try:
+                worker = await asyncio.wait_for(queue.get(), remaining)
+            except TimeoutError:
+                raise PoolBusy("no worker became free within the time budget") from None
+            if worker.process.is_alive():
+                return worker
+            self._replace_soon(worker)
 
     async def run(self, args: tuple[Any, ...], budget_s: float, cheap: bool = False) -> Any:
         """Run ``runner(*args, remaining_budget)`` in a worker.
