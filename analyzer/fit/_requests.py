@@ -82,6 +82,19 @@ def fit_link(obj: Any, link: str) -> FitReport:
         raise _prefixed(exc, link) from None
 
 
+def _refuse_edge(found: FitReport, where: str) -> None:
+    """Refuse a fitted channel with a conditional arrival probability of 0 or 1 (outside Assumption 1)."""
+    edge = [name for name, x in found.estimates.items() if x in (0, 1)]
+    if edge:
+        raise AssumptionViolation(
+            where,
+            f"the {found.model} model fitted to the trace has {edge[0]} = {found.parameters[edge[0]]}: "
+            "Assumption 1 of Rohr, Marelli and Fu 2014 requires every conditional arrival probability to "
+            "lie strictly between 0 and 1, so no verdict is given; a longer trace, or one with both outcomes "
+            "after every history, is needed",
+        )
+
+
 def resolve_traces(tree: Any, links: tuple[str, ...] = ("/channel",)) -> tuple[Any, dict[str, FitReport]]:
     """``tree`` with every trace channel at ``links`` replaced by its fitted channel, and the fits by link."""
     if not isinstance(tree, dict):
@@ -93,15 +106,7 @@ def resolve_traces(tree: Any, links: tuple[str, ...] = ("/channel",)) -> tuple[A
         obj = tree.get(key)
         if isinstance(obj, Mapping) and obj.get("model") == "trace":
             found = fit_link(obj, link)
-            edge = [name for name, x in found.estimates.items() if x in (0, 1)]
-            if edge:
-                raise AssumptionViolation(
-                    f"{link}/arrivals",
-                    f"the {found.model} model fitted to the trace has {edge[0]} = {found.parameters[edge[0]]}: "
-                    "Assumption 1 of Rohr, Marelli and Fu 2014 requires every conditional arrival probability to "
-                    "lie strictly between 0 and 1, so no verdict is given; a longer trace, or one with both outcomes "
-                    "after every history, is needed",
-                )
+            _refuse_edge(found, f"{link}/arrivals")
             fits[link] = found
             out[key] = found.channel
     return out, fits
@@ -129,6 +134,7 @@ def with_trace(request: Request, trace: Trace | Any, level: Any = None) -> tuple
         raise InvalidInput("--trace", "a trace gives one packet's channel; this request has one channel per sensor")
     lvl = DEFAULT_LEVEL if level is None else level if isinstance(level, Fraction) else parse_level(level, "--level")
     found = fit_trace(as_trace(trace), level=lvl)
+    _refuse_edge(found, "--trace")
     channel = parse_markov_channel(found.channel)
     return dataclasses.replace(request, channel=channel), found
 

@@ -105,6 +105,16 @@ def test_cli_analyze_trace_stable_and_undecided(files: Path, capsys) -> None:
     assert "at 95% confidence: UNDECIDED" in text and "packets in all would decide" in text
 
 
+def test_cli_trace_whose_fit_leaves_assumption_1_is_refused_naming_the_trace(files: Path, capsys) -> None:
+    # every loss followed by an arrival: the maximum-likelihood recovery rate is exactly 1, outside
+    # Assumption 1 of Rohr, Marelli and Fu (2014); the request door says so at /channel/arrivals
+    edge = files / "edge.txt"
+    edge.write_text("\n".join("110" * 40) + "\n")
+    assert cli_main(["analyze", str(files / "plant.json"), "--trace", str(edge)]) == 2
+    err = capsys.readouterr().err
+    assert "--trace" in err and "recovery_rate = 1" in err and "Assumption 1" in err
+
+
 def test_cli_analyze_trace_from_sequence_numbers_and_a_csv_column(files: Path, capsys) -> None:
     plant = str(files / "plant.json")
     assert cli_main(["analyze", plant, "--trace", str(files / "seq.txt"), "--trace-sequence", "--json"]) in (0, 1)
