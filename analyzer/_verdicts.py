@@ -38,7 +38,7 @@ class Verdict(StrEnum):
         return (cls.STABLE, cls.BOUNDARY, cls.UNSTABLE)[sign + 1]
 
     def __repr__(self) -> str:
-        # reports and tuples print the JSON text, as before the enum: ('stable', '9/25', 0.5)
+        # reports and tuples print the JSON text, so a verdict reads alike everywhere: ('stable', '9/25', 0.5)
         return repr(self.value)
 
 

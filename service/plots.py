@@ -417,7 +417,7 @@ def region_figure(
     return fig
 
 
-# -- exact Gilbert-Elliott region (issue 11) ----------------------------------
+# -- exact Gilbert-Elliott region ----------------------------------------------
 
 
 def ge_region(request: Request, budget: Budget, params: Mapping[str, Any]) -> bytes:

@@ -183,7 +183,7 @@ class _CompiledLMI:
 #: Compiled problems kept, one per shape ``(n, rows of each pattern)``, least recently used first.
 CACHE_SIZE = 8
 #: Largest ``n`` whose compiled problem is kept.  Above, compiling is a small part of the solves
-#: and the compiled program is large, so each :class:`StabilityLMI` compiles its own, as before.
+#: and the compiled program is large, so each :class:`StabilityLMI` compiles its own.
 CACHED_MAX_N = 12
 _CACHE: OrderedDict[tuple[int, tuple[int, ...]], _CompiledLMI] = OrderedDict()
 _CACHE_LOCK = threading.Lock()

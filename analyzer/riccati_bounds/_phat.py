@@ -118,7 +118,7 @@ class BatchedMare:
         """``P(S)`` of every prefix ``S`` of length ``k = 0, ..., N - 1``, in the order of the levels.
 
         They do not depend on ``X``, so they are formed once per ``N`` (by the same products
-        ``w (1 - lam)`` and ``w lam`` as before, so the same floats).
+        ``w (1 - lam)`` and ``w lam`` as the level-by-level recursion, so the same floats).
         """
         ws = self._weights.get(N)
         if ws is None:

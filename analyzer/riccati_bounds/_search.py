@@ -108,7 +108,7 @@ class CertifiedSearch:
         ``False`` keeps the balanced coordinates (the naive formulation).
     lmi:
         ``"fallback"`` (default): solve the LMI only where the solver-free
-        gains do not certify; ``"always"``: the LMI at every point, as before
+        gains do not certify; ``"always"``: the LMI at every point
         (the reference route of the benchmark); ``"never"``: no solver.
     """
 

@@ -22,8 +22,8 @@ fixed-point iteration already converges exactly when ``rho(L) < 1``; GMRES accel
 Every answer is substituted back: unless ``||X - L(X) - W||_F`` is at the level of
 :data:`RESIDUAL_RTOL` times the size of the terms, the dense ``vech`` solve answers instead
 (the callers' fallback), so the result is always that of the dense solve up to rounding.  Up to
-:data:`DENSE_MAX_N` states the dense solve answers as before, so the floats of every request
-of that size are what they were.
+:data:`DENSE_MAX_N` states the dense solve answers directly, so the floats of every request
+of that size are the dense solve's.
 """
 
 from __future__ import annotations
@@ -35,7 +35,7 @@ import scipy.linalg
 
 from ._vech import unvech, vech_layout
 
-#: Up to this many states the dense ``vech`` solve answers, as before: it is faster there (a whole
+#: Up to this many states the dense ``vech`` solve answers: it is faster there (a whole
 #: ``kfio bounds`` request at ``n = 20``: 1.1 s against 2.0 s; at ``n = 30``: 3.9 s against 3.3 s).
 DENSE_MAX_N = 24
 #: GMRES's relative residual target and the substitute-back check's, relative to the terms' size.

@@ -437,7 +437,7 @@ def _critical_probability(
     e.g. ``1 - 1/alpha^2`` for a rational real ``alpha``), compared exactly
     between blocks; for an algebraic ``beta_k`` it is ``1 - CRootOf(h, i)**(-N/z)``,
     valued from FLINT's certified enclosure of ``beta_k`` and rounded to a float
-    (as the 40-digit SymPy value was before), its text written as SymPy prints
+    (the float of the exact value), its text written as SymPy prints
     it; the float path (``beta_k`` not exact) stays in SymPy.  Long exact texts
     get a short form for the terminal in ``display`` (the JSON keeps the text).
     """
@@ -687,7 +687,7 @@ def analyze(
     if basis != "extension":
         return report
     # per-sensor Bernoulli channels: exact critical probability of each sensor, and for two
-    # sensors the boundary curve (issue 6; an extension of Rohr, Marelli and Fu (2014), see docs/regions.md)
+    # sensors the boundary curve (an extension of Rohr, Marelli and Fu (2014), see docs/regions.md)
     regions = region_report(request, budget, report=report, fmo=fmo, sigma=[res for _, res in analyzed])
     return dataclasses.replace(report, regions=regions)
 

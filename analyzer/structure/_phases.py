@@ -10,7 +10,7 @@ seen at phase ``n`` (time ``t = n mod N``) is
 
 and a set ``F`` of (phase, row group) slots is *blind* when the stacked rows
 ``{r_n[group rows] : (n, group) in F}`` do not have full column rank ``L``.
-A row group is a sensor packet (issue 6); the one-packet case has a single
+A row group is a sensor packet; the one-packet case has a single
 group holding every row.
 """
 
