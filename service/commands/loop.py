@@ -68,19 +68,24 @@ def critical_lines(report: dict) -> list[str]:
 
     A link whose stable set is an interval that does not reach 1 (a UDP-like estimator
     assumes the link's arrival rate, so a better link can destabilize the loop) gets that
-    interval instead; a link with no stable value says so; a value not computed, the note.
+    interval instead; a link with no stable value says so; a loop too large for the exact value,
+    the certified bracket; a value not computed, the note.
     """
     lines = []
     for c in report.get("critical_values") or []:
         name = _link_name(c)
         poly = c.get("value_minimal_polynomial")
         if c["value"] is not None:
-            degree = None if poly is None else len(poly) - 1
+            degree = c.get("value_minimal_polynomial_degree") or (None if poly is None else len(poly) - 1)
             every = " (stable at every value of this link)" if c["value_exact"] == "0" else ""
             lines.append(f"{name}: {_probability(c['value'], c['value_exact'], degree)}{every}")
             continue
+        bracket = c.get("value_bracket")
         stable = [i for i in c.get("intervals") or [] if i["verdict"] == "stable"]
-        if stable:
+        if bracket:  # an operator too large for the exact value: both ends proved (the note in --json says how)
+            lo, hi = (_probability(x, None) for x in bracket)
+            lines.append(f"{name}: in [{lo}, {hi}] (certified bracket: proved unstable at {lo}, stable at {hi})")
+        elif stable:
             spans = " or ".join(f"({_probability(i['from'], None)}, {_probability(i['to'], None)})" for i in stable)
             lines.append(f"{name}: none near 1; stable only for values in {spans}")
         elif c.get("intervals"):

@@ -269,6 +269,25 @@ def test_python_control_plants_of_8_to_10_states_answer_with_certified_enclosure
         assert len(text) <= 420  # every exact text is capped (200 digits each side of a fraction)
 
 
+@pytest.mark.slow
+@pytest.mark.parametrize("n", [8, 10])
+def test_the_summary_of_a_big_plant_prints_each_bracket_as_proved(big_reports, n) -> None:
+    from kfio.service.commands.loop import summary
+
+    d = json.loads(big_reports[n][1].to_json())
+    lines = summary(d).splitlines()
+    assert lines[0].startswith(f"verdict: {d['verdict'].upper()}  (certified mean-square verdict")
+    assert all(len(line) <= 160 for line in lines), lines
+    for c in d["critical_values"]:
+        if c["value_bracket"] is None:
+            continue
+        lo, hi = c["value_bracket"]
+        line = next(x for x in lines if x.startswith(f"critical {c['link']} "))
+        assert line.endswith(
+            f"in [{lo:.6g}, {hi:.6g}] (certified bracket: proved unstable at {lo:.6g}, stable at {hi:.6g})"
+        )
+
+
 def _texts(tree: object) -> list[str]:
     if isinstance(tree, str):
         return [tree]
