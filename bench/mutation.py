@@ -190,8 +190,8 @@ MUTANTS: tuple[Mutant, ...] = (
     Mutant(
         "summary-degree-off-by-one",
         "service/commands/loop.py",
-        "            degree = None if poly is None else len(poly) - 1\n",
-        "            degree = None if poly is None else len(poly)\n",
+        '            degree = c.get("value_minimal_polynomial_degree")  # known also when the coefficients are capped\n',
+        '            degree = len(c["value_minimal_polynomial"] or []) or None\n',
         ("tests/loop/test_loop_summary.py",),
         "the summary names a critical value's degree as its number of coefficients",
     ),

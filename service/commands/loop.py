@@ -74,9 +74,8 @@ def critical_lines(report: dict) -> list[str]:
     lines = []
     for c in report.get("critical_values") or []:
         name = _link_name(c)
-        poly = c.get("value_minimal_polynomial")
         if c["value"] is not None:
-            degree = c.get("value_minimal_polynomial_degree") or (None if poly is None else len(poly) - 1)
+            degree = c.get("value_minimal_polynomial_degree")  # known also when the coefficients are capped
             every = " (stable at every value of this link)" if c["value_exact"] == "0" else ""
             lines.append(f"{name}: {_probability(c['value'], c['value_exact'], degree)}{every}")
             continue
