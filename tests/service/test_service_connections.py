@@ -12,56 +12,22 @@ import asyncio
 import json
 import logging
 import socket
-import threading
 import time
 from collections.abc import Iterator
 
 import httpx
 import pytest
-import uvicorn
 
-from kfio.service.app import create_app
-from kfio.service.connection_guard import RateLimitedLog, install_accept_error_log, uvicorn_options
+from kfio.service.connection_guard import RateLimitedLog, install_accept_error_log
 from kfio.service.settings import Settings
+
+from support.thread_server import ThreadServer
 
 HEADER_TIMEOUT_S = 1.0
 BODY_TIMEOUT_S = 1.0
 MAX_CONNECTIONS = 12
 #: A socket that the server should have closed within a deadline gets this long before the test fails.
 HANG_GUARD_S = 20.0
-
-
-class ThreadServer:
-    """Uvicorn with kfio's app and guard, in a thread, on a free port of 127.0.0.1."""
-
-    def __init__(self, settings: Settings, log_level: str = "info") -> None:
-        options = uvicorn_options(settings)
-        self.guard = options["http"].guard
-        config = uvicorn.Config(
-            create_app(settings),
-            host="127.0.0.1",
-            port=0,
-            loop="asyncio",
-            log_level=log_level,
-            **options,
-        )
-        self.server = uvicorn.Server(config)
-        self.thread = threading.Thread(target=self.server.run, daemon=True)
-
-    def __enter__(self) -> ThreadServer:
-        self.thread.start()
-        for _ in range(2000):  # bounded: about 20 s
-            if self.server.started:
-                break
-            time.sleep(0.01)
-        assert self.server.started, "the server did not start"
-        self.port = self.server.servers[0].sockets[0].getsockname()[1]
-        self.url = f"http://127.0.0.1:{self.port}"
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.server.should_exit = True
-        self.thread.join(timeout=30)
 
 
 @pytest.fixture(scope="module")

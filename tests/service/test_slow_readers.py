@@ -12,18 +12,18 @@ from __future__ import annotations
 
 import asyncio
 import socket
-import threading
 import time
 from collections.abc import Iterator
 from typing import Any
 
 import pytest
-import uvicorn
 
 from kfio.service.api.web import offline_redoc
 from kfio.service.app import create_app
-from kfio.service.connection_guard import CHUNK_BYTES, ChunkedResponses, uvicorn_options
+from kfio.service.connection_guard import CHUNK_BYTES, ChunkedResponses
 from kfio.service.settings import Settings
+
+from support.thread_server import ThreadServer
 
 PATH = "/docs-assets/redoc.standalone.js"
 #: A socket the server should have cut off within a deadline gets this long before the test fails.
@@ -67,36 +67,9 @@ async def big_response(scope: Any, receive: Any, send: Any) -> None:
     await send({"type": "http.response.body", "body": BIG})
 
 
-class ThreadServer:
-    """Uvicorn with the options of ``kfio serve``, in a thread, on a free port of 127.0.0.1.
-
-    The app is kfio's, or with ``big`` :func:`big_response` behind :class:`ChunkedResponses`.
-    """
-
-    def __init__(self, settings: Settings, big: bool = False) -> None:
-        options = uvicorn_options(settings)
-        self.guard = options["http"].guard
-        app: Any = ChunkedResponses(big_response) if big else create_app(settings)
-        config = uvicorn.Config(
-            app, host="127.0.0.1", port=0, loop="asyncio", lifespan="off" if big else "on", **options
-        )
-        self.server = uvicorn.Server(config)
-        self.thread = threading.Thread(target=self.server.run, daemon=True)
-
-    def __enter__(self) -> ThreadServer:
-        self.thread.start()
-        for _ in range(2000):  # bounded: about 20 s
-            if self.server.started:
-                break
-            time.sleep(0.01)
-        assert self.server.started, "the server did not start"
-        self.port = self.server.servers[0].sockets[0].getsockname()[1]
-        self.url = f"http://127.0.0.1:{self.port}"
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.server.should_exit = True
-        self.thread.join(timeout=30)
+def _big_server(settings: Settings) -> ThreadServer:
+    """Uvicorn with the options of ``kfio serve`` serving :func:`big_response` behind :class:`ChunkedResponses`."""
+    return ThreadServer(settings, app=ChunkedResponses(big_response), lifespan="off")
 
 
 def slow_reader(port: int) -> socket.socket:
@@ -150,7 +123,7 @@ def test_a_reader_gets_the_whole_redoc_bundle_in_pieces() -> None:
 
 @pytest.fixture(scope="module")
 def server() -> Iterator[ThreadServer]:
-    with ThreadServer(Settings(send_timeout_s=1.0, max_connections=6), big=True) as live:
+    with _big_server(Settings(send_timeout_s=1.0, max_connections=6)) as live:
         yield live
 
 
@@ -172,7 +145,7 @@ def test_a_stalled_response_buffers_pieces_not_the_body_and_is_cut_off_at_the_se
 
 
 def test_at_the_cap_a_new_connection_takes_the_place_of_a_stalled_one() -> None:
-    with ThreadServer(Settings(send_timeout_s=600, max_connections=3), big=True) as live:
+    with _big_server(Settings(send_timeout_s=600, max_connections=3)) as live:
         readers = [slow_reader(live.port) for _ in range(3)]
         try:
             wait(lambda: len(live.guard.stalled) == 3, "three slow readers did not stall")
