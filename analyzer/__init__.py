@@ -26,8 +26,9 @@ function that needs them.
 from __future__ import annotations
 
 import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
+from ._lazy import lazy_names
 from ._version import __version__
 
 #: Public name -> the module (relative to kfio) that defines it.
@@ -123,13 +124,7 @@ if TYPE_CHECKING:  # what the lazy names are, for type checkers and editors
     from .stability import BlockReport, StabilityReport
 
 
-def __getattr__(name: str) -> Any:
-    module = _LAZY.get(name)
-    if module is None:
-        raise AttributeError(f"module 'kfio' has no attribute {name!r}")
-    value = getattr(importlib.import_module(module, __name__), name)
-    globals()[name] = value
-    return value
+__getattr__, __dir__ = lazy_names(__name__, _LAZY, globals())
 
 
 # The import system binds a subpackage to its parent's attribute of the same name when it first loads
@@ -139,10 +134,6 @@ importlib.import_module(".loop", __name__)
 del globals()["loop"]
 importlib.import_module(".fit", __name__)
 del globals()["fit"]
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_LAZY))
 
 
 __all__ = [
