@@ -13,6 +13,7 @@ from typing import Any
 
 import sympy
 
+from .._numbers import decimal_text
 from ._eigen import X
 
 #: Exact texts longer than this many characters are shortened in summaries.
@@ -54,16 +55,6 @@ def _degree_from_text(text: str) -> int | None:
     return None
 
 
-def _value_text(value: complex | float, digits: int) -> str:
-    z = complex(value)
-    scale = max(abs(z.real), abs(z.imag), 1e-300)
-    if abs(z.imag) <= 1e-14 * scale:
-        return f"{z.real:.{digits}g}"
-    if abs(z.real) <= 1e-14 * scale:
-        return f"{z.imag:.{digits}g}i"
-    return f"{z.real:.{digits}g}{z.imag:+.{digits}g}i"
-
-
 def short_text(
     text: str,
     value: complex | float,
@@ -103,7 +94,7 @@ def short_text(
         return text
     if degree is None:
         degree = _degree_from_text(text)
-    shown = _value_text(value, digits)
+    shown = decimal_text(value, digits)
     if degree is None:
         return f"algebraic number, {shown}"
     return f"root of a degree-{degree} polynomial, {shown}"
