@@ -212,11 +212,4 @@ CAMPAIGN = settings(
 @CAMPAIGN
 @given(body=requests(), as_json=st.booleans())
 def test_hostile_json_never_crashes_the_cli(command: str, body: Any, as_json: bool, tmp_path, capsys) -> None:
-    # The CLI runs in a child forked from this pytest worker, and RLIMIT_AS counts the address space the
-    # child inherits: a worker that has loaded Dask, Chromium drivers and many BLAS threads already maps
-    # close to the 3 GiB default, so a C extension's allocation then fails mid-computation (seen as a
-    # SystemError from SymPy's ground types under full-suite load).  The memory limit is tested on its own
-    # (tests/service/test_cli_watchdog.py); here the input is the subject, so the limit is lifted.
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setenv("KFIO_MEMORY_MB", "0")
-        _run(command, body, tmp_path, capsys, as_json)
+    _run(command, body, tmp_path, capsys, as_json)
