@@ -79,7 +79,7 @@ MUTANTS: tuple[Mutant, ...] = (
         "analyzer/design/_ge_region.py",
         "        out: np.ndarray = _rho(self.gaps, p, q, np.ones(np.broadcast(p, q).shape))\n",
         "        out: np.ndarray = _rho(self.gaps, p, q, np.ones(np.broadcast(p, q).shape)) * (1 + 1e-4)\n",
-        ("tests/service/test_plot_ge_boundary.py",),
+        ("tests/service/plots/test_plot_ge_boundary.py",),
         "the float evaluation of the Gilbert-Elliott recurrence that draws the boundary curve is off by 1e-4 "
         "(the drawn curve must be the exact one)",
     ),
@@ -307,7 +307,7 @@ MUTANTS: tuple[Mutant, ...] = (
         "service/lanes.py",
         "len(matrix) > MAX_STATES:",
         "len(matrix) > MAX_STATES + 1:",
-        ("tests/service/test_lanes.py",),
+        ("tests/service/jobs/test_lanes.py",),
         "the cheap lane takes a request one state past its size rule",
     ),
     Mutant(
@@ -315,7 +315,7 @@ MUTANTS: tuple[Mutant, ...] = (
         "service/jobstore.py",
         "if job.attempts >= MAX_RUNS:",
         "if job.attempts > MAX_RUNS:",
-        ("tests/service/test_jobs_durable.py",),
+        ("tests/service/jobs/test_jobs_durable.py",),
         "a job found running after MAX_RUNS server deaths is run again instead of failing interrupted-by-restart",
     ),
     Mutant(
@@ -323,7 +323,7 @@ MUTANTS: tuple[Mutant, ...] = (
         "service/connection_guard.py",
         "            if len(body) <= self.chunk_bytes:\n",
         "            if True:\n",
-        ("tests/service/test_slow_readers.py",),
+        ("tests/service/server/test_slow_readers.py",),
         "a large response body handed to the server whole: a slow reader holds all of it",
     ),
     Mutant(
@@ -347,7 +347,7 @@ MUTANTS: tuple[Mutant, ...] = (
         "analyzer/errors.py",
         '    return text if len(text) <= limit else text[:limit] + "..."\n',
         "    return text\n",
-        ("tests/model/test_number_text.py", "tests/service/test_error_bounds.py"),
+        ("tests/model/test_number_text.py", "tests/service/http/test_error_bounds.py"),
         "errors quote a client's value whole: a 1 MB key gives a 2 MB error body",
     ),
     Mutant(
@@ -355,7 +355,7 @@ MUTANTS: tuple[Mutant, ...] = (
         "service/auth.py",
         "        return any([hmac.compare_digest(presented, t) for t in self._tokens])\n",
         "        return hmac.compare_digest(presented, self._tokens[0])\n",
-        ("tests/service/test_auth.py",),
+        ("tests/service/server/test_auth.py",),
         "only the first configured token is accepted: a token file's other clients get 401",
     ),
     Mutant(
@@ -363,7 +363,7 @@ MUTANTS: tuple[Mutant, ...] = (
         "service/auth.py",
         'OPEN_PATHS = frozenset({"/healthz", "/", ',
         'OPEN_PATHS = frozenset({"/healthz", "/readyz", "/", ',
-        ("tests/service/test_auth.py",),
+        ("tests/service/server/test_auth.py",),
         "a route other than /healthz, the page and the docs answers without a token",
     ),
 )

@@ -18,7 +18,7 @@ os.environ.setdefault("KFIO_TRUSTED_HOSTS", "localhost,127.0.0.1,[::1],testserve
 # In-process commands (cli_main, kfio check workers) fork from this pytest worker, and RLIMIT_AS counts the
 # address space the child inherits: a worker that has loaded Dask, browsers and BLAS threads maps most of
 # the 3 GiB default, so the limit would fail C allocations at random under load.  The memory limit has its
-# own tests, which set it explicitly (tests/service/test_cli_watchdog.py, test_service_hardening.py).
+# own tests, which set it explicitly (tests/service/cli/test_cli_watchdog.py, test_service_hardening.py).
 os.environ.setdefault("KFIO_MEMORY_MB", "0")
 
 # `kfio serve` keeps its jobs under $XDG_DATA_HOME/kfio unless KFIO_DATA_DIR says otherwise: one started

@@ -1,7 +1,7 @@
 """The Dockerfile's invariants, read from the file (CI cannot pull base images, so nothing is built here).
 
 scripts/container.sh builds and runs the image with buildah (docs/deployment.md records a run), and
-tests/service/test_service_docker.py replays its install and start commands in a virtual environment.
+tests/service/server/test_service_docker.py replays its install and start commands in a virtual environment.
 """
 
 from __future__ import annotations

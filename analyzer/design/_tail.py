@@ -21,7 +21,7 @@ non-degenerate systems with Gilbert-Elliott losses (Bernoulli is the case
 ``p + q = 1``): those blocks are labelled ``theorem``.  Degenerate blocks,
 several packets and channels of order above 1 are kfio's **extension** of the
 same argument (``sigma_k`` from the blind-set construction of Rohr, Marelli
-and Fu 2014), checked against simulated tails in ``tests/stability/test_tail.py``.
+and Fu 2014), checked against simulated tails in ``tests/design/test_tail.py``.
 
 Everything is exact where ``sigma_k^N`` is: the moment comparisons are the
 exact comparisons of :mod:`kfio.sigma._decide` with ``N`` replaced by
@@ -340,7 +340,7 @@ def log_ratio_text(x: Fraction, b: Fraction, N: int) -> str:
     its argument before it leaves ``log(x)`` alone (about 2.5 ms for
     ``log(1000000/399993)``, most of an uncached analysis of a small system);
     for ``x > 1`` rational none applies, so the text is built directly.
-    ``tests/stability/test_tail.py`` checks it against SymPy's, character for character.
+    ``tests/design/test_tail.py`` checks it against SymPy's, character for character.
 
     Examples
     --------
@@ -362,7 +362,7 @@ def log_root_ratio_text(x: Fraction, beta: AlgebraicReal, N: int) -> str:
     """SymPy's text of ``log(x) / (N log(beta))`` for a rational ``x > 1`` and an irrational ``beta`` printed as a plain ``CRootOf``.
 
     As :func:`log_ratio_text`, without building SymPy's expression (the root's
-    text is :meth:`AlgebraicReal.root_text`); ``tests/stability/test_tail.py``
+    text is :meth:`AlgebraicReal.root_text`); ``tests/design/test_tail.py``
     checks it against SymPy's text.
     """
     root = beta.root_text()
@@ -415,7 +415,7 @@ def tail_kappa(
     :func:`_kappa_float` at 40 digits), so it is the same float; what the row
     does not print (the exact comparisons of the two moments, ``kappa`` as
     exact text, ``sigma`` as text) is skipped.  ``None`` when no block has
-    ``|alpha_k| > 1``.  ``tests/stability/test_tail_kappa.py`` checks it equal
+    ``|alpha_k| > 1``.  ``tests/design/test_tail_kappa.py`` checks it equal
     to ``tail_report(...).kappa`` on every kind of channel.
     """
     bern = _bernoulli_lambdas(channels)

@@ -195,7 +195,7 @@ def _real_line_residuals(rows: np.ndarray, e: np.ndarray) -> np.ndarray:
     same order (the product ``(W_t . u_e) u_e`` formed one column at a time
     instead of by a broadcast over a length-``d`` axis, which is about half
     the cost at ``d = 2, 3``): the residuals are the same bits, which
-    ``tests/stability/test_residuals_same_bits.py`` checks.
+    ``tests/search/test_residuals_same_bits.py`` checks.
     """
     ue = rows[np.arange(rows.shape[0]), e]
     u = ue / np.linalg.norm(ue, axis=1)[:, None]

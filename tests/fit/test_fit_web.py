@@ -1,6 +1,6 @@
 """The page fits an uploaded trace (POST /v1/fit) and shows the verdict at 95% confidence with its plot.
 
-Server and browser are those of ``tests/service/test_web_browser.py`` (Debian's chromium, loopback only).
+Server and browser are those of ``tests/service/web/test_web_browser.py`` (Debian's chromium, loopback only).
 """
 
 # ruff: noqa: F811  (pytest fixtures imported from test_web_browser are parameters here)
@@ -14,7 +14,7 @@ from typing import Any
 import httpx
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "service"))  # the browser fixtures live there
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "service" / "web"))  # the browser fixtures live there
 
 from test_web_browser import browser_context, open_page, server  # noqa: E402, F401  (fixtures)
 

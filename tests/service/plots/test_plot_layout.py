@@ -20,6 +20,8 @@ from kfio.service.api.schemas import REQUEST_EXAMPLES
 from kfio.service.sweep_plot import sweep_figure
 from kfio.sweep import load_sweep, run_sweep
 
+from support.paths import ROOT
+
 
 def _request(name: str, options: dict | None = None):
     body = json.loads(json.dumps(REQUEST_EXAMPLES[name]["value"]))
@@ -139,9 +141,8 @@ def test_sweep_plot_title_says_whose_verdict_the_colours_are() -> None:
 
 
 def test_one_axis_sweep_plot_names_a_long_critical_probability_by_its_decimal() -> None:
-    from pathlib import Path
 
-    pendulum = json.loads((Path(__file__).resolve().parents[2] / "examples" / "pendulum_c2d.json").read_text())
+    pendulum = json.loads((ROOT / "examples" / "pendulum_c2d.json").read_text())
     spec = load_sweep(
         json.dumps(
             {

@@ -14,7 +14,6 @@ import dataclasses
 import json
 import re
 from fractions import Fraction
-from pathlib import Path
 
 import pytest
 
@@ -22,7 +21,9 @@ from kfio import System, analyze, load_request
 from kfio.service.cli import build_parser
 from kfio.simulation._simulate import simulate
 
-EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
+from support.paths import ROOT
+
+EXAMPLES = ROOT / "examples"
 
 
 def _helps() -> dict[str, str]:

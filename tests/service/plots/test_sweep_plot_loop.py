@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import json
 from fractions import Fraction
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -20,7 +19,9 @@ from kfio.loop import analyze_loop, parse_loop_request
 from kfio.service.sweep_plot import _COLORS, THRESHOLD_GID, sweep_figure
 from kfio.sweep import load_sweep, run_sweep
 
-BASE = json.loads((Path(__file__).resolve().parents[2] / "examples" / "loop_scalar.json").read_text())
+from support.paths import ROOT
+
+BASE = json.loads((ROOT / "examples" / "loop_scalar.json").read_text())
 SENSOR, ACTUATOR = "/channel/arrival_probability", "/actuator_channel/arrival_probability"
 
 

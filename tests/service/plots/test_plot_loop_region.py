@@ -11,7 +11,6 @@ from __future__ import annotations
 import json
 import time
 from fractions import Fraction
-from pathlib import Path
 from typing import Iterator
 
 import numpy as np
@@ -29,7 +28,9 @@ from kfio.service.loop_plot import (
 )
 from kfio.service.settings import Settings
 
-EXAMPLE = json.loads((Path(__file__).parents[2] / "examples" / "loop_scalar.json").read_text())
+from support.paths import ROOT
+
+EXAMPLE = json.loads((ROOT / "examples" / "loop_scalar.json").read_text())
 POINTS = 5
 
 

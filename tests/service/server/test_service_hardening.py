@@ -118,7 +118,7 @@ def test_a_budget_too_small_to_do_anything_is_422(client: TestClient, tiny: obje
 
 @pytest.mark.slow
 def test_validation_comes_before_the_busy_answer() -> None:
-    # no cheap lane: its reserved worker would answer the small valid request (tests/service/test_lanes.py)
+    # no cheap lane: its reserved worker would answer the small valid request (tests/service/jobs/test_lanes.py)
     with started(Settings(workers=1, max_queue=0, time_budget_s=20, lane_workers=0)) as c:
         hold = threading.Thread(
             target=lambda: c.post(SLOW_PATH, content=slow_request(time_budget_s=12, seed=61), headers=JSON_HEADERS)

@@ -10,6 +10,8 @@ import pytest
 from kfio.service import exitcodes
 from kfio.service.cli import main
 
+from support.paths import ROOT
+
 SCALAR = {"A": [[-1.25]], "C": [[1]], "Q": [[1]], "R": [[2.5]]}
 
 
@@ -66,7 +68,7 @@ def test_json_and_flags(write, capsys) -> None:
 
 @pytest.mark.slow
 def test_examples_run(capsys) -> None:
-    root = Path(__file__).resolve().parents[2] / "examples"
+    root = ROOT / "examples"
     for path in sorted(root.glob("bounds_*.json")):
         code, out, err = (
             run(capsys, str(path), "--json", "--horizon", "1")

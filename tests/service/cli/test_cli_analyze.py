@@ -5,13 +5,14 @@ from __future__ import annotations
 import io
 import json
 import sys
-from pathlib import Path
 
 import pytest
 
 from kfio.service.cli import main
 
-EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
+from support.paths import ROOT
+
+EXAMPLES = ROOT / "examples"
 
 
 def run_cli(argv, stdin=None, capsys=None, monkeypatch=None):

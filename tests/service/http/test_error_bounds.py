@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import json
 from collections.abc import Iterator
-from pathlib import Path
 
 import pytest
 from fastapi.testclient import TestClient
@@ -22,8 +21,9 @@ from kfio.service.problems import TEXT_LIMIT, Problem
 from kfio.service.settings import Settings
 
 from support.app_client import ready_client
+from support.paths import ROOT
 
-EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
+EXAMPLES = ROOT / "examples"
 MB = 1_000_000
 BODY_LIMIT = 64 * 1024
 HUGE = "k" * MB

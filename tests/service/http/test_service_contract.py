@@ -26,6 +26,7 @@ from kfio.service.app import create_app
 from kfio.service.settings import Settings
 
 from support.live_server import OPENAPI_PATH
+from support.paths import ROOT
 
 DOC: dict[str, Any] = json.loads(OPENAPI_PATH.read_text(encoding="utf-8"))
 REGISTRY = Registry().with_resource("urn:kfio:openapi", DRAFT202012.create_resource(DOC))
@@ -165,9 +166,8 @@ def test_problem_in_enum_lists_every_place_the_server_names() -> None:
 def test_sweep_budgets_are_typed_as_the_validator_reads_them() -> None:
     """``point_budget_s`` and ``time_budget_s`` of a sweep: a number in range or an exact-number string."""
     import json
-    from pathlib import Path
 
-    doc = json.loads((Path(__file__).resolve().parents[2] / "openapi" / "openapi.json").read_text())
+    doc = json.loads((ROOT / "openapi" / "openapi.json").read_text())
     found = []
 
     def walk(node: object) -> None:

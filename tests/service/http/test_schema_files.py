@@ -22,7 +22,8 @@ from kfio.service.schema_files import DOCUMENTS, PACKAGE_DIR, texts
 from kfio.service.schema_files import main as schema_main
 from kfio.service.settings import Settings
 
-ROOT = Path(__file__).resolve().parents[2]
+from support.paths import ROOT
+
 EXAMPLES = sorted(p for p in (ROOT / "examples").rglob("*") if p.suffix in (".json", ".toml"))
 
 

@@ -5,12 +5,13 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
-from pathlib import Path
 
 import kfio
 from kfio.service.cli import main
 
-EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
+from support.paths import ROOT
+
+EXAMPLES = ROOT / "examples"
 
 
 def test_version_and_help_exit_0(capsys):

@@ -9,6 +9,8 @@ import pytest
 
 from kfio.service.cli import main
 
+from support.paths import ROOT
+
 REQUEST = {
     "system": {"A": [[-1.25]], "C": [[1]], "Q": [[1]], "R": [[2.5]]},
     "channel": {"model": "bernoulli", "arrival_probability": 0.5},
@@ -80,6 +82,6 @@ def test_unstable_overflow_still_exits_0_with_null_mean(tmp_path: Path, capsys) 
 
 
 def test_example_file_runs(capsys) -> None:
-    example = Path(__file__).resolve().parents[2] / "examples" / "simulate_seed004_bernoulli.json"
+    example = ROOT / "examples" / "simulate_seed004_bernoulli.json"
     code, out, _ = run(["simulate", str(example), "--steps", "20", "--trajectories", "200"], capsys)
     assert code == 0 and "exact E[P_t] (t <= 12)" in out
