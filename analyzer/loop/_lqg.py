@@ -85,7 +85,7 @@ def optimal_sensor(system: Any, channel: Any) -> tuple[bool, float | None, str |
 
 
 def _optimal_sensor(system: Any, channel: Any) -> tuple[bool, float | None, str | None, str | None]:
-    from .._api import analyze
+    from ..stability import analyze
 
     rep = analyze(Request(system=system, channel=channel))
     note = None
@@ -126,9 +126,10 @@ def _nu_c_bracket(req: Any) -> ActuatorCritical:
     an upper end of the bracket; the lower end holds for any ``B`` (a lost packet
     applies no input).
     """
-    from .._api import bounds
     from .._system import System
     from ..errors import AnalyzerError
+    from ..model import parse_request
+    from ..riccati_bounds import compute_bounds
 
     rho2, approx = largest_modulus(req.system.A)
     lower_exact = None if rho2 is None else (max(Fraction(0), 1 - 1 / rho2) if rho2 else Fraction(0))
@@ -147,7 +148,8 @@ def _nu_c_bracket(req: Any) -> ActuatorCritical:
             R=[[fraction_text(x) for x in row] for row in req.U],
         )
         arrival = fraction_text(req.actuator.table[0])
-        found = bounds(dual, {"model": "bernoulli", "arrival_probability": arrival}).critical[0].upper
+        channel = {"model": "bernoulli", "arrival_probability": arrival}
+        found = compute_bounds(parse_request({"system": dual.to_dict(), "channel": channel})).critical[0].upper
         upper = None if found.value is None else float(found.value)
         if upper is None:
             why = f"no certified upper bound: {found.reason}"

@@ -99,9 +99,9 @@ def lqg_cost_bounds(req: Any, S: np.ndarray | None, budget: Any = None) -> LqgCo
     A, B, C, Q, R, W, U = lqg_floats(req)
     lam, nu = float(req.channel.table[0]), float(req.actuator.table[0])
     M = control_weight(A, B, W, U, S, nu)
-    from .._api import bounds
+    from ..riccati_bounds import compute_bounds
 
-    rep = bounds(Request(system=req.system, channel=req.channel), budget=budget)
+    rep = compute_bounds(Request(system=req.system, channel=req.channel), budget)
     base = float(np.trace(S @ Q))
     lower = upper = paper_upper = None
     lower_from = upper_from = None

@@ -157,8 +157,8 @@ def _optimal_filter_critical(req: LoopRequest) -> OptimalFilter:
     """The optimal time-varying filter's critical arrival probability (``kfio.analyze``, Theorem 1)."""
     if isinstance(req.channel, PerSensorChannel) or req.channel.model != "bernoulli":
         return OptimalFilter(None, None, "defined for one Bernoulli sensor packet")
-    from .._api import analyze
     from ..errors import AnalyzerError
+    from ..stability import analyze
 
     try:
         rep = analyze(Request(system=req.system, channel=req.channel))
