@@ -224,7 +224,7 @@ def block_constraints(
     Liu and Goldsmith (2004), Section VI.B: ``A = diag(5/2, 3/2)``, one sensor per state.
 
     >>> from fractions import Fraction as F
-    >>> from kfio.model._types import Sensor
+    >>> from kfio.model import Sensor
     >>> s = System(A=((F(5, 2), F(0)), (F(0), F(3, 2))), C=((F(1), F(0)), (F(0), F(1))),
     ...            sensors=(Sensor("s1", (0,)), Sensor("s2", (1,))))
     >>> [(b.beta_text, [p.misses for p in b.patterns]) for b in block_constraints(s)]

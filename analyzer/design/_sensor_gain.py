@@ -77,7 +77,7 @@ def sensor_gains(blocks: Sequence[BlockConstraints], names: Sequence[str], lambd
     sees the worst block, so only its improvement helps.
 
     >>> from fractions import Fraction as F
-    >>> from kfio.model._types import Sensor, System
+    >>> from kfio.model import Sensor, SystemRecord as System
     >>> from kfio.design._regions_constraints import block_constraints
     >>> from kfio.design._sensor_gain import sensor_gains
     >>> s = System(A=((F(5, 2), F(0)), (F(0), F(3, 2))), C=((F(1), F(0)), (F(0), F(1))),

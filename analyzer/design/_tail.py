@@ -278,7 +278,7 @@ def block_tail(
 
     >>> from fractions import Fraction
     >>> from kfio import load_request
-    >>> from kfio.structure._fmo import fmo_blocks
+    >>> from kfio.structure import fmo_blocks
     >>> from kfio.stability import compute_sigma
     >>> from kfio.design._tail import block_tail
     >>> req = load_request('{"system": {"A": [[2]], "C": [[1]]}, '

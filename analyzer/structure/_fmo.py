@@ -700,7 +700,7 @@ def fmo_blocks(system: System, budget: Budget | None = None) -> list[FmoBlock]:
     Examples
     --------
     >>> from fractions import Fraction as F
-    >>> from kfio.model._types import System
+    >>> from kfio.model import SystemRecord as System
     >>> s = System(A=((F(2), F(0)), (F(0), F(-2))), C=((F(1), F(1)),))
     >>> [(b.eigenvalue_texts, b.phase.base_period) for b in fmo_blocks(s)]
     [(('2', '-2'), 2)]

@@ -114,7 +114,7 @@ def record(row: SweepRow, columns: Sequence[str]) -> dict[str, Any]:
     unchanged (text, an integer, a boolean, ``None``, a finite float), the
     view is the JSON and the encoder is not run; anything else goes through it.
     """
-    from .._json._registry import view_of
+    from .._json import view_of
 
     view = view_of(SweepRow)
     assert view is not None
@@ -124,7 +124,7 @@ def record(row: SweepRow, columns: Sequence[str]) -> dict[str, Any]:
     return {c: d.get(c) for c in columns}
 
 
-#: Types :func:`kfio._json._encode.encode` returns unchanged (and ``float`` when finite).
+#: Types :func:`kfio._json.encode` returns unchanged (and ``float`` when finite).
 _AS_IS = frozenset({str, int, bool, type(None)})
 
 

@@ -107,7 +107,7 @@ def _fields(command: str, report: Mapping[str, Any]) -> dict[str, Any]:
 
 def _view(obj: Any) -> dict[str, Any]:
     """The JSON view of a report object (its fields, not yet encoded)."""
-    from .._json._registry import view_of
+    from .._json import view_of
 
     view = view_of(type(obj))
     if view is None:  # pragma: no cover - every report part has a view (tests/test_json_views.py)
@@ -120,11 +120,11 @@ def analyze_row(report: Any) -> dict[str, Any]:
 
     A sweep row reads six fields of a report of a hundred values.  Each is
     taken from the same view and through the same encoder
-    (:func:`kfio._json._encode.encode`) as the whole report's JSON, so the
+    (:func:`kfio._json.encode`) as the whole report's JSON, so the
     row equals the one read off ``to_dict()`` (tested on every kind of
     channel in ``tests/sweep/test_sweep_plant_memo.py``).
     """
-    from .._json._encode import encode
+    from .._json import encode
 
     top = _view(report)
     blocks = []
