@@ -64,7 +64,9 @@ def test_the_check_sees_a_private_import(tmp_path: Path) -> None:
     (fake / "stability" / "_v.py").write_text("def f():\n    from ..model._types import X\n")
     (fake / "stability" / "_w.py").write_text('"""Example.\n\n>>> from kfio.model._types import X\n"""\n')
     (fake / "stability" / "_x.py").write_text("from .._json._encode import encode\n")
-    (fake / "stability" / "_y.py").write_text("from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from ..model._types import X\n")
+    (fake / "stability" / "_y.py").write_text(
+        "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from ..model._types import X\n"
+    )
     assert _violations(tmp_path, (("analyzer", "kfio"),)) == [
         "analyzer/stability/_v.py:2 imports kfio.model._types from outside kfio.model",
         "analyzer/stability/_w.py:3 imports kfio.model._types from outside kfio.model",

@@ -101,13 +101,18 @@ def _imports_of(name: str, path: Path, node: ast.Import | ast.ImportFrom, line: 
         yield Import(name, path, line, f"{base}.{alias.name}", names)
 
 
-def kfio_imports(root: Path = ROOT, packages: tuple[tuple[str, str], ...] = PACKAGES) -> Iterator[Import]:
-    """Every run-time import of a ``kfio`` module or name by the modules of ``packages`` under ``root``."""
+def kfio_imports(
+    root: Path = ROOT, packages: tuple[tuple[str, str], ...] = PACKAGES, *, examples: bool = True
+) -> Iterator[Import]:
+    """Every run-time import of a ``kfio`` module or name by the modules of ``packages`` under ``root``
+    (with ``examples``, those of the docstring examples too)."""
     for folder, pkg in packages:
         for path in sorted((root / folder).rglob("*.py")):
             name = module_name(root / folder, pkg, path)
             tree = ast.parse(path.read_text())
-            found = [(n.lineno, n) for n in runtime_import_nodes(tree)] + list(_example_nodes(tree))
+            found = [(n.lineno, n) for n in runtime_import_nodes(tree)]
+            if examples:
+                found += list(_example_nodes(tree))
             for line, node in found:
                 for imp in _imports_of(name, path, node, line):
                     if imp.target == "kfio" or imp.target.startswith("kfio."):
