@@ -26,8 +26,10 @@ from ._exact import (
     values_withheld,
 )
 from ._fields import (
+    MAX_CHECK_BUDGET_S,
     MAX_CHECK_ENTRIES,
     MAX_NUMBER_TEXT,
+    MAX_SENSOR_NAME,
     OPTION_FIELDS,
     OPTION_GROUP_NAMES,
     REQUEST_GROUPS,
@@ -73,8 +75,10 @@ __all__ = [
     "DECIMAL_PATTERN",
     "DEFAULT_LIMITS",
     "Limits",
+    "MAX_CHECK_BUDGET_S",
     "MAX_CHECK_ENTRIES",
     "MAX_NUMBER_TEXT",
+    "MAX_SENSOR_NAME",
     "MIN_TIME_BUDGET_S",
     "MarkovChannel",
     "Matrix",

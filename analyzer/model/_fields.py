@@ -80,8 +80,14 @@ class OptionField:
 #: Most characters of an exact number written as text, with the default limits.
 MAX_NUMBER_TEXT = number_text_limit(DEFAULT_LIMITS.max_digits)
 
+#: Most characters of a sensor name.
+MAX_SENSOR_NAME = 64
+
 #: Most entries of a check file (``kfio check``).
 MAX_CHECK_ENTRIES = 1000
+
+#: Longest budget of a whole check file (its ``time_budget_s`` and ``point_budget_s``), in seconds.
+MAX_CHECK_BUDGET_S = 86400
 
 _POSITIVE = {"minimum": 0, "exclusive_minimum": True}
 
@@ -90,8 +96,8 @@ OPTION_FIELDS: tuple[OptionField, ...] = (
         "",
         "time_budget_s",
         "number",
-        "Seconds this request may take (less than the minimum cannot even reach a worker); the deployment's "
-        "budget caps it.",
+        "Seconds this request may take (an exact number; less than the minimum cannot even reach a worker, and is "
+        "422); the deployment's budget caps it.",
         minimum=Fraction(1, 100),
         maximum=3600,
     ),

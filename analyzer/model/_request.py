@@ -14,7 +14,7 @@ from typing import Any, Iterable, Mapping, Optional
 
 from ..errors import InvalidInput, LimitExceeded
 from ._exact import load_json, parse_number, value_text
-from ._fields import OPTION_KEYS, option_field, option_fields
+from ._fields import MAX_SENSOR_NAME, OPTION_KEYS, option_field, option_fields
 from ._limits import DEFAULT_LIMITS, Limits
 from ._pointer import json_pointer
 from ._types import Channel, MarkovChannel, Matrix, PerSensorChannel, Request, Sensor, System
@@ -262,8 +262,10 @@ def _parse_sensors(obj: Any, where: str, p: int, limits: Limits) -> tuple[Sensor
     for i, s in enumerate(obj):
         s = check_keys(s, f"{where}/{i}", {"name", "rows"}, {"name", "rows"})
         name = s["name"]
-        if not isinstance(name, str) or not name or len(name) > 64:
-            raise InvalidInput(f"{where}/{i}/name", "a sensor name must be a non-empty string of at most 64 characters")
+        if not isinstance(name, str) or not name or len(name) > MAX_SENSOR_NAME:
+            raise InvalidInput(
+                f"{where}/{i}/name", f"a sensor name must be a non-empty string of at most {MAX_SENSOR_NAME} characters"
+            )
         if name in names:
             raise InvalidInput(f"{where}/{i}/name", f"sensor name {name!r} is used twice")
         names.add(name)
