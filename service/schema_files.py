@@ -81,9 +81,7 @@ def _check_components() -> dict[str, dict[str, Any]]:
         },
     }
     assert set(requirements) == set(COMMAND_OF) and set(requirements["outage"]["properties"]) == set(OUTAGE_KEYS)
-    budget = exact_number(
-        f"seconds, in (0, {MAX_CHECK_BUDGET_S}]", exclusiveMinimum=0, maximum=MAX_CHECK_BUDGET_S
-    )
+    budget = exact_number(f"seconds, in (0, {MAX_CHECK_BUDGET_S}]", exclusiveMinimum=0, maximum=MAX_CHECK_BUDGET_S)
     entry: dict[str, Any] = {
         "type": "object",
         "description": "One plant and channel and the requirements on them, or one loop request file and the "
@@ -138,7 +136,12 @@ def _check_components() -> dict[str, dict[str, Any]]:
                 "properties": {"time_budget_s": budget, "point_budget_s": budget},
                 "additionalProperties": False,
             },
-            "checks": {"type": "array", "minItems": 1, "maxItems": MAX_CHECK_ENTRIES, "items": schema_ref("CheckEntry")},
+            "checks": {
+                "type": "array",
+                "minItems": 1,
+                "maxItems": MAX_CHECK_ENTRIES,
+                "items": schema_ref("CheckEntry"),
+            },
         },
         "required": ["checks"],
         "additionalProperties": False,

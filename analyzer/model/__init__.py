@@ -42,7 +42,6 @@ from ._pointer import json_pointer, pointer_tokens
 from ._request import (
     MIN_TIME_BUDGET_S,
     OPTION_KEYS,
-    parse_time_budget,
     check_keys,
     check_symmetric,
     is_positive_definite,
@@ -54,6 +53,7 @@ from ._request import (
     parse_matrix,
     parse_request,
     parse_system,
+    parse_time_budget,
     require_assumption_1,
 )
 from ._types import (

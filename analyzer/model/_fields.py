@@ -89,8 +89,6 @@ MAX_CHECK_ENTRIES = 1000
 #: Longest budget of a whole check file (its ``time_budget_s`` and ``point_budget_s``), in seconds.
 MAX_CHECK_BUDGET_S = 86400
 
-_POSITIVE = {"minimum": 0, "exclusive_minimum": True}
-
 OPTION_FIELDS: tuple[OptionField, ...] = (
     OptionField(
         "",
@@ -159,7 +157,8 @@ OPTION_FIELDS: tuple[OptionField, ...] = (
         "A target T; the report's trace_target gives the smallest arrival probability at which the certified "
         "upper bound trace(V_bar) is at most T (one Bernoulli packet; bisection, V_bar decreases with lambda: "
         "Sinopoli et al. 2004).",
-        **_POSITIVE,
+        minimum=0,
+        exclusive_minimum=True,
     ),
     OptionField(
         "bounds",
@@ -232,7 +231,8 @@ OPTION_FIELDS: tuple[OptionField, ...] = (
         "number_list",
         "Positive numbers M; the report's stationary.outage gives P(trace P > M) with a 95% interval for each.",
         max_items=20,
-        **_POSITIVE,
+        minimum=0,
+        exclusive_minimum=True,
     ),
     OptionField(
         "simulate",
@@ -242,7 +242,14 @@ OPTION_FIELDS: tuple[OptionField, ...] = (
         "outage P(trace P > M) is at most epsilon, with the bracket where its 95% interval straddles epsilon (one "
         "Bernoulli packet; bisection over lambda with common random numbers; estimated, not certified).",
         properties=(
-            OptionField("simulate.outage_target", "threshold", "number", "The threshold M of trace P.", **_POSITIVE),
+            OptionField(
+                "simulate.outage_target",
+                "threshold",
+                "number",
+                "The threshold M of trace P.",
+                minimum=0,
+                exclusive_minimum=True,
+            ),
             OptionField(
                 "simulate.outage_target",
                 "epsilon",

@@ -84,7 +84,11 @@ def parse_outage_target(request: Request) -> OutageTargetSpec | None:
     e = parse_number(raw["epsilon"], f"{FIELD}/epsilon")
     if not _TARGET.prop("epsilon").admits(e):
         raise InvalidInput(f"{FIELD}/epsilon", "epsilon must lie strictly between 0 and 1")
-    tol = parse_number(raw["tolerance"], f"{FIELD}/tolerance") if "tolerance" in raw else _TARGET.prop("tolerance").default
+    tol = (
+        parse_number(raw["tolerance"], f"{FIELD}/tolerance")
+        if "tolerance" in raw
+        else _TARGET.prop("tolerance").default
+    )
     if not _TARGET.prop("tolerance").admits(tol):
         raise InvalidInput(f"{FIELD}/tolerance", "tolerance must lie in (0, 1/4]")
     ch = request.channel

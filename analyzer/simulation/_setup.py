@@ -224,7 +224,9 @@ def parse_options(request: Request, limits: SimulationLimits = DEFAULT_SIMULATIO
     steps = _int_option(raw, "steps", limits.default_steps, limits.max_steps)
     # The defaults (200 steps, 10^4 trajectories) exceed the default work cap of 10^6
     # trajectory-steps, so an unspecified count shrinks to what the cap allows.
-    fitting = max(int(_TRAJECTORIES.minimum or 0), min(limits.default_trajectories, limits.max_trajectory_steps // (steps or 1)))
+    fitting = max(
+        int(_TRAJECTORIES.minimum or 0), min(limits.default_trajectories, limits.max_trajectory_steps // (steps or 1))
+    )
     trajectories = _int_option(raw, "trajectories", fitting)
     seed = _int_option(raw, "seed", int(_SEED.default))
     exact_steps = _int_option(raw, "exact_steps", _EXACT_STEPS.default)

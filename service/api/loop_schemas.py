@@ -4,9 +4,9 @@ from __future__ import annotations
 
 from typing import Any
 
-from ..._version import __version__
 from kfio.model import option_fields
 
+from ..._version import __version__
 from .schemas import COMPONENTS, SENSORS, option_schema, options_group_schema, schema_ref
 
 LOOP_EXAMPLE: dict[str, Any] = {
