@@ -25,20 +25,14 @@ import sys
 from pathlib import Path
 from typing import Any, Sequence
 
-from .api.schemas import COMPONENTS, NUMBER_PATTERN
+from kfio.model import MAX_CHECK_BUDGET_S, MAX_CHECK_ENTRIES
+
+from .api.schemas import COMPONENTS, exact_number
 
 DIALECT = "https://json-schema.org/draft/2020-12/schema"
 PACKAGE_DIR = Path(__file__).resolve().parent / "schemas"
 
 _COMPONENT_REF = "#/components/schemas/"
-
-
-def _exact(description: str, **bounds: Any) -> dict[str, Any]:
-    """An exact number (JSON number or its text) with numeric ``bounds`` on the JSON-number form."""
-    return {
-        "description": description,
-        "anyOf": [{"type": "number", **bounds}, {"type": "string", "pattern": NUMBER_PATTERN, "maxLength": 816}],
-    }
 
 
 def _check_components() -> dict[str, dict[str, Any]]:
@@ -47,27 +41,27 @@ def _check_components() -> dict[str, dict[str, Any]]:
 
     requirements: dict[str, Any] = {
         "verdict": {"enum": list(VERDICTS), "description": "the exact verdict the entry must have"},
-        "margin": _exact(
+        "margin": exact_number(
             "m in [0, 1): the worst rate max_k |alpha_k|^2 sigma_k must be at most 1 - m", minimum=0, exclusiveMaximum=1
         ),
-        "critical_arrival_probability_at_most": _exact(
+        "critical_arrival_probability_at_most": exact_number(
             "the exact critical arrival probability must be at most this (one Bernoulli packet)", minimum=0, maximum=1
         ),
-        "tail_exponent_above": _exact(
+        "tail_exponent_above": exact_number(
             "the tail exponent kappa must exceed this (2: finite variance)", exclusiveMinimum=0
         ),
-        "trace_V_bar_at_most": _exact(
+        "trace_V_bar_at_most": exact_number(
             "trace(V_bar), the certified upper bound of lim E[P], must be at most this (needs Q and R)",
             exclusiveMinimum=0,
         ),
         "loop_verdict": {"enum": list(VERDICTS), "description": "the exact mean-square verdict the loop must have"},
-        "loop_cost_at_most": _exact(
+        "loop_cost_at_most": exact_number(
             "the loop's exact stationary cost lim E[x'Wx + a'Ua] must be at most this", exclusiveMinimum=0
         ),
-        "critical_sensor_arrival_probability_at_most": _exact(
+        "critical_sensor_arrival_probability_at_most": exact_number(
             "the loop's exact critical sensor arrival probability must be at most this", minimum=0, maximum=1
         ),
-        "critical_actuator_arrival_probability_at_most": _exact(
+        "critical_actuator_arrival_probability_at_most": exact_number(
             "the loop's exact critical actuator arrival probability must be at most this", minimum=0, maximum=1
         ),
         "outage": {
@@ -76,8 +70,8 @@ def _check_components() -> dict[str, dict[str, Any]]:
             "be at most epsilon (Monte Carlo evidence; needs Q and R); steps * trajectories is capped by the "
             "simulation limits",
             "properties": {
-                "threshold": _exact("M > 0", exclusiveMinimum=0),
-                "epsilon": _exact("epsilon in (0, 1)", exclusiveMinimum=0, exclusiveMaximum=1),
+                "threshold": exact_number("M > 0", exclusiveMinimum=0),
+                "epsilon": exact_number("epsilon in (0, 1)", exclusiveMinimum=0, exclusiveMaximum=1),
                 "trajectories": {"type": "integer", "minimum": 2},
                 "steps": {"type": "integer", "minimum": 1},
                 "seed": {"type": "integer", "minimum": 0},
@@ -87,7 +81,7 @@ def _check_components() -> dict[str, dict[str, Any]]:
         },
     }
     assert set(requirements) == set(COMMAND_OF) and set(requirements["outage"]["properties"]) == set(OUTAGE_KEYS)
-    budget = _exact("seconds, in (0, 86400]", exclusiveMinimum=0, maximum=86400)
+    budget = exact_number(f"seconds, in (0, {MAX_CHECK_BUDGET_S}]", exclusiveMinimum=0, maximum=MAX_CHECK_BUDGET_S)
     entry: dict[str, Any] = {
         "type": "object",
         "description": "One plant and channel and the requirements on them, or one loop request file and the "
@@ -109,7 +103,7 @@ def _check_components() -> dict[str, dict[str, Any]]:
                 "a channel: the channel fitted to it (kfio fit), verdict judged for the whole confidence region",
             },
             "level": {
-                **_exact("with trace: the joint confidence level, in (0, 1) (default 0.95)"),
+                **exact_number("with trace: the joint confidence level, in (0, 1) (default 0.95)"),
             },
             "loop": {
                 "type": "string",
@@ -142,7 +136,12 @@ def _check_components() -> dict[str, dict[str, Any]]:
                 "properties": {"time_budget_s": budget, "point_budget_s": budget},
                 "additionalProperties": False,
             },
-            "checks": {"type": "array", "minItems": 1, "maxItems": 1000, "items": schema_ref("CheckEntry")},
+            "checks": {
+                "type": "array",
+                "minItems": 1,
+                "maxItems": MAX_CHECK_ENTRIES,
+                "items": schema_ref("CheckEntry"),
+            },
         },
         "required": ["checks"],
         "additionalProperties": False,

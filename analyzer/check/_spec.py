@@ -63,6 +63,8 @@ from typing import Any, Mapping
 from ..errors import InvalidInput
 from ..model import (
     DEFAULT_LIMITS,
+    MAX_CHECK_BUDGET_S,
+    MAX_CHECK_ENTRIES,
     fraction_text,
     json_pointer,
     load_json,
@@ -83,7 +85,7 @@ DEFAULT_POINT_BUDGET_S = 120.0
 
 #: Largest check file, plant file or channel file read (bytes).
 MAX_FILE_BYTES = 1 << 20
-MAX_ENTRIES = 1000
+MAX_ENTRIES = MAX_CHECK_ENTRIES
 
 
 @dataclass(frozen=True)
@@ -319,8 +321,8 @@ def _budget(opts: Mapping[str, Any], key: str, default: float) -> float:
     if key not in opts:
         return default
     value = parse_number(opts[key], f"/options/{key}")
-    if not 0 < value <= 86400:
-        raise InvalidInput(f"/options/{key}", "must be in (0, 86400] seconds")
+    if not 0 < value <= MAX_CHECK_BUDGET_S:
+        raise InvalidInput(f"/options/{key}", f"must be in (0, {MAX_CHECK_BUDGET_S}] seconds")
     return float(value)
 
 

@@ -13,10 +13,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ..errors import InvalidInput
-from ..model import OPTION_KEYS, MarkovChannel, Request, option_group
+from ..model import OPTION_KEYS, MarkovChannel, Request, option_field, option_group
 
+_GE_GRID = option_field("analyze", "ge_grid")
 #: Largest ``ge_grid``: 101 x 101 exact labels stay within a second or two.
-MAX_GE_GRID = 101
+MAX_GE_GRID = int(_GE_GRID.maximum or 0)
+MIN_GE_GRID = int(_GE_GRID.minimum or 0)
 
 
 @dataclass(frozen=True)
@@ -37,8 +39,8 @@ def analyze_options(request: Request) -> AnalyzeOptions:
     grid = raw.get("ge_grid")
     if grid is not None:
         where = "/options/analyze/ge_grid"
-        if isinstance(grid, bool) or not isinstance(grid, int) or not 2 <= grid <= MAX_GE_GRID:
-            raise InvalidInput(where, f"ge_grid must be an integer from 2 to {MAX_GE_GRID}")
+        if isinstance(grid, bool) or not isinstance(grid, int) or not MIN_GE_GRID <= grid <= MAX_GE_GRID:
+            raise InvalidInput(where, f"ge_grid must be an integer from {MIN_GE_GRID} to {MAX_GE_GRID}")
         if not isinstance(request.channel, MarkovChannel) or request.channel.model != "gilbert_elliott":
             raise InvalidInput(where, "ge_grid needs a single gilbert_elliott channel")
     pointer = raw.get("critical_parameter")

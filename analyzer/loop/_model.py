@@ -37,7 +37,6 @@ from typing import Any, Mapping
 from ..errors import InvalidInput
 from ..model import (
     DEFAULT_LIMITS,
-    MIN_TIME_BUDGET_S,
     Channel,
     Limits,
     MarkovChannel,
@@ -46,22 +45,25 @@ from ..model import (
     check_symmetric,
     is_psd,
     load_json,
+    option_field,
+    option_fields,
     parse_channel,
     parse_markov_channel,
     parse_matrix,
-    parse_number,
     parse_system,
+    parse_time_budget,
     value_text,
 )
 from ..model import SystemRecord as System
 
 _TOP_KEYS = {"system", "channel", "actuator_channel", "controller", "cost", "options"}
-_LOOP_OPTIONS = {"protocol", "on_loss", "region"}
-PROTOCOLS = ("tcp", "udp")
-ON_LOSS = ("zero", "hold")
+_LOOP_OPTIONS = {f.name for f in option_fields("loop")}
+PROTOCOLS = option_field("loop", "protocol").enum
+ON_LOSS = option_field("loop", "on_loss").enum
 FORMS = ("predictor", "filter")
-#: Largest grid of ``options.loop.region``.
-MAX_REGION_POINTS = 41
+_REGION = option_field("loop", "region")
+#: Smallest and largest grid of ``options.loop.region``.
+MIN_REGION_POINTS, MAX_REGION_POINTS = int(_REGION.minimum or 0), int(_REGION.maximum or 0)
 
 
 @dataclass(frozen=True)
@@ -218,34 +220,30 @@ def parse_loop_request(obj: Any, limits: Limits = DEFAULT_LIMITS) -> LoopRequest
     if "cost" in obj:
         W, U = _weights(obj["cost"], "/cost", n, m, limits)
 
-    protocol, on_loss, budget, region = "tcp", "zero", None, None
+    protocol, on_loss = option_field("loop", "protocol").default, option_field("loop", "on_loss").default
+    budget, region = None, None
     if "options" in obj:
         opts = check_keys(obj["options"], "/options", {"loop", "time_budget_s"}, set())
         if "time_budget_s" in opts:
-            t = parse_number(opts["time_budget_s"], "/options/time_budget_s", limits.max_digits)
-            if not MIN_TIME_BUDGET_S <= t <= 3600:
-                raise InvalidInput(
-                    "/options/time_budget_s", f"time_budget_s must be in [{float(MIN_TIME_BUDGET_S):g}, 3600] seconds"
-                )
-            budget = float(t)
+            budget = parse_time_budget(opts["time_budget_s"], limits)
         if "loop" in opts:
             lo: Mapping[str, Any] = check_keys(opts["loop"], "/options/loop", _LOOP_OPTIONS, set())
-            protocol = lo.get("protocol", "tcp")
+            protocol = lo.get("protocol", protocol)
             if protocol not in PROTOCOLS:
                 raise InvalidInput(
                     "/options/loop/protocol", f"protocol must be 'tcp' or 'udp'; got {value_text(protocol)}"
                 )
-            on_loss = lo.get("on_loss", "zero")
+            on_loss = lo.get("on_loss", on_loss)
             if on_loss not in ON_LOSS:
                 raise InvalidInput(
                     "/options/loop/on_loss", f"on_loss must be 'zero' or 'hold'; got {value_text(on_loss)}"
                 )
             if "region" in lo:
                 region = lo["region"]
-                if isinstance(region, bool) or not isinstance(region, int) or not 2 <= region <= MAX_REGION_POINTS:
+                if isinstance(region, bool) or not isinstance(region, int) or not _REGION.admits(region):
                     raise InvalidInput(
-                        "/options/loop/region",
-                        f"region must be an integer number of points in [2, {MAX_REGION_POINTS}]",
+                        _REGION.pointer,
+                        f"region must be an integer number of points in [{MIN_REGION_POINTS}, {MAX_REGION_POINTS}]",
                     )
     req = LoopRequest(
         system,

@@ -61,6 +61,15 @@ def _decimal_text_to_fraction(text: str, field: str, max_digits: int) -> Fractio
     return -value if sign == "-" else value
 
 
+def number_text_limit(max_digits: int) -> int:
+    """Most characters of a number written as text: ``4 * max_digits + 16``.
+
+    Two parts of at most ``max_digits`` digits, their exponents (at most
+    ``4 * max_digits`` in magnitude), signs and marks.
+    """
+    return 4 * max_digits + 16
+
+
 def parse_number(value: Any, field: str, max_digits: int = 200) -> Fraction:
     """Return the exact rational that ``value`` denotes.
 
@@ -104,8 +113,8 @@ def parse_number(value: Any, field: str, max_digits: int = 200) -> Fraction:
         value = str(value)
     if not isinstance(value, str):
         raise InvalidInput(field, f"expected a number, got a {_json_type(value)}")
-    if len(value) > 4 * max_digits + 16:
-        raise LimitExceeded(field, f"the text of a number may have at most {4 * max_digits + 16} characters")
+    if len(value) > number_text_limit(max_digits):
+        raise LimitExceeded(field, f"the text of a number may have at most {number_text_limit(max_digits)} characters")
     m = _NUMBER_RE.fullmatch(value)
     if m is None:
         raise InvalidInput(

@@ -14,29 +14,11 @@ from typing import Any, Iterable, Mapping, Optional
 
 from ..errors import InvalidInput, LimitExceeded
 from ._exact import load_json, parse_number, value_text
+from ._fields import MAX_SENSOR_NAME, OPTION_KEYS, option_field, option_fields
 from ._limits import DEFAULT_LIMITS, Limits
 from ._pointer import json_pointer
 from ._types import Channel, MarkovChannel, Matrix, PerSensorChannel, Request, Sensor, System
 
-#: Option groups a request may carry, one per command, and the keys of each.  Every command
-#: refuses an unknown key in any group (the contract says so), and validates the values of its own.
-OPTION_KEYS: dict[str, frozenset[str]] = {
-    "analyze": frozenset({"ge_grid", "critical_parameter"}),
-    "bounds": frozenset({"tolerance", "horizon", "grid", "arrival_probability", "trace_target", "sdp_cross_check"}),
-    "simulate": frozenset(
-        {
-            "steps",
-            "trajectories",
-            "seed",
-            "P0",
-            "exact_steps",
-            "initial_channel",
-            "percentiles",
-            "outage_thresholds",
-            "outage_target",
-        }
-    ),
-}
 OPTION_GROUPS = tuple(OPTION_KEYS)
 
 _TOP_KEYS = {"system", "channel", "options"}
@@ -280,8 +262,10 @@ def _parse_sensors(obj: Any, where: str, p: int, limits: Limits) -> tuple[Sensor
     for i, s in enumerate(obj):
         s = check_keys(s, f"{where}/{i}", {"name", "rows"}, {"name", "rows"})
         name = s["name"]
-        if not isinstance(name, str) or not name or len(name) > 64:
-            raise InvalidInput(f"{where}/{i}/name", "a sensor name must be a non-empty string of at most 64 characters")
+        if not isinstance(name, str) or not name or len(name) > MAX_SENSOR_NAME:
+            raise InvalidInput(
+                f"{where}/{i}/name", f"a sensor name must be a non-empty string of at most {MAX_SENSOR_NAME} characters"
+            )
         if name in names:
             raise InvalidInput(f"{where}/{i}/name", f"sensor name {name!r} is used twice")
         names.add(name)
@@ -381,8 +365,20 @@ def parse_channel(obj: Any, system: System, limits: Limits = DEFAULT_LIMITS, whe
     return parse_markov_channel(obj, limits, where)
 
 
+_TIME_BUDGET = option_field("", "time_budget_s")
 #: Smallest ``options.time_budget_s`` (seconds): less cannot even hand a request to a worker.
-MIN_TIME_BUDGET_S = Fraction(1, 100)
+MIN_TIME_BUDGET_S = Fraction(_TIME_BUDGET.minimum or 0)
+
+
+def parse_time_budget(value: Any, limits: Limits = DEFAULT_LIMITS) -> float:
+    """``options.time_budget_s`` in seconds, in the range of :data:`kfio.model.OPTION_FIELDS`."""
+    t = parse_number(value, _TIME_BUDGET.pointer, limits.max_digits)
+    if not _TIME_BUDGET.admits(t):
+        raise InvalidInput(
+            _TIME_BUDGET.pointer,
+            f"time_budget_s must be in [{float(MIN_TIME_BUDGET_S):g}, {_TIME_BUDGET.maximum}] seconds",
+        )
+    return float(t)
 
 
 def parse_request(obj: Any, limits: Limits = DEFAULT_LIMITS, *, system: System | None = None) -> Request:
@@ -405,16 +401,10 @@ def parse_request(obj: Any, limits: Limits = DEFAULT_LIMITS, *, system: System |
     options: dict[str, Mapping[str, Any]] = {}
     time_budget = None
     if "options" in obj:
-        opts = check_keys(obj["options"], "/options", set(OPTION_GROUPS) | {"time_budget_s"}, set())
+        opts = check_keys(obj["options"], "/options", set(OPTION_GROUPS) | {f.name for f in option_fields("")}, set())
         for key, val in opts.items():
             if key == "time_budget_s":
-                t = parse_number(val, "/options/time_budget_s", limits.max_digits)
-                if not MIN_TIME_BUDGET_S <= t <= 3600:
-                    raise InvalidInput(
-                        "/options/time_budget_s",
-                        f"time_budget_s must be in [{float(MIN_TIME_BUDGET_S):g}, 3600] seconds",
-                    )
-                time_budget = float(t)
+                time_budget = parse_time_budget(val, limits)
             elif not isinstance(val, dict):
                 raise InvalidInput(f"/options/{key}", "expected a JSON object")
             else:

@@ -21,6 +21,7 @@ from ..model import (
     Packet,
     Request,
     json_pointer,
+    option_field,
     option_group,
     packets_of,
     parse_integer,
@@ -29,15 +30,20 @@ from ..model import (
 from ._phat import max_horizon
 from ._vbar_sdp import COMPILED_MAX_N
 
-DEFAULT_TOLERANCE = 1e-6
-MIN_TOLERANCE, MAX_TOLERANCE = 1e-9, 1e-1
-DEFAULT_HORIZON = 8
-MIN_GRID, MAX_GRID = 2, 41
+_TOLERANCE = option_field("bounds", "tolerance")
+DEFAULT_TOLERANCE = float(_TOLERANCE.default)
+MIN_TOLERANCE, MAX_TOLERANCE = float(_TOLERANCE.minimum or 0), float(_TOLERANCE.maximum or 0)
+_HORIZON = option_field("bounds", "horizon")
+DEFAULT_HORIZON = int(_HORIZON.default)
+MIN_HORIZON = int(_HORIZON.minimum or 0)
+_GRID = option_field("bounds", "grid")
+MIN_GRID, MAX_GRID = int(_GRID.minimum or 0), int(_GRID.maximum or 0)
 #: The stability LMI has ``n (2^m + 1)`` rows for ``n`` states and ``m`` packets.
 MAX_LMI_ROWS = 200
+_SDP = option_field("bounds", "sdp_cross_check")
 #: Values of ``options.bounds.sdp_cross_check``; ``"auto"`` solves the ``V_bar`` SDP up to
 #: :data:`SDP_AUTO_MAX_N` states.
-SDP_CROSS_CHECK = ("auto", "always", "never")
+SDP_CROSS_CHECK = _SDP.enum
 #: Largest ``n`` at which ``"auto"`` solves the ``V_bar`` SDP (the compiled problems' limit,
 #: :data:`kfio.riccati_bounds._vbar_sdp.COMPILED_MAX_N`; 20 s of Clarabel at ``n = 40``).
 SDP_AUTO_MAX_N = COMPILED_MAX_N
@@ -222,8 +228,8 @@ def parse_bounds_options(request: Request, flags: Mapping[str, Any] | None = Non
             raise InvalidInput(
                 at, f"P_hat_N (Rohr, Marelli and Fu 2010) is defined for one packet; this request has {m} sensors"
             )
-        if h < 1:
-            raise InvalidInput(at, f"horizon must be at least 1{_source('horizon', flags)}")
+        if h < MIN_HORIZON:
+            raise InvalidInput(at, f"horizon must be at least {MIN_HORIZON}{_source('horizon', flags)}")
         if h > limit:
             raise LimitExceeded(
                 at,
@@ -241,7 +247,7 @@ def parse_bounds_options(request: Request, flags: Mapping[str, Any] | None = Non
             raise LimitExceeded(at, f"grid must lie in [{MIN_GRID}, {MAX_GRID}]; got {k}{_source('grid', flags)}")
         grid = k
 
-    sdp = "auto"
+    sdp = str(_SDP.default)
     if "sdp_cross_check" in merged:
         sdp = merged["sdp_cross_check"]
         if not isinstance(sdp, str) or sdp not in SDP_CROSS_CHECK:

@@ -27,10 +27,11 @@ import numpy as np
 from .._budget import Budget
 from .._reporting import ReportPart
 from ..errors import InvalidInput
-from ..model import Request, parse_number
+from ..model import Request, option_field, parse_number
 from ._riccati import one_packet_model, solve_v_bar, spectral_radius
 
-FIELD = "/options/bounds/trace_target"
+_TRACE_TARGET = option_field("bounds", "trace_target")
+FIELD = _TRACE_TARGET.pointer
 
 
 def parse_trace_target(request: Request) -> float | None:
@@ -45,7 +46,7 @@ def parse_trace_target(request: Request) -> float | None:
     if raw is None:
         return None
     value = parse_number(raw, FIELD)
-    if value <= 0:
+    if not _TRACE_TARGET.admits(value):
         raise InvalidInput(FIELD, "trace_target must be positive")
     return float(value)
 

@@ -39,13 +39,14 @@ import numpy as np
 from .._budget import Budget
 from .._reporting import ReportPart
 from ..errors import InvalidInput
-from ..model import Request, parse_number
+from ..model import Request, option_field, parse_number
 from ._setup import SimSystem, SimulateOptions
 from ._stationary import wilson
 
-FIELD = "/options/simulate/outage_target"
-DEFAULT_TOLERANCE = 1 / 256
-_KEYS = ("threshold", "epsilon", "tolerance")
+_TARGET = option_field("simulate", "outage_target")
+FIELD = _TARGET.pointer
+DEFAULT_TOLERANCE = float(_TARGET.prop("tolerance").default)
+_KEYS = tuple(p.name for p in _TARGET.properties)
 
 
 @dataclass(frozen=True)
@@ -74,17 +75,21 @@ def parse_outage_target(request: Request) -> OutageTargetSpec | None:
     for key in raw:
         if key not in _KEYS:
             raise InvalidInput(f"{FIELD}/{str(key)[:64]}", f"unknown key; allowed: {', '.join(_KEYS)}")
-    for key in ("threshold", "epsilon"):
+    for key in _TARGET.required:
         if key not in raw:
             raise InvalidInput(f"{FIELD}/{key}", f"outage_target needs {key!r}")
     m = parse_number(raw["threshold"], f"{FIELD}/threshold")
-    if m <= 0:
+    if not _TARGET.prop("threshold").admits(m):
         raise InvalidInput(f"{FIELD}/threshold", "the outage threshold M must be positive")
     e = parse_number(raw["epsilon"], f"{FIELD}/epsilon")
-    if not 0 < e < 1:
+    if not _TARGET.prop("epsilon").admits(e):
         raise InvalidInput(f"{FIELD}/epsilon", "epsilon must lie strictly between 0 and 1")
-    tol = parse_number(raw["tolerance"], f"{FIELD}/tolerance") if "tolerance" in raw else Fraction(1, 256)
-    if not 0 < tol <= Fraction(1, 4):
+    tol = (
+        parse_number(raw["tolerance"], f"{FIELD}/tolerance")
+        if "tolerance" in raw
+        else _TARGET.prop("tolerance").default
+    )
+    if not _TARGET.prop("tolerance").admits(tol):
         raise InvalidInput(f"{FIELD}/tolerance", "tolerance must lie in (0, 1/4]")
     ch = request.channel
     if getattr(ch, "model", None) != "bernoulli" or request.system.sensors and len(request.system.sensors) > 1:

@@ -55,6 +55,7 @@ from ..model import (
     Request,
     check_symmetric,
     is_psd,
+    option_field,
     option_group,
     packets_of,
     parse_integer,
@@ -63,8 +64,13 @@ from ..model import (
 )
 
 OPTIONS_FIELD = "/options/simulate"
-PERCENTILES = (50, 90, 99)
-INITIAL_CHANNELS = ("stationary", "all_arrived", "all_lost")
+_STEPS = option_field("simulate", "steps")
+_TRAJECTORIES = option_field("simulate", "trajectories")
+_SEED = option_field("simulate", "seed")
+_EXACT_STEPS = option_field("simulate", "exact_steps")
+_INITIAL = option_field("simulate", "initial_channel")
+PERCENTILES: tuple[int, ...] = tuple(option_field("simulate", "percentiles").default)
+INITIAL_CHANNELS = _INITIAL.enum
 _KEYS = OPTION_KEYS["simulate"]
 
 
@@ -86,12 +92,12 @@ class SimulationLimits:
         Values used when the request gives none.
     """
 
-    max_steps: int = 10_000
+    max_steps: int = int(_STEPS.maximum or 0)
     max_trajectory_steps: int = 1_000_000
     max_sequences: int = 1 << 20
     max_batch_floats: int = 1 << 25
-    default_steps: int = 200
-    default_trajectories: int = 10_000
+    default_steps: int = int(_STEPS.default)
+    default_trajectories: int = int(_TRAJECTORIES.default)
 
 
 DEFAULT_SIMULATION_LIMITS = SimulationLimits()
@@ -166,10 +172,13 @@ def sim_system(request: Request) -> SimSystem:
     )
 
 
-def _int_option(raw: Mapping[str, Any], key: str, default: int | None, lo: int, hi: int | None) -> int | None:
+def _int_option(raw: Mapping[str, Any], key: str, default: int | None, hi: int | None = None) -> int | None:
+    """The integer option ``key`` in its table range (``hi``, when given, a deployment's own upper end)."""
     if key not in raw:
         return default
-    return parse_integer(raw[key], f"{OPTIONS_FIELD}/{key}", lo, hi, key)
+    f = option_field("simulate", key)
+    upper = hi if hi is not None else None if f.maximum is None else int(f.maximum)
+    return parse_integer(raw[key], f.pointer, int(f.minimum or 0), upper, key)
 
 
 def _parse_p0(raw: Any, n: int) -> Matrix:
@@ -212,13 +221,15 @@ def parse_options(request: Request, limits: SimulationLimits = DEFAULT_SIMULATIO
     raw = option_group(request, "simulate", _KEYS)
     if "percentiles" in raw and raw["percentiles"] != list(PERCENTILES):
         raise InvalidInput(f"{OPTIONS_FIELD}/percentiles", f"percentiles are fixed at {list(PERCENTILES)}")
-    steps = _int_option(raw, "steps", limits.default_steps, 1, limits.max_steps)
+    steps = _int_option(raw, "steps", limits.default_steps, limits.max_steps)
     # The defaults (200 steps, 10^4 trajectories) exceed the default work cap of 10^6
     # trajectory-steps, so an unspecified count shrinks to what the cap allows.
-    fitting = max(2, min(limits.default_trajectories, limits.max_trajectory_steps // (steps or 1)))
-    trajectories = _int_option(raw, "trajectories", fitting, 2, None)
-    seed = _int_option(raw, "seed", 0, 0, (1 << 64) - 1)
-    exact_steps = _int_option(raw, "exact_steps", None, 0, None)
+    fitting = max(
+        int(_TRAJECTORIES.minimum or 0), min(limits.default_trajectories, limits.max_trajectory_steps // (steps or 1))
+    )
+    trajectories = _int_option(raw, "trajectories", fitting)
+    seed = _int_option(raw, "seed", int(_SEED.default))
+    exact_steps = _int_option(raw, "exact_steps", _EXACT_STEPS.default)
     assert steps is not None and trajectories is not None and seed is not None
     if steps * trajectories > limits.max_trajectory_steps:
         raise LimitExceeded(
@@ -235,7 +246,7 @@ def parse_options(request: Request, limits: SimulationLimits = DEFAULT_SIMULATIO
         )
     if exact_steps is not None:
         check_exact_steps(exact_steps, len(packets_of(request)), limits, f"{OPTIONS_FIELD}/exact_steps")
-    initial = raw.get("initial_channel", "stationary")
+    initial = raw.get("initial_channel", _INITIAL.default)
     if initial not in INITIAL_CHANNELS:
         raise InvalidInput(
             f"{OPTIONS_FIELD}/initial_channel", f"initial_channel must be one of {list(INITIAL_CHANNELS)}"

@@ -42,13 +42,14 @@ import numpy as np
 from .._reporting import ReportPart
 from .._verdicts import Verdict
 from ..errors import InvalidInput, LimitExceeded
-from ..model import Request, parse_number
+from ..model import Request, option_field, parse_number
 from ._order import order_indices, select_in_place
 
 Z95 = 1.959963984540054
 QUANTILES = (0.5, 0.9, 0.99, 0.999)
-MAX_THRESHOLDS = 20
-FIELD = "/options/simulate/outage_thresholds"
+_THRESHOLDS = option_field("simulate", "outage_thresholds")
+MAX_THRESHOLDS = int(_THRESHOLDS.max_items or 0)
+FIELD = _THRESHOLDS.pointer
 
 
 def parse_thresholds(request: Request) -> tuple[float, ...]:
@@ -69,7 +70,7 @@ def parse_thresholds(request: Request) -> tuple[float, ...]:
     out = []
     for i, v in enumerate(raw):
         x = parse_number(v, f"{FIELD}/{i}")
-        if x <= 0:
+        if not _THRESHOLDS.admits(x):
             raise InvalidInput(f"{FIELD}/{i}", "an outage threshold must be positive")
         out.append(float(x))
     return tuple(out)

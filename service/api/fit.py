@@ -12,6 +12,9 @@ from typing import Any
 from fastapi import APIRouter, Request
 from fastapi.responses import Response
 
+from kfio.fit import MAX_ORDER
+from kfio.model import MAX_NUMBER_TEXT
+
 from ..._version import __version__
 from .deps import BodyDep, get_body, get_dispatcher
 from .jobs import STATUS_RESPONSE, JobStoreDep, validated
@@ -33,7 +36,7 @@ _LEVEL = {
     "description": "joint confidence level in (0, 1), exact from its decimal text (default 0.95)",
     "anyOf": [
         {"type": "number", "exclusiveMinimum": 0, "exclusiveMaximum": 1},
-        {"type": "string", "maxLength": 816},
+        {"type": "string", "maxLength": MAX_NUMBER_TEXT},
     ],
 }
 
@@ -56,11 +59,16 @@ FIT_COMPONENTS: dict[str, dict[str, Any]] = {
                 "enum": ["bernoulli", "gilbert_elliott", "markov"],
                 "description": "fit this model instead of choosing by BIC (markov needs order)",
             },
-            "order": {"type": "integer", "minimum": 2, "maximum": 8, "description": "with model markov: its order"},
+            "order": {
+                "type": "integer",
+                "minimum": 2,
+                "maximum": MAX_ORDER,
+                "description": "with model markov: its order",
+            },
             "max_order": {
                 "type": "integer",
                 "minimum": 0,
-                "maximum": 8,
+                "maximum": MAX_ORDER,
                 "description": "largest Markov order tried (default 4)",
             },
         },
@@ -82,7 +90,7 @@ FIT_COMPONENTS: dict[str, dict[str, Any]] = {
                 ]
             },
             "level": _LEVEL,
-            "max_order": {"type": "integer", "minimum": 0, "maximum": 8},
+            "max_order": {"type": "integer", "minimum": 0, "maximum": MAX_ORDER},
         },
         "required": ["model", "arrivals"],
         "additionalProperties": False,

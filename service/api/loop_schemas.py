@@ -4,8 +4,10 @@ from __future__ import annotations
 
 from typing import Any
 
+from kfio.model import option_fields
+
 from ..._version import __version__
-from .schemas import COMPONENTS, schema_ref
+from .schemas import COMPONENTS, SENSORS, option_schema, options_group_schema, schema_ref
 
 LOOP_EXAMPLE: dict[str, Any] = {
     "system": {"A": [[1.25]], "B": [[1]], "C": [[1]], "Q": [[1]], "R": [[0.5]]},
@@ -49,7 +51,7 @@ LOOP_COMPONENTS: dict[str, dict[str, Any]] = {
                     "C": schema_ref("Matrix"),
                     "Q": schema_ref("Matrix"),
                     "R": schema_ref("Matrix"),
-                    "sensors": {"type": "array", "minItems": 1, "maxItems": 8, "items": schema_ref("Sensor")},
+                    "sensors": SENSORS,
                 },
                 "required": ["A", "B", "C", "Q", "R"],
                 "additionalProperties": False,
@@ -110,23 +112,8 @@ LOOP_COMPONENTS: dict[str, dict[str, Any]] = {
             "options": {
                 "type": "object",
                 "properties": {
-                    "loop": {
-                        "type": "object",
-                        "properties": {
-                            "protocol": {"enum": ["tcp", "udp"]},
-                            "on_loss": {"enum": ["zero", "hold"]},
-                            "region": {
-                                "type": "integer",
-                                "minimum": 2,
-                                "maximum": 41,
-                                "description": "add the exact boundary of the stable region in the (sensor, "
-                                "actuator) arrival-probability plane at this many sensor probabilities "
-                                "(Bernoulli links on both sides)",
-                            },
-                        },
-                        "additionalProperties": False,
-                    },
-                    "time_budget_s": {**schema_ref("ExactNumber"), "description": "seconds, in [0.01, 3600]"},
+                    "loop": options_group_schema("loop", "Options of the loop command."),
+                    **{f.name: option_schema(f) for f in option_fields("")},
                 },
                 "additionalProperties": False,
             },

@@ -1,21 +1,27 @@
-"""Hand-written JSON Schemas of the HTTP contract, with examples from the seeds.
+"""JSON Schemas of the HTTP contract, with examples from the seeds.
 
 The routes read the raw body themselves (numbers must stay exact, so pydantic
 never sees them); these schemas document what :func:`kfio.parse_request`
-accepts.  The validator stays the single source of truth: a body that passes
-the schema can still be refused with a 422 naming the field (``A`` not
-square, ``Q`` not semidefinite, ...).
+accepts.  The options and every size limit are rendered from the validator's
+own table (:data:`kfio.model.OPTION_FIELDS`) and :data:`kfio.model.DEFAULT_LIMITS`,
+so a range cannot differ between the two.  The validator stays the single
+source of truth: a body that passes the schema can still be refused with a 422
+naming the field (``A`` not square, ``Q`` not semidefinite, ...).
 """
 
 from __future__ import annotations
 
+from fractions import Fraction
 from typing import Any
 
 from kfio._version import __version__
-from kfio.model import DECIMAL_PATTERN, OPTION_KEYS
+from kfio.model import DECIMAL_PATTERN, DEFAULT_LIMITS, MAX_NUMBER_TEXT, MAX_SENSOR_NAME, OptionField, option_fields
 
 #: The grammar of :func:`kfio.model.parse_number`, from its own pieces: ASCII digits, no whitespace.
 NUMBER_PATTERN = rf"^{DECIMAL_PATTERN}(?:/{DECIMAL_PATTERN})?$"
+
+#: An exact number written as text (its range is the validator's to check).
+NUMBER_TEXT: dict[str, Any] = {"type": "string", "pattern": NUMBER_PATTERN, "maxLength": MAX_NUMBER_TEXT}
 
 
 _KFIO_VERSION = {"type": "string", "description": "The version of kfio that made the report", "examples": [__version__]}
@@ -25,12 +31,94 @@ def schema_ref(name: str) -> dict[str, str]:
     return {"$ref": f"#/components/schemas/{name}"}
 
 
+def json_bound(x: int | Fraction) -> int | float:
+    """A bound of the table as a JSON number: an integer stays one, a fraction becomes its nearest float."""
+    return int(x) if isinstance(x, int) or x.denominator == 1 else float(x)
+
+
+def number_bounds(field: OptionField) -> dict[str, int | float]:
+    """The JSON Schema keywords of ``field``'s range (``minimum``, ``exclusiveMaximum``, ...)."""
+    out: dict[str, int | float] = {}
+    if field.minimum is not None:
+        out["exclusiveMinimum" if field.exclusive_minimum else "minimum"] = json_bound(field.minimum)
+    if field.maximum is not None:
+        out["exclusiveMaximum" if field.exclusive_maximum else "maximum"] = json_bound(field.maximum)
+    return out
+
+
+def exact_number(description: str, **bounds: Any) -> dict[str, Any]:
+    """An exact number (a JSON number or its text) with numeric ``bounds`` on the JSON-number form."""
+    return {"description": description, "anyOf": [{"type": "number", **bounds}, NUMBER_TEXT]}
+
+
+def option_schema(field: OptionField) -> dict[str, Any]:
+    """The JSON Schema of one option of :data:`kfio.model.OPTION_FIELDS`."""
+    out: dict[str, Any]
+    if field.kind == "integer":
+        out = {"type": "integer", **number_bounds(field), "description": field.description}
+    elif field.kind == "number":
+        out = exact_number(field.description, **number_bounds(field))
+    elif field.kind == "enum":
+        out = {"enum": list(field.enum), "description": field.description}
+    elif field.kind == "pointer":
+        out = {"type": "string", "description": field.description}
+    elif field.kind == "matrix":
+        out = {**schema_ref("Matrix"), "description": field.description}
+    elif field.kind == "probability_or_map":
+        out = {
+            "description": field.description,
+            "anyOf": [
+                schema_ref("Probability"),
+                {
+                    "type": "object",
+                    "propertyNames": {"minLength": 1, "maxLength": MAX_SENSOR_NAME},
+                    "minProperties": 1,
+                    "maxProperties": DEFAULT_LIMITS.max_sensors,
+                    "additionalProperties": schema_ref("Probability"),
+                },
+            ],
+        }
+    elif field.kind == "number_list":
+        out = {
+            "type": "array",
+            "minItems": 1,
+            "maxItems": field.max_items,
+            "items": exact_number("one value", **number_bounds(field)),
+            "description": field.description,
+        }
+    elif field.kind == "object":
+        out = {
+            "type": "object",
+            "description": field.description,
+            "properties": {p.name: option_schema(p) for p in field.properties},
+            "required": list(field.required),
+            "additionalProperties": False,
+        }
+    else:  # "fixed": the one value accepted
+        out = {"const": list(field.default), "description": field.description}
+    if field.default is not None and field.kind != "fixed":
+        out["default"] = json_bound(field.default) if isinstance(field.default, Fraction) else field.default
+    return out
+
+
+def options_group_schema(group: str, description: str) -> dict[str, Any]:
+    """The JSON Schema of one option group (``options.<group>``), every key from the table."""
+    return {
+        "type": "object",
+        "description": description,
+        "properties": {f.name: option_schema(f) for f in option_fields(group)},
+        "additionalProperties": False,
+    }
+
+
 def _matrix(description: str) -> dict[str, Any]:
+    # the widest a request may be (kfio analyze); the other commands refuse more states with a 422
+    n = max(DEFAULT_LIMITS.max_analyze_states, DEFAULT_LIMITS.max_states)
     return {
         "type": "array",
         "minItems": 1,
-        "maxItems": 120,  # Limits.max_analyze_states; the other commands refuse more than 40 states (422)
-        "items": {"type": "array", "minItems": 1, "maxItems": 120, "items": schema_ref("ExactNumber")},
+        "maxItems": n,
+        "items": {"type": "array", "minItems": 1, "maxItems": n, "items": schema_ref("ExactNumber")},
         "description": description,
     }
 
@@ -46,6 +134,15 @@ def _channel(
         "additionalProperties": False,
         "examples": [example],
     }
+
+
+#: ``system.sensors``: at most :attr:`kfio.model.Limits.max_sensors` packets.
+SENSORS: dict[str, Any] = {
+    "type": "array",
+    "minItems": 1,
+    "maxItems": DEFAULT_LIMITS.max_sensors,
+    "items": schema_ref("Sensor"),
+}
 
 
 # -- examples: the reference cases of the papers (docs/theory.md) -----------
@@ -234,9 +331,9 @@ COMPONENTS: dict[str, dict[str, Any]] = {
         "description": (
             "An exact number: a JSON number (read as its decimal text, so 1.1 is 11/10, never a binary double), "
             "or a string holding an integer, a decimal such as '1.1e-3' or a fraction such as '11/10'. "
-            "At most 200 digits."
+            f"At most {DEFAULT_LIMITS.max_digits} digits."
         ),
-        "anyOf": [{"type": "number"}, {"type": "string", "pattern": NUMBER_PATTERN, "maxLength": 816}],
+        "anyOf": [{"type": "number"}, NUMBER_TEXT],
         "examples": [1.25, "11/10", "2.5e-1"],
     },
     "Probability": {
@@ -244,14 +341,15 @@ COMPONENTS: dict[str, dict[str, Any]] = {
         "forms). A command may need more (its 422 names the rule).",
         "anyOf": [
             {"type": "number", "minimum": 0, "maximum": 1},
-            {"type": "string", "pattern": NUMBER_PATTERN, "maxLength": 816},
+            NUMBER_TEXT,
         ],
         "examples": [0.5, "9/25"],
     },
     "Matrix": {
         **_matrix(
-            "A non-empty rectangular matrix, as an array of rows. At most 120 states for analyze, "
-            "40 for every other command (a deployment may change both: KFIO_MAX_ANALYZE_STATES, KFIO_MAX_STATES)."
+            f"A non-empty rectangular matrix, as an array of rows. At most {DEFAULT_LIMITS.max_analyze_states} "
+            f"states for analyze, {DEFAULT_LIMITS.max_states} for every other command (a deployment may change "
+            "both: KFIO_MAX_ANALYZE_STATES, KFIO_MAX_STATES)."
         ),
         "examples": [_SEED002_2X2["system"]["A"], [["5/4", 0], [1, "11/10"]]],
     },
@@ -259,7 +357,7 @@ COMPONENTS: dict[str, dict[str, Any]] = {
         "type": "object",
         "description": "A packet: the rows of C (and the block of R) it carries. Sensors partition the rows of C.",
         "properties": {
-            "name": {"type": "string", "minLength": 1, "maxLength": 64},
+            "name": {"type": "string", "minLength": 1, "maxLength": MAX_SENSOR_NAME},
             "rows": {"type": "array", "minItems": 1, "items": {"type": "integer", "minimum": 0}},
         },
         "required": ["name", "rows"],
@@ -282,7 +380,7 @@ COMPONENTS: dict[str, dict[str, Any]] = {
                 "description": "p x p measurement noise covariance, symmetric positive definite (checked exactly by "
                 "the validator, 422 otherwise)",
             },
-            "sensors": {"type": "array", "minItems": 1, "maxItems": 8, "items": schema_ref("Sensor")},
+            "sensors": SENSORS,
         },
         "required": ["A", "C"],
         "additionalProperties": False,
@@ -305,15 +403,15 @@ COMPONENTS: dict[str, dict[str, Any]] = {
     "MarkovChannel": _channel(
         "markov",
         {
-            "order": {"type": "integer", "minimum": 0, "maximum": 10},
+            "order": {"type": "integer", "minimum": 0, "maximum": DEFAULT_LIMITS.max_markov_order},
             "arrival_probability": {
                 "type": "object",
                 "description": "P(arrival | last `order` outcomes), keyed by the history as 0/1 text, oldest first. "
                 "Every key has exactly `order` characters and all 2^order histories are required (the validator "
                 "checks both).",
-                "propertyNames": {"pattern": "^[01]{0,10}$"},
+                "propertyNames": {"pattern": f"^[01]{{0,{DEFAULT_LIMITS.max_markov_order}}}$"},
                 "minProperties": 1,
-                "maxProperties": 1024,
+                "maxProperties": 1 << DEFAULT_LIMITS.max_markov_order,
                 "additionalProperties": schema_ref("Probability"),
             },
         },
@@ -329,9 +427,9 @@ COMPONENTS: dict[str, dict[str, Any]] = {
                 "description": "One independent channel per sensor name (requires system.sensors). The keys must "
                 "be exactly the names in system.sensors, each once (the validator checks it: an unknown or "
                 "missing name is 422).",
-                "propertyNames": {"minLength": 1, "maxLength": 64},
+                "propertyNames": {"minLength": 1, "maxLength": MAX_SENSOR_NAME},
                 "minProperties": 1,
-                "maxProperties": 8,
+                "maxProperties": DEFAULT_LIMITS.max_sensors,
                 "additionalProperties": schema_ref("PacketChannel"),
             }
         },
@@ -357,63 +455,10 @@ COMPONENTS: dict[str, dict[str, Any]] = {
         "type": "object",
         "description": "Per-command options (each command validates its own group) and the time budget.",
         "properties": {
-            "time_budget_s": {
-                "description": "Seconds this request may take, in [0.01, 3600] (an exact number; less cannot even "
-                "reach a worker, and is 422); the deployment's budget caps it.",
-                "anyOf": [
-                    {"type": "number", "minimum": 0.01, "maximum": 3600},
-                    {"type": "string", "pattern": NUMBER_PATTERN, "maxLength": 816},
-                ],
-            },
-            "analyze": {
-                "type": "object",
-                "description": "Options of the analyze command.",
-                "properties": {
-                    "ge_grid": {
-                        "type": "integer",
-                        "minimum": 2,
-                        "maximum": 101,
-                        "description": (
-                            "Gilbert-Elliott channel only: cells per axis of the exact (failure rate, recovery "
-                            "rate) stability map added to the report (gilbert_elliott_region.map)."
-                        ),
-                    },
-                    "critical_parameter": {
-                        "type": "string",
-                        "description": (
-                            "A JSON pointer into channel naming one conditional arrival probability "
-                            "(/channel/recovery_rate, /channel/failure_rate, /channel/arrival_probability/01, "
-                            "/channel/channels/<sensor>/...); the report's critical_parameter gives its exact "
-                            "critical value(s) with the other parameters fixed."
-                        ),
-                    },
-                },
-                "additionalProperties": False,
-            },
-            "bounds": {
-                "type": "object",
-                "description": (
-                    "Options of the bounds command.  trace_target: a positive number T; the report's trace_target "
-                    "gives the smallest arrival probability at which the certified upper bound trace(V_bar) is at "
-                    "most T (one Bernoulli packet; bisection, V_bar decreases with lambda: Sinopoli et al. 2004).  "
-                    'sdp_cross_check: "auto" (default: solve the V_bar SDP cross-check up to 12 states, skip it '
-                    'above, where V_bar comes from the MARE iteration alone), "always" or "never".'
-                ),
-                "propertyNames": {"enum": sorted(OPTION_KEYS["bounds"])},
-            },
-            "simulate": {
-                "type": "object",
-                "description": (
-                    "Options of the simulate command.  outage_thresholds: a list of up to 20 positive numbers M; "
-                    "the report's stationary.outage gives P(trace P > M) with a 95% interval for each.  "
-                    'outage_target: {"threshold": M, "epsilon": e, "tolerance": optional, default 1/256}; the '
-                    "report's outage_target gives the smallest arrival probability at which the estimated "
-                    "stationary outage P(trace P > M) is at most e, with the bracket where its 95% interval "
-                    "straddles e (one Bernoulli packet; bisection over lambda with common random numbers; "
-                    "estimated, not certified)."
-                ),
-                "propertyNames": {"enum": sorted(OPTION_KEYS["simulate"])},
-            },
+            **{f.name: option_schema(f) for f in option_fields("")},
+            "analyze": options_group_schema("analyze", "Options of the analyze command."),
+            "bounds": options_group_schema("bounds", "Options of the bounds command."),
+            "simulate": options_group_schema("simulate", "Options of the simulate command."),
         },
         "additionalProperties": False,
         "examples": [{"time_budget_s": 10}],
