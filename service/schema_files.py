@@ -27,8 +27,6 @@ from typing import Any, Sequence
 
 from kfio.model import MAX_CHECK_BUDGET_S, MAX_CHECK_ENTRIES
 
-from .api.schemas import COMPONENTS, exact_number
-
 DIALECT = "https://json-schema.org/draft/2020-12/schema"
 PACKAGE_DIR = Path(__file__).resolve().parent / "schemas"
 
@@ -38,6 +36,8 @@ _COMPONENT_REF = "#/components/schemas/"
 def _check_components() -> dict[str, dict[str, Any]]:
     """The check file, and the plant and channel files it names (see docs/check.md)."""
     from kfio.check import CHECK_ENTRY_KEYS, CHECK_OPTION_KEYS, CHECK_TOP_KEYS, COMMAND_OF, OUTAGE_KEYS, VERDICTS
+
+    from .api.schemas import exact_number
 
     requirements: dict[str, Any] = {
         "verdict": {"enum": list(VERDICTS), "description": "the exact verdict the entry must have"},
@@ -220,8 +220,10 @@ def schema_ref(name: str) -> dict[str, str]:
 
 
 def _all_components() -> dict[str, dict[str, Any]]:
+    # imported here, not at the top: the API package serves these files and imports this module's table
     from .api.fit import FIT_COMPONENTS
     from .api.loop_schemas import LOOP_COMPONENTS
+    from .api.schemas import COMPONENTS
     from .api.sweeps import SWEEP_SCHEMA
 
     return {**COMPONENTS, **LOOP_COMPONENTS, **FIT_COMPONENTS, "Sweep": SWEEP_SCHEMA, **_check_components()}

@@ -88,9 +88,7 @@ EXEMPTIONS = (NOT_ANALYSES, NO_HTTP, ROUTES, SCHEMA_FILES, NO_DOCUMENT, NOT_IN_O
 
 
 def _documents() -> dict[str, tuple[str, str]]:
-    """The schema files' table (``kfio.service.schema_files.DOCUMENTS``), imported after the API package,
-    which it is imported by."""
-    import kfio.service.api  # noqa: F401
+    """The schema files' table (``kfio.service.schema_files.DOCUMENTS``)."""
     from kfio.service.schema_files import DOCUMENTS
 
     return DOCUMENTS
