@@ -24,7 +24,7 @@ import time
 from dataclasses import dataclass, field
 from typing import Any, Callable, ClassVar, Generator, Iterable, Iterator, Sequence
 
-from .._reporting import Report, ReportPart
+from .._reporting import FieldsPart, Report
 from ..errors import InvalidInput, MissingDependency
 from ..model import DEFAULT_LIMITS, Limits, fraction_text
 from ._evaluate import evaluate_chunk
@@ -53,7 +53,7 @@ AUTO_PROBE_POINTS = 16
 
 
 @dataclass(frozen=True)
-class SweepRow(ReportPart):
+class SweepRow(FieldsPart):
     """One finished point: index, coordinates (axis name -> exact value text) and fields."""
 
     index: int
