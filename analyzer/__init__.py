@@ -89,6 +89,7 @@ _LAZY = {
     "MatrixLike": "._typing",
     "NumberLike": "._typing",
     "SensorsLike": "._typing",
+    "StateSpaceLike": "._typing",
 }
 
 if TYPE_CHECKING:  # what the lazy names are, for type checkers and editors
@@ -96,8 +97,10 @@ if TYPE_CHECKING:  # what the lazy names are, for type checkers and editors
     from ._budget import Budget
     from ._exact_values import ExactReal, exact_value
     from ._system import System
-    from ._typing import BudgetLike, ChannelLike, MatrixLike, NumberLike, SensorsLike
+    from ._typing import BudgetLike, ChannelLike, MatrixLike, NumberLike, SensorsLike, StateSpaceLike
     from ._verdicts import Verdict
+    from .check._api import check
+    from .check._run import CheckResult
     from .errors import (
         AnalyzerError,
         AssumptionViolation,
@@ -106,8 +109,6 @@ if TYPE_CHECKING:  # what the lazy names are, for type checkers and editors
         LimitExceeded,
         NumericalFailure,
     )
-    from .check._api import check
-    from .check._run import CheckResult
     from .fit._fit import FitReport, fit
     from .loop._api import loop
     from .model import (
@@ -177,6 +178,7 @@ __all__ = [
     "SimulationLimits",
     "SimulationReport",
     "StabilityReport",
+    "StateSpaceLike",
     "SweepResult",
     "System",
     "Verdict",

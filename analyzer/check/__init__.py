@@ -60,8 +60,8 @@ _LAZY = {
 
 if TYPE_CHECKING:
     from ._api import check
-    from ._requirements import COMMAND_OF, Judgement, OUTAGE_KEYS, Requirement, VERDICTS, judge, parse_requirements
-    from ._run import CheckResult, ERROR_KINDS, Outcome, run_check, run_one
+    from ._requirements import COMMAND_OF, OUTAGE_KEYS, VERDICTS, Judgement, Requirement, judge, parse_requirements
+    from ._run import ERROR_KINDS, CheckResult, Outcome, run_check, run_one
     from ._spec import (
         CHECK_ENTRY_KEYS,
         CHECK_OPTION_KEYS,

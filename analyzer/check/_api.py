@@ -105,7 +105,7 @@ def check(
     return run_check(parsed, workers=workers, time_budget_s=seconds, memory_bytes=memory_bytes, progress=progress)
 
 
-def _directories(allow_outside: Any) -> list[str | os.PathLike[str]]:
+def _directories(allow_outside: Any) -> list[Path]:
     if isinstance(allow_outside, (str, os.PathLike)):
         allow_outside = [allow_outside]
     try:
@@ -115,10 +115,10 @@ def _directories(allow_outside: Any) -> list[str | os.PathLike[str]]:
     for d in dirs:
         if not isinstance(d, (str, os.PathLike)) or not os.path.isdir(d):
             raise InvalidInput("allow_outside", f"{d!r} is not a directory")
-    return dirs
+    return [Path(d) for d in dirs]
 
 
-def _spec(spec: Any, base: Any, dirs: list[str | os.PathLike[str]]) -> CheckSpec:
+def _spec(spec: Any, base: Any, dirs: list[Path]) -> CheckSpec:
     if isinstance(spec, CheckSpec):
         if base is not None or dirs:
             name = "base" if base is not None else "allow_outside"
@@ -128,11 +128,11 @@ def _spec(spec: Any, base: Any, dirs: list[str | os.PathLike[str]]) -> CheckSpec
         where = Path.cwd() if base is None else base
         if not isinstance(where, (str, os.PathLike)) or not os.path.isdir(where):
             raise InvalidInput("base", f"{where!r} is not a directory")
-        return parse_check(dict(spec), where, "<check>", dirs)
+        return parse_check(dict(spec), Path(where), "<check>", dirs)
     if isinstance(spec, (str, os.PathLike)):
         if base is not None:
             raise InvalidInput("base", "a check file's paths are relative to its own directory: base is for an object")
-        return load_check(spec, dirs)
+        return load_check(Path(spec), dirs)
     raise InvalidInput(
         "spec", f"expected a check file's path, its parsed object or a CheckSpec; got a {type(spec).__name__}"
     )

@@ -17,11 +17,11 @@ from typing import Any
 import pytest
 from fastapi.testclient import TestClient
 
-from kfio.sweep import _spec as spec_module
 from kfio.errors import LimitExceeded
 from kfio.service.cli import main
 from kfio.service.settings import Settings
 from kfio.sweep import RationalRange, load_sweep, parse_sweep, sweep_size
+from kfio.sweep import _spec as spec_module
 
 from support.app_client import ready_client
 
