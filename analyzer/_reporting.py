@@ -74,19 +74,6 @@ class ReportPart:
         return getattr(self, key + "_exact"), getattr(self, key, None)
 
 
-class FieldsPart(ReportPart):
-    """A piece of a report whose values sit in a ``fields`` mapping (a sweep row): exact texts there too."""
-
-    fields: dict[str, Any]
-
-    def exact_names(self) -> tuple[str, ...]:
-        """The names :meth:`exact_of` accepts: every key ``X`` of ``fields`` with an exact text ``X_exact``."""
-        return tuple(sorted(k.removesuffix("_exact") for k in self.fields if k.endswith("_exact")))
-
-    def _exact_pair(self, key: str) -> tuple[Any, Any]:
-        return self.fields.get(key + "_exact"), self.fields.get(key)
-
-
 #: A text or fraction longer than this is shown in a ``repr`` as kfio's number format reads it.
 _LONG_TEXT = 40
 
@@ -161,4 +148,4 @@ def _short(value: Any) -> str:
     return repr(value)
 
 
-__all__ = ["FieldsPart", "Report", "ReportPart", "ShortRepr", "json_text", "stamp", "terminal_text"]
+__all__ = ["Report", "ReportPart", "ShortRepr", "json_text", "stamp", "terminal_text"]
