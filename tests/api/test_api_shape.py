@@ -16,6 +16,7 @@ import kfio
 from kfio.check import load_check, run_check
 from kfio.service.cli import main
 from kfio.sweep import load_sweep, run_sweep
+
 from support.paths import ROOT
 
 SWEEP = ROOT / "examples" / "sweeps" / "arrival_probability.json"
