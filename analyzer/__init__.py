@@ -12,6 +12,7 @@ The Python API (see ``docs/python_api.md``)::
     kfio.simulate(sys, kfio.bernoulli(0.6), steps=50)     # Monte Carlo
     kfio.expected_covariance(sys, kfio.bernoulli(0.6), 6) # exact E[P_t]
     kfio.fit("0110111011")                                # a channel model for a measured trace
+    kfio.sweep("sweep.json"), kfio.check("kfio-check.toml")  # the files of ``kfio sweep`` and ``kfio check``
 
 Typed (``py.typed``): ``report.verdict`` is a :class:`Verdict` (equal to its
 JSON text), ``report.exact_of("critical_arrival_probability")`` the exact value
@@ -42,6 +43,10 @@ _LAZY = {
     "loop": ".loop._api",
     "fit": ".fit._fit",
     "FitReport": ".fit._fit",
+    "sweep": ".sweep._api",
+    "SweepResult": ".sweep._engine",
+    "check": ".check._api",
+    "CheckResult": ".check._run",
     "build_request": "._api",
     "request_dict": "._api",
     "bernoulli": ".model._channels",
@@ -84,6 +89,7 @@ _LAZY = {
     "MatrixLike": "._typing",
     "NumberLike": "._typing",
     "SensorsLike": "._typing",
+    "StateSpaceLike": "._typing",
 }
 
 if TYPE_CHECKING:  # what the lazy names are, for type checkers and editors
@@ -91,8 +97,10 @@ if TYPE_CHECKING:  # what the lazy names are, for type checkers and editors
     from ._budget import Budget
     from ._exact_values import ExactReal, exact_value
     from ._system import System
-    from ._typing import BudgetLike, ChannelLike, MatrixLike, NumberLike, SensorsLike
+    from ._typing import BudgetLike, ChannelLike, MatrixLike, NumberLike, SensorsLike, StateSpaceLike
     from ._verdicts import Verdict
+    from .check._api import check
+    from .check._run import CheckResult
     from .errors import (
         AnalyzerError,
         AssumptionViolation,
@@ -122,6 +130,8 @@ if TYPE_CHECKING:  # what the lazy names are, for type checkers and editors
     from .riccati_bounds import BoundsReport
     from .simulation import DEFAULT_SIMULATION_LIMITS, FiniteHorizonReport, SimulationLimits, SimulationReport
     from .stability import BlockReport, StabilityReport
+    from .sweep._api import sweep
+    from .sweep._engine import SweepResult
 
 
 __getattr__, __dir__ = lazy_names(__name__, _LAZY, globals())
@@ -129,11 +139,13 @@ __getattr__, __dir__ = lazy_names(__name__, _LAZY, globals())
 
 # The import system binds a subpackage to its parent's attribute of the same name when it first loads
 # it, which would make ``kfio.loop`` the subpackage after any ``from kfio.loop import ...``.  Loading the
-# (lazy, import-free) subpackage now and unbinding it leaves the attribute to ``__getattr__``: the function.
-importlib.import_module(".loop", __name__)
-del globals()["loop"]
-importlib.import_module(".fit", __name__)
-del globals()["fit"]
+# (lazy, import-free) subpackages now and unbinding them leaves the attributes to ``__getattr__``: the
+# functions.  ``import kfio.loop._report as r`` therefore fails (its last step reads the attribute);
+# ``from kfio.loop import _report`` reads the subpackage from ``sys.modules``.
+for _name in ("loop", "fit", "sweep", "check"):
+    importlib.import_module("." + _name, __name__)
+    del globals()[_name]
+del _name
 
 
 __all__ = [
@@ -145,6 +157,7 @@ __all__ = [
     "Budget",
     "BudgetExceeded",
     "BudgetLike",
+    "CheckResult",
     "ChannelLike",
     "DEFAULT_LIMITS",
     "DEFAULT_SIMULATION_LIMITS",
@@ -165,12 +178,15 @@ __all__ = [
     "SimulationLimits",
     "SimulationReport",
     "StabilityReport",
+    "StateSpaceLike",
+    "SweepResult",
     "System",
     "Verdict",
     "analyze",
     "bernoulli",
     "bounds",
     "build_request",
+    "check",
     "exact_value",
     "expected_covariance",
     "fit",
@@ -184,4 +200,5 @@ __all__ = [
     "per_sensor",
     "request_dict",
     "simulate",
+    "sweep",
 ]

@@ -15,14 +15,13 @@ from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 from ._budget import Budget
-from ._system import System
+from ._system import System, plant_of
 from .errors import InvalidInput
 from .model import (
     DEFAULT_LIMITS,
     Limits,
     Request,
     Route,
-    SystemRecord,
     channel_tree,
     json_ready,
     parse_request,
@@ -31,7 +30,7 @@ from .model import (
 )
 
 if TYPE_CHECKING:
-    from ._typing import BudgetLike, ChannelLike, MatrixLike
+    from ._typing import BudgetLike, ChannelLike, MatrixLike, StateSpaceLike
     from .riccati_bounds import BoundsReport
     from .simulation import FiniteHorizonReport, SimulationReport
     from .stability import StabilityReport
@@ -45,9 +44,11 @@ def _budget_of(budget: Any) -> tuple[Budget | None, Any]:
 
 
 def request_dict(
-    system: System,
+    system: System | StateSpaceLike,
     channel: ChannelLike,
     *,
+    Q: MatrixLike | None = None,
+    R: MatrixLike | None = None,
     command: str | None = None,
     options: Mapping[str, Any] | None = None,
     budget: BudgetLike | None = None,
@@ -65,7 +66,7 @@ def request_dict(
     {'system': {'A': [['11/10']], 'C': [['1']]}, 'channel': {'model': 'bernoulli', 'arrival_probability': '1/2'}, \
 'options': {'time_budget_s': 10}}
     """
-    tree, _ = _tree(system, channel, command, options, budget)
+    tree, _ = _tree(system, channel, command, options, budget, Q=Q, R=R)
     return json_ready(tree)
 
 
@@ -77,11 +78,10 @@ def _tree(
     budget: Any,
     keywords: Mapping[str, Any] = {},
     limits: Limits = DEFAULT_LIMITS,
+    Q: Any = None,
+    R: Any = None,
 ) -> tuple[dict[str, Any], list[Route]]:
-    if not isinstance(system, SystemRecord):
-        raise InvalidInput("system", f"expected a kfio.System; got a {type(system).__name__}")
-    if not isinstance(system, System):
-        system = System(system.A, system.C, system.Q, system.R, system.sensors, limits=limits)
+    system = plant_of(system, Q, R, limits=None if isinstance(system, System) else limits)
     ch = channel_tree(channel)
     if not isinstance(ch, dict):
         raise InvalidInput(
@@ -117,9 +117,11 @@ def _tree(
 
 
 def build_request(
-    system: System | Request,
+    system: System | StateSpaceLike | Request,
     channel: ChannelLike | None = None,
     *,
+    Q: MatrixLike | None = None,
+    R: MatrixLike | None = None,
     command: str | None = None,
     options: Mapping[str, Any] | None = None,
     budget: BudgetLike | None = None,
@@ -144,14 +146,18 @@ def build_request(
     >>> req.channel.table, req.time_budget_s
     ((Fraction(1, 2),), 10.0)
     """
-    request, _, _ = _build_request(system, channel, command=command, options=options, budget=budget, limits=limits)
+    request, _, _ = _build_request(
+        system, channel, Q=Q, R=R, command=command, options=options, budget=budget, limits=limits
+    )
     return request
 
 
 def _build_request(
-    system: System | Request,
+    system: Any,
     channel: Any = None,
     *,
+    Q: Any = None,
+    R: Any = None,
     command: str | None = None,
     options: Mapping[str, Any] | None = None,
     budget: Any = None,
@@ -163,6 +169,9 @@ def _build_request(
     if isinstance(system, Request):
         if channel is not None or options is not None or keywords:
             raise InvalidInput("channel", "a validated Request already holds its channel and options")
+        for name, value in (("Q", Q), ("R", R)):
+            if value is not None:
+                raise InvalidInput(name, f"a validated Request already holds its system: {name} belongs in it")
         work, seconds = _budget_of(budget)
         if seconds is not None:
             work = Budget(seconds=float(python_tree(seconds)))
@@ -171,7 +180,7 @@ def _build_request(
         raise InvalidInput("channel", "a channel is required, e.g. kfio.bernoulli(0.5)")
     if limits is None:
         limits = getattr(system, "_limits", DEFAULT_LIMITS)
-    tree, routes = _tree(system, channel, command, options, budget, keywords or {}, limits)
+    tree, routes = _tree(system, channel, command, options, budget, keywords or {}, limits, Q, R)
     work, _ = _budget_of(budget)
     try:
         return parse_request(tree, limits.for_command(command)), work, routes
@@ -187,9 +196,11 @@ def _run(fn: Any, routes: Sequence[Route], *args: Any, **kwargs: Any) -> Any:
 
 
 def analyze(
-    system: System | Request,
+    system: System | StateSpaceLike | Request,
     channel: ChannelLike | None = None,
     *,
+    Q: MatrixLike | None = None,
+    R: MatrixLike | None = None,
     options: Mapping[str, Any] | None = None,
     budget: BudgetLike | None = None,
 ) -> StabilityReport:
@@ -206,8 +217,13 @@ def analyze(
     Parameters
     ----------
     system:
-        A :class:`System`, or a validated request (the CLI's and the
-        service's entry: ``analyze(load_request(text))``).
+        A :class:`System`, a discrete-time python-control ``StateSpace``
+        (its ``A`` and ``C``; ``Q`` and ``R`` as keywords), or a validated
+        request (the CLI's and the service's entry: ``analyze(load_request(text))``).
+    Q, R:
+        The noise covariances where ``system`` has none (a ``StateSpace``, or
+        a :class:`System` built without them); a keyword for a matrix the
+        system already has is refused, naming it.
     channel:
         :func:`kfio.bernoulli`, :func:`kfio.gilbert_elliott`,
         :func:`kfio.markov`, :func:`kfio.per_sensor`, or a channel's JSON object.
@@ -246,14 +262,16 @@ def analyze(
     """
     from .stability import analyze as _analyze
 
-    request, work, routes = _build_request(system, channel, command="analyze", options=options, budget=budget)
+    request, work, routes = _build_request(system, channel, Q=Q, R=R, command="analyze", options=options, budget=budget)
     return _run(_analyze, routes, request, budget=work)
 
 
 def bounds(
-    system: System | Request,
+    system: System | StateSpaceLike | Request,
     channel: ChannelLike | None = None,
     *,
+    Q: MatrixLike | None = None,
+    R: MatrixLike | None = None,
     options: Mapping[str, Any] | None = None,
     budget: BudgetLike | None = None,
 ) -> BoundsReport:
@@ -267,7 +285,7 @@ def bounds(
 
     Parameters
     ----------
-    system, channel, budget:
+    system, channel, Q, R, budget:
         As in :func:`analyze`.
     options:
         ``options.bounds`` of a request: ``tolerance``, ``horizon``, ``grid``,
@@ -287,14 +305,16 @@ def bounds(
     """
     from .riccati_bounds import compute_bounds
 
-    request, work, routes = _build_request(system, channel, command="bounds", options=options, budget=budget)
+    request, work, routes = _build_request(system, channel, Q=Q, R=R, command="bounds", options=options, budget=budget)
     return _run(compute_bounds, routes, request, work)
 
 
 def simulate(
-    system: System | Request,
+    system: System | StateSpaceLike | Request,
     channel: ChannelLike | None = None,
     *,
+    Q: MatrixLike | None = None,
+    R: MatrixLike | None = None,
     steps: int | None = None,
     trajectories: int | None = None,
     seed: int | None = None,
@@ -313,7 +333,7 @@ def simulate(
 
     Parameters
     ----------
-    system, channel, budget:
+    system, channel, Q, R, budget:
         As in :func:`analyze`; ``Q`` and ``R`` are needed.
     steps, trajectories, seed, exact_steps, P0, initial_channel:
         The keys of ``options.simulate`` (defaults: 200 steps, as many
@@ -349,16 +369,18 @@ def simulate(
     )
     keywords = {k: v for k, v in given.items() if v is not None}
     request, work, routes = _build_request(
-        system, channel, command="simulate", options=options, budget=budget, keywords=keywords
+        system, channel, Q=Q, R=R, command="simulate", options=options, budget=budget, keywords=keywords
     )
     return _run(_simulate, routes, request, work)
 
 
 def expected_covariance(
-    system: System | Request,
+    system: System | StateSpaceLike | Request,
     channel: ChannelLike | int | None = None,
     steps: int | None = None,
     *,
+    Q: MatrixLike | None = None,
+    R: MatrixLike | None = None,
     P0: MatrixLike | None = None,
     initial_channel: str | None = None,
     budget: BudgetLike | None = None,
@@ -372,7 +394,7 @@ def expected_covariance(
 
     Parameters
     ----------
-    system, channel, budget:
+    system, channel, Q, R, budget:
         As in :func:`analyze`; ``Q`` and ``R`` are needed.  With a validated
         request (which carries its channel), the horizon may come second:
         ``expected_covariance(request, 4)`` or ``expected_covariance(request, steps=4)``.
@@ -399,7 +421,9 @@ def expected_covariance(
     if steps is None:
         raise InvalidInput("steps", "the horizon is required: expected_covariance(system, channel, steps)")
     keywords = {k: v for k, v in dict(P0=P0, initial_channel=initial_channel).items() if v is not None}
-    request, work, routes = _build_request(system, channel, command="simulate", budget=budget, keywords=keywords)
+    request, work, routes = _build_request(
+        system, channel, Q=Q, R=R, command="simulate", budget=budget, keywords=keywords
+    )
     routes = [("/options/simulate/exact_steps", "steps", steps, False), *routes]
     return _run(_expected, routes, request, python_tree(steps), work)
 

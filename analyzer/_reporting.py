@@ -60,15 +60,18 @@ class ReportPart:
             raise AttributeError(
                 f"{type(self).__name__} has no exact value {name!r}; it has: {', '.join(self.exact_names()) or 'none'}"
             )
-        text = getattr(self, key + "_exact")
+        text, approx = self._exact_pair(key)
         if text is None:
             return None
-        approx = getattr(self, key, None)
         return exact_value(text, approx if isinstance(approx, (int, float)) else None)
 
     def exact_names(self) -> tuple[str, ...]:
         """The names :meth:`exact_of` accepts: every field ``X`` with an exact text ``X_exact``."""
         return tuple(sorted(n.removesuffix("_exact") for n in dir(self) if n.endswith("_exact")))
+
+    def _exact_pair(self, key: str) -> tuple[Any, Any]:
+        """The exact text of ``key`` and its float (or ``None``): the attributes ``key_exact`` and ``key``."""
+        return getattr(self, key + "_exact"), getattr(self, key, None)
 
 
 #: A text or fraction longer than this is shown in a ``repr`` as kfio's number format reads it.

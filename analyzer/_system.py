@@ -210,6 +210,48 @@ class System(SystemRecord):
         return f"System({', '.join(parts)})"
 
 
+def is_statespace(obj: Any) -> bool:
+    """Whether ``obj`` looks like a python-control ``StateSpace`` (kfio never imports python-control)."""
+    return not isinstance(obj, SystemRecord) and all(hasattr(obj, a) for a in ("A", "B", "C", "dt"))
+
+
+def plant_of(system: Any, Q: Any = None, R: Any = None, *, limits: Limits | None = None) -> System:
+    """The :class:`System` of a ``system`` argument, with the ``Q`` and ``R`` keywords of the public functions.
+
+    The one rule of every function that takes a system: ``system`` is a
+    :class:`System` or a discrete-time python-control ``StateSpace``; ``Q``
+    and ``R`` fill what the plant lacks (a ``StateSpace`` never has them), and
+    a keyword for a matrix the :class:`System` already has is refused, naming
+    it, so that no value is silently replaced.
+    """
+    given = {"Q": Q, "R": R}
+    if isinstance(system, SystemRecord):
+        for name, value in given.items():
+            if value is not None and getattr(system, name) is not None:
+                raise InvalidInput(
+                    name, f"the System already has {name}: give it to kfio.System or as this keyword, not both"
+                )
+        lim = limits if limits is not None else getattr(system, "_limits", DEFAULT_LIMITS)
+        if isinstance(system, System) and Q is None and R is None and limits is None:
+            return system
+        return System(
+            system.A,
+            system.C,
+            system.Q if Q is None else Q,
+            system.R if R is None else R,
+            None if system.sensors is None else list(system.sensors),
+            limits=lim,
+        )
+    if is_statespace(system):
+        try:
+            return System.from_statespace(system, Q=Q, R=R)
+        except InvalidInput as exc:
+            raise (InvalidInput("system", exc.rule) if exc.field == "ss" else exc) from None
+    raise InvalidInput(
+        "system", f"expected a kfio.System or a discrete-time python-control StateSpace; got a {type(system).__name__}"
+    )
+
+
 def _sensors_tree(sensors: Any) -> tuple[list[Any], list[Route]]:
     """Sensors as the request's list of ``{name, rows}``, and routes naming them as the user wrote them."""
     if isinstance(sensors, Mapping):
@@ -226,4 +268,4 @@ def _sensors_tree(sensors: Any) -> tuple[list[Any], list[Route]]:
     return sensors, []  # the validator says what it expected
 
 
-__all__ = ["System"]
+__all__ = ["System", "is_statespace", "plant_of"]

@@ -9,7 +9,7 @@ this module imports neither NumPy nor anything else of kfio's at run time.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from typing import TYPE_CHECKING, Any, SupportsFloat, SupportsIndex, TypeAlias, Union
+from typing import TYPE_CHECKING, Any, Protocol, SupportsFloat, SupportsIndex, TypeAlias, Union
 
 if TYPE_CHECKING:
     from numpy.typing import NDArray
@@ -34,4 +34,22 @@ BudgetLike: TypeAlias = Union["Budget", NumberLike]
 #: Sensors of a :class:`kfio.System`: ``{"gps": [0], "imu": [1, 2]}`` or ``[{"name": ..., "rows": [...]}]``.
 SensorsLike: TypeAlias = Union[Mapping[str, Sequence[int]], Sequence[Mapping[str, Any]], Sequence["Sensor"]]
 
-__all__ = ["BudgetLike", "ChannelLike", "MatrixLike", "NumberLike", "SensorsLike"]
+
+class StateSpaceLike(Protocol):
+    """A python-control ``StateSpace`` with a discrete time base, as kfio reads it: ``A``, ``C`` (``B`` for a
+    loop) and ``dt``.  kfio never imports python-control; any object with these attributes is taken."""
+
+    @property
+    def A(self) -> Any: ...
+
+    @property
+    def B(self) -> Any: ...
+
+    @property
+    def C(self) -> Any: ...
+
+    @property
+    def dt(self) -> Any: ...
+
+
+__all__ = ["BudgetLike", "ChannelLike", "MatrixLike", "NumberLike", "SensorsLike", "StateSpaceLike"]

@@ -36,16 +36,35 @@ def read_request_text(path: str, max_bytes: int = MAX_REQUEST_BYTES, what: str =
     return data
 
 
+#: The range of ``--time-budget`` in seconds, the same for every computing command.
+TIME_BUDGET_RANGE = (0.01, 86400)
+
+
+def add_time_budget_argument(p: argparse.ArgumentParser, what: str) -> None:
+    """``--time-budget S`` of every computing command; ``what`` says its default and how it is enforced."""
+    lo, hi = TIME_BUDGET_RANGE
+    p.add_argument(
+        "--time-budget", type=float, metavar="S", help=f"wall-clock budget in seconds, {lo:g}..{hi:g} ({what})"
+    )
+
+
+def time_budget(args: argparse.Namespace) -> float | None:
+    """``--time-budget`` of ``args``, checked against :data:`TIME_BUDGET_RANGE` (``None`` when not given)."""
+    lo, hi = TIME_BUDGET_RANGE
+    if args.time_budget is not None and not lo <= args.time_budget <= hi:
+        raise InvalidInput("--time-budget", f"must be in [{lo:g}, {hi:g}] seconds")
+    seconds: float | None = args.time_budget
+    return seconds
+
+
 def add_request_arguments(p: argparse.ArgumentParser) -> None:
     """Arguments every request-taking command shares."""
     p.add_argument("file", metavar="FILE", help="request JSON file, or - for standard input")
     p.add_argument("--json", action="store_true", help="print the JSON report instead of a summary")
-    p.add_argument(
-        "--time-budget",
-        type=float,
-        metavar="S",
-        help="wall-clock budget in seconds (default: options.time_budget_s of the request, else "
-        f"{DEFAULT_TIME_BUDGET_S:g}); enforced by a watchdog that stops the work, exit 4",
+    add_time_budget_argument(
+        p,
+        f"default: options.time_budget_s of the request, else {DEFAULT_TIME_BUDGET_S:g}; enforced by a watchdog "
+        "that stops the work, exit 4",
     )
     p.add_argument(
         "--memory-mb",
@@ -115,11 +134,10 @@ def run_request_command(
     """
 
     def body() -> int:
-        if args.time_budget is not None and not 0.01 <= args.time_budget <= 86400:
-            raise InvalidInput("--time-budget", "must be in [0.01, 86400] seconds")
+        flag = time_budget(args)
         memory = memory_limit(args)
         data = read_request_text(args.file)
-        seconds = args.time_budget or request_budget(data) or DEFAULT_TIME_BUDGET_S
+        seconds = flag or request_budget(data) or DEFAULT_TIME_BUDGET_S
 
         def child() -> int:
             from kfio import DEFAULT_LIMITS, Budget, load_request

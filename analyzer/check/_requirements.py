@@ -95,6 +95,11 @@ class Requirement:
     command: str
 
     @property
+    def required_exact(self) -> str | None:
+        """The exact limit as text (``'1/2'``) where the requirement is a number, else ``None``."""
+        return fraction_text(self.value) if isinstance(self.value, Fraction) else None
+
+    @property
     def required(self) -> str:
         """The requirement as text, e.g. ``'<= 1/2'``."""
         v = self.value
@@ -116,6 +121,9 @@ class Judgement:
     status: str
     measured: str
     detail: str
+    #: The measured quantity's exact text (a fraction or an algebraic number) and its float, where kfio has them.
+    exact: str | None = None
+    approx: float | None = None
 
 
 def parse_requirements(obj: Any, where: str) -> tuple[Requirement, ...]:
@@ -191,10 +199,14 @@ def _exact_or_none(text: Any) -> Fraction | None:
         return None
 
 
-def _verdict(ok: bool | None, measured: str, detail: str) -> Judgement:
+def _verdict(ok: bool | None, measured: str, detail: str, exact: Any = None, approx: Any = None) -> Judgement:
+    text = exact if isinstance(exact, str) else None
+    value = float(approx) if isinstance(approx, (int, float)) else None
     if ok is None:
-        return Judgement("error", measured, "too close to the limit to decide in floating point; " + detail)
-    return Judgement("pass" if ok else "fail", measured, detail)
+        return Judgement(
+            "error", measured, "too close to the limit to decide in floating point; " + detail, text, value
+        )
+    return Judgement("pass" if ok else "fail", measured, detail, text, value)
 
 
 def judge(req: Requirement, payload: Mapping[str, Any]) -> Judgement:
@@ -225,6 +237,8 @@ def judge(req: Requirement, payload: Mapping[str, Any]) -> Judgement:
             _compare(rate, exact, 1 - req.value, False, True),
             f"worst rate {measured}",
             f"worst |alpha_k|^2 sigma_k ({basis})",
+            payload.get("worst_rate_exact"),
+            rate,
         )
     if req.key == "critical_arrival_probability_at_most":
         value = report.get("critical_arrival_probability")
@@ -233,7 +247,11 @@ def judge(req: Requirement, payload: Mapping[str, Any]) -> Judgement:
             return Judgement("error", "none", "kfio gives a critical arrival probability for one Bernoulli packet only")
         exact = _exact_or_none(text)
         return _verdict(
-            _compare(value, exact, req.value, False, True), str(text or value), "exact critical arrival probability"
+            _compare(value, exact, req.value, False, True),
+            str(text or value),
+            "exact critical arrival probability",
+            text,
+            value,
         )
     if req.key == "tail_exponent_above":
         tail = report.get("tail") or {}
@@ -294,7 +312,7 @@ def _judge_loop_limit(req: Requirement, report: Mapping[str, Any], points: Mappi
     exact = _exact_or_none(text)
     what = "exact stationary cost" if field == "cost" else f"exact critical {field.split('_')[1]} arrival probability"
     measured = str(text) if exact is not None and len(str(text)) <= 40 else f"{value:.6g}"
-    return _verdict(_compare(value, exact, req.value, False, True), measured, what)
+    return _verdict(_compare(value, exact, req.value, False, True), measured, what, text, value)
 
 
 def _judge_stable_interval(req: Requirement, critical: Mapping[str, Any], point: str | None) -> Judgement:

@@ -52,6 +52,19 @@ class Outcome(ReportPart):
     detail: str
     seconds: float
     error_kind: str | None = None
+    #: The exact measured value's text and its float, and the exact limit's text, where they exist;
+    #: :meth:`exact_of` reads them (``exact_of("measured")``, ``exact_of("required")``).  The texts above
+    #: are for people, rounded where the value is long.
+    measured_exact: str | None = None
+    measured_approx: float | None = None
+    required_exact: str | None = None
+
+    def exact_names(self) -> tuple[str, ...]:
+        """The names :meth:`exact_of` accepts: ``measured`` and ``required``."""
+        return ("measured", "required")
+
+    def _exact_pair(self, key: str) -> tuple[Any, Any]:
+        return getattr(self, key + "_exact"), self.measured_approx if key == "measured" else None
 
 
 @dataclass(frozen=True, repr=False)
@@ -277,17 +290,53 @@ def run_check(
             if got is None:
                 message = f"the check's time budget of {budget:g} s ran out before this run finished"
                 outcomes.append(
-                    Outcome(entry.name, req.key, "error", "none", req.required, message, 0.0, "budget-exceeded")
+                    Outcome(
+                        entry.name,
+                        req.key,
+                        "error",
+                        "none",
+                        req.required,
+                        message,
+                        0.0,
+                        "budget-exceeded",
+                        required_exact=req.required_exact,
+                    )
                 )
                 continue
             status, payload, seconds = got
             if status == "error":
                 kind, message = payload
-                outcomes.append(Outcome(entry.name, req.key, "error", "none", req.required, message, seconds, kind))
+                outcomes.append(
+                    Outcome(
+                        entry.name,
+                        req.key,
+                        "error",
+                        "none",
+                        req.required,
+                        message,
+                        seconds,
+                        kind,
+                        required_exact=req.required_exact,
+                    )
+                )
                 continue
             j = judge(req, payload)
             kind = "numerical-failure" if j.status == "error" else None
-            outcomes.append(Outcome(entry.name, req.key, j.status, j.measured, req.required, j.detail, seconds, kind))
+            outcomes.append(
+                Outcome(
+                    entry.name,
+                    req.key,
+                    j.status,
+                    j.measured,
+                    req.required,
+                    j.detail,
+                    seconds,
+                    kind,
+                    j.exact,
+                    j.approx,
+                    req.required_exact,
+                )
+            )
     return CheckResult(tuple(outcomes), time.perf_counter() - t0, n, spec.source)
 
 

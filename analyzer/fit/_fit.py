@@ -16,16 +16,20 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
+from .._budget import Budget
 from .._numbers import number_text
 from .._reporting import Report
 from ..errors import InvalidInput
-from ..model import fraction_text, parse_number
+from ..model import budget_seconds, fraction_text, parse_number
 from ._estimate import Candidate, candidate, history_key, model_name
 from ._intervals import bonferroni_level, clopper_pearson, interval_method
 from ._runs import run_test
 from ._trace import Trace, as_trace
+
+if TYPE_CHECKING:
+    from .._typing import BudgetLike
 
 #: Default confidence level of the intervals and of the verdict.
 DEFAULT_LEVEL = Fraction(95, 100)
@@ -276,8 +280,9 @@ def fit_trace(
     model: str | None = None,
     order: int | None = None,
     max_order: int | None = None,
+    budget: Budget | None = None,
 ) -> FitReport:
-    """Fit :func:`fit`'s candidates to a parsed :class:`Trace` (see :func:`fit`)."""
+    """Fit :func:`fit`'s candidates to a parsed :class:`Trace` (see :func:`fit`); ``budget`` is ticked per candidate."""
     lvl = level if isinstance(level, Fraction) else parse_level(level)
     forced, top = _order_of(model, order, max_order)
     a = trace.arrivals
@@ -292,7 +297,11 @@ def fit_trace(
         )
     orders = [forced] if forced is not None else list(range(0, top + 1))
     common = max(orders) if forced is None else forced
-    cands = [candidate(a, k, common) for k in orders]
+    cands = []
+    for k in orders:
+        if budget is not None:
+            budget.tick("fit: candidate models")
+        cands.append(candidate(a, k, common))
     notes = []
     if forced is not None:
         chosen = cands[0]
@@ -311,6 +320,8 @@ def fit_trace(
     each = float(bonferroni_level(lvl, m))
     intervals = {name: clopper_pearson(k, nn, each) for name, (k, nn) in trials.items()}
     marginal = {name: clopper_pearson(k, nn, float(lvl)) for name, (k, nn) in trials.items()}
+    if budget is not None:
+        budget.tick("fit: run-length check")
     gof, warnings = _goodness(a, cands, chosen)
     warnings = list(warnings)
     if any(x in (0, 1) for x in est.values()):
@@ -375,6 +386,7 @@ def fit(
     model: str | None = None,
     order: int | None = None,
     max_order: int | None = None,
+    budget: BudgetLike | None = None,
 ) -> FitReport:
     """Fit a packet channel to a measured arrival trace, with exact estimates and confidence intervals.
 
@@ -401,6 +413,9 @@ def fit(
         ``"markov"`` with its ``order``) instead of choosing by BIC.
     max_order:
         Largest Markov order tried (default 4, at most 8).
+    budget:
+        Seconds (in ``[0.01, 3600]``) or a :class:`kfio.Budget`, ticked once
+        per candidate model and once for the run-length check; default none.
 
     Returns
     -------
@@ -412,6 +427,8 @@ def fit(
     InvalidInput
         An empty trace, one symbol only, a character other than 0/1, a trace
         too short for the model asked (the message says how many packets it needs).
+    BudgetExceeded
+        The fit did not fit the budget.
 
     Examples
     --------
@@ -420,7 +437,10 @@ def fit(
     >>> r.parameters, r.channel
     ({'arrival_probability': '3/4'}, {'model': 'bernoulli', 'arrival_probability': '3/4'})
     """
-    return fit_trace(as_trace(arrivals), level=level, model=model, order=order, max_order=max_order)
+    work = budget if isinstance(budget, Budget) else None
+    if work is None and budget is not None:
+        work = Budget(seconds=budget_seconds(budget))
+    return fit_trace(as_trace(arrivals), level=level, model=model, order=order, max_order=max_order, budget=work)
 
 
 __all__ = [

@@ -21,11 +21,11 @@ from ._report import LoopReport, analyze_loop
 
 if TYPE_CHECKING:
     from .._system import System
-    from .._typing import BudgetLike, ChannelLike, MatrixLike
+    from .._typing import BudgetLike, ChannelLike, MatrixLike, StateSpaceLike
 
 
 def loop(
-    system: System | Mapping[str, Any] | LoopRequest | Any,
+    system: System | StateSpaceLike | Mapping[str, Any] | LoopRequest,
     *,
     feedback: MatrixLike | None = None,
     estimator: MatrixLike | None = None,
@@ -56,7 +56,8 @@ def loop(
     system:
         A discrete-time python-control ``StateSpace`` (``A``, ``B``, ``C``;
         ``Q`` and ``R`` as keywords), a :class:`kfio.System` with ``Q`` and
-        ``R`` (then ``B`` is required), a loop request (the dict of a
+        ``R`` (then ``B`` is required; ``Q`` and ``R`` as keywords only where
+        the System has none), a loop request (the dict of a
         ``kfio loop`` file; then only ``budget`` may be given), or a
         validated :class:`kfio.loop.LoopRequest`.
     feedback:
@@ -73,7 +74,8 @@ def loop(
         packets' (Bernoulli, Gilbert-Elliott or Markov), e.g. ``kfio.bernoulli(0.9)``.
     B, Q, R:
         The input matrix (with a :class:`kfio.System`) and the noise
-        covariances (with a ``StateSpace``).
+        covariances (with a ``StateSpace``, or a System without them; a
+        keyword for a matrix the System already has is refused, naming it).
     cost:
         ``{"W": ..., "U": ...}`` weighing ``x' W x + a' U a`` (default ``W = I``, ``U = 0``).
     options:
@@ -119,7 +121,7 @@ def loop(
 
 
 def loop_request(
-    system: System | Mapping[str, Any] | Any,
+    system: System | StateSpaceLike | Mapping[str, Any],
     *,
     feedback: MatrixLike | None = None,
     estimator: MatrixLike | None = None,
@@ -179,7 +181,7 @@ def _request_tree(
     budget: Any,
 ) -> tuple[dict[str, Any], list[Route]]:
     """The request's JSON tree and the routes that name its fields as the Python arguments."""
-    from .._system import System
+    from .._system import System, is_statespace, plant_of
 
     seconds = None if budget is None or isinstance(budget, Budget) else python_tree(budget)
     if isinstance(system, Mapping):
@@ -190,15 +192,12 @@ def _request_tree(
         return json_ready(given), []
     keywords = {"B": B, "Q": Q, "R": R}  # the plant's matrices that come as keywords, named so in errors
     if isinstance(system, System):
-        sys_tree = system.to_dict()
         if B is None:
             raise InvalidInput("B", "a loop needs the input matrix B (or pass a python-control StateSpace)")
+        sys_tree = plant_of(system, Q, R).to_dict()
         sys_tree["B"] = python_tree(B)
-        for key, val in (("Q", Q), ("R", R)):
-            if val is not None:
-                sys_tree[key] = python_tree(val)
-    elif all(hasattr(system, a) for a in ("A", "B", "C", "dt")):
-        sys_tree = System.from_statespace(system, Q=Q, R=R).to_dict()
+    elif is_statespace(system):
+        sys_tree = plant_of(system, Q, R).to_dict()
         sys_tree["B"] = python_tree(system.B if B is None else B)
         keywords = {"B": B, "Q": Q if Q is not None else "", "R": R if R is not None else ""}
     else:

@@ -8,7 +8,7 @@ is given); the validator's own frozen record of a plant, the type of
 """
 
 from ._channels import bernoulli, channel_tree, gilbert_elliott, markov, per_sensor
-from ._coerce import Route, json_ready, python_tree, renamed
+from ._coerce import Route, budget_seconds, json_ready, python_tree, renamed
 from ._exact import (
     DECIMAL_PATTERN,
     MAX_EXACT_DIGITS,
@@ -129,6 +129,7 @@ __all__ = [
     "pointer_tokens",
     "python_tree",
     "renamed",
+    "budget_seconds",
     "require_assumption_1",
     "to_domain",
     "to_float",

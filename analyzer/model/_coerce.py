@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InvalidInput
-from ._exact import fraction_text
+from ._exact import fraction_text, parse_number
 from ._pointer import pointer_tokens
 
 
@@ -123,3 +123,32 @@ def renamed(exc: InvalidInput, routes: Sequence[Route]) -> InvalidInput:
             field = python_name(exc.field[len(prefix) :], tree, name, attribute)
             return type(exc)(field or name, exc.rule)
     return exc
+
+
+def budget_seconds(budget: Any, upper: float = 3600, field: str = "budget") -> float | None:
+    """The wall-clock seconds of a ``budget`` argument: ``None`` when none is given or it has no limit.
+
+    A :class:`kfio.Budget` gives what remains of it (the functions that run
+    in worker processes, ``kfio.sweep`` and ``kfio.check``, take its clock
+    only: a step count cannot follow the work into another process); a
+    number of seconds must lie in ``[0.01, upper]``, as ``options.time_budget_s``.
+
+    Examples
+    --------
+    >>> budget_seconds(None), budget_seconds("5/2"), budget_seconds(30)
+    (None, 2.5, 30.0)
+    """
+    from .._budget import Budget
+    from ._request import MIN_TIME_BUDGET_S
+
+    if budget is None:
+        return None
+    if isinstance(budget, Budget):
+        return budget.remaining()
+    value = python_leaf(budget)
+    if isinstance(value, bool) or not isinstance(value, (int, Decimal, str)) or len(str(value)) > 40:
+        raise InvalidInput(field, f"expected seconds or a kfio.Budget; got a {type(budget).__name__}")
+    t = parse_number(value, field)
+    if not MIN_TIME_BUDGET_S <= t <= upper:
+        raise InvalidInput(field, f"must be in [{float(MIN_TIME_BUDGET_S):g}, {upper:g}] seconds")
+    return float(t)

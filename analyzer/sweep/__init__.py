@@ -16,27 +16,83 @@ Examples
 3
 >>> [r.fields["verdict"] for r in run_sweep(spec, engine="serial").rows]
 ['unstable', 'unstable', 'stable']
+
+``kfio.sweep`` (the attribute of the package ``kfio``) is the typed function
+:func:`sweep`; this subpackage stays importable under the same name
+(``from kfio.sweep import run_sweep``).  Its names load on first use, so
+importing it costs nothing until then (Dask and NumPy load with the run):
+``kfio`` imports it at start-up to keep the function, not the subpackage, as
+its attribute.
 """
 
-from ._boundary import exact_boundary
-from ._engine import SweepResult, SweepRow, in_index_order, iter_sweep, record, run_sweep, table_columns
-from ._evaluate import cache_stats, clear_caches, evaluate_point
-from ._rows import FIELDS, coordinate_column, row_from_report
-from ._spec import (
-    Axis,
-    RationalRange,
-    SweepPointInvalid,
-    SweepSpec,
-    check_points,
-    coordinates_at,
-    load_sweep,
-    parse_sweep,
-    point_at,
-    points,
-    sweep_size,
-    validate_points,
-)
-from ._table import FORMATS, TableWriter, format_of, jsonl_line, write_table
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from .._lazy import lazy_names
+
+#: Public name -> the private module (relative to this package) that defines it.
+_LAZY = {
+    "Axis": "._spec",
+    "cache_stats": "._evaluate",
+    "check_points": "._spec",
+    "clear_caches": "._evaluate",
+    "coordinate_column": "._rows",
+    "coordinates_at": "._spec",
+    "evaluate_point": "._evaluate",
+    "exact_boundary": "._boundary",
+    "FIELDS": "._rows",
+    "format_of": "._table",
+    "FORMATS": "._table",
+    "in_index_order": "._engine",
+    "iter_sweep": "._engine",
+    "jsonl_line": "._table",
+    "load_sweep": "._spec",
+    "parse_sweep": "._spec",
+    "point_at": "._spec",
+    "points": "._spec",
+    "RationalRange": "._spec",
+    "record": "._engine",
+    "row_from_report": "._rows",
+    "run_sweep": "._engine",
+    "sweep": "._api",
+    "sweep_size": "._spec",
+    "sweep_spec": "._api",
+    "SweepPointInvalid": "._spec",
+    "SweepResult": "._engine",
+    "SweepRow": "._engine",
+    "SweepSpec": "._spec",
+    "table_columns": "._engine",
+    "TableWriter": "._table",
+    "validate_points": "._spec",
+    "write_table": "._table",
+}
+
+if TYPE_CHECKING:
+    from ._api import sweep, sweep_spec
+    from ._boundary import exact_boundary
+    from ._engine import SweepResult, SweepRow, in_index_order, iter_sweep, record, run_sweep, table_columns
+    from ._evaluate import cache_stats, clear_caches, evaluate_point
+    from ._rows import FIELDS, coordinate_column, row_from_report
+    from ._spec import (
+        Axis,
+        RationalRange,
+        SweepPointInvalid,
+        SweepSpec,
+        check_points,
+        coordinates_at,
+        load_sweep,
+        parse_sweep,
+        point_at,
+        points,
+        sweep_size,
+        validate_points,
+    )
+    from ._table import FORMATS, TableWriter, format_of, jsonl_line, write_table
+
+
+__getattr__, __dir__ = lazy_names(__name__, _LAZY, globals())
+
 
 __all__ = [
     "Axis",
@@ -66,7 +122,9 @@ __all__ = [
     "record",
     "row_from_report",
     "run_sweep",
+    "sweep",
     "sweep_size",
+    "sweep_spec",
     "table_columns",
     "validate_points",
     "write_table",

@@ -54,11 +54,21 @@ AUTO_PROBE_POINTS = 16
 
 @dataclass(frozen=True)
 class SweepRow(ReportPart):
-    """One finished point: index, coordinates (axis name -> exact value text) and fields."""
+    """One finished point: index, coordinates (axis name -> exact value text) and fields.
+
+    :meth:`exact_of` reads ``fields``: ``row.exact_of("critical_arrival_probability")``.
+    """
 
     index: int
     coordinates: dict[str, Any]
     fields: dict[str, Any]
+
+    def exact_names(self) -> tuple[str, ...]:
+        """The names :meth:`exact_of` accepts: every key ``X`` of ``fields`` with an exact text ``X_exact``."""
+        return tuple(sorted(k.removesuffix("_exact") for k in self.fields if k.endswith("_exact")))
+
+    def _exact_pair(self, key: str) -> tuple[Any, Any]:
+        return self.fields.get(key + "_exact"), self.fields.get(key)
 
 
 @dataclass(repr=False)

@@ -22,7 +22,7 @@ import sys
 from pathlib import Path
 
 from .. import exitcodes
-from ..io import dump_json, emit, memory_limit, run_guarded
+from ..io import add_time_budget_argument, dump_json, emit, memory_limit, run_guarded, time_budget
 
 #: Where ``kfio check`` looks when no FILE is given, in this order.
 DEFAULT_FILES = ("kfio-check.json", "kfio-check.toml")
@@ -48,12 +48,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--junit", metavar="XML", help="write JUnit XML: one test case per requirement")
     p.add_argument("--markdown", metavar="MD", help="write a Markdown summary (for a CI step summary)")
     p.add_argument("--workers", type=int, metavar="N", help="worker processes (default: cores; 1 runs in this process)")
-    p.add_argument(
-        "--time-budget",
-        type=float,
-        metavar="S",
-        help="budget of the whole check in seconds (default: options.time_budget_s of the file, else 600); "
-        "past it the workers are stopped, exit 4",
+    add_time_budget_argument(
+        p,
+        "of the whole check; default: options.time_budget_s of the file, else 600; past it the workers are "
+        "stopped, exit 4",
     )
     p.add_argument("--memory-mb", type=int, metavar="M", help="address-space limit of each worker in MiB (0: none)")
     p.add_argument(
@@ -104,11 +102,10 @@ def _run(args: argparse.Namespace) -> int:
 
         if args.workers is not None and args.workers < 1:
             raise InvalidInput("--workers", "must be a positive integer")
-        if args.time_budget is not None and not 0.01 <= args.time_budget <= 86400:
-            raise InvalidInput("--time-budget", "must be in [0.01, 86400] seconds")
+        seconds = time_budget(args)
         memory = memory_limit(args)
         spec = load_check(args.file or _default_file(), _allowed_dirs(args.allow_outside))
-        result = run_check(spec, workers=args.workers, time_budget_s=args.time_budget, memory_bytes=memory)
+        result = run_check(spec, workers=args.workers, time_budget_s=seconds, memory_bytes=memory)
         if args.junit:
             _write(args.junit, junit_xml(result), "--junit")
         if args.markdown:

@@ -12,7 +12,7 @@ import os
 from typing import Any
 
 from .. import exitcodes
-from ..io import dump_json, emit, run_guarded
+from ..io import add_time_budget_argument, dump_json, emit, run_guarded, time_budget
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -66,19 +66,23 @@ def register(sub: argparse._SubParsersAction) -> None:
         "(the exact verdict of the estimate and the verdict at --level confidence, per trace)",
     )
     p.add_argument("--json", action="store_true", help="print the JSON report instead of a summary")
+    add_time_budget_argument(p, "default: none; past it the fit stops, exit 4")
     p.set_defaults(func=_run, quick_exit=True)
 
 
 def _run(args: argparse.Namespace) -> int:
     def body() -> int:
+        from kfio import Budget
         from kfio.errors import InvalidInput
         from kfio.fit import fit_trace, parse_level, read_trace
 
         if args.modulus < 0 or args.modulus == 1:
             raise InvalidInput("--modulus", "the modulus is an integer >= 2, or 0 for a counter that never wraps")
         level = parse_level(args.level, "--level")
+        seconds = time_budget(args)
+        budget = None if seconds is None else Budget(seconds=seconds)
         if os.path.isdir(args.trace):
-            return _run_folder(args, level)
+            return _run_folder(args, level, budget)
         if args.plant is not None:
             raise InvalidInput(
                 "--plant", "--plant is for a folder of traces; for one trace use kfio analyze PLANT --trace TRACE"
@@ -94,7 +98,7 @@ def _run(args: argparse.Namespace) -> int:
         for name, trace in traces.items():
             try:
                 reports[name] = fit_trace(
-                    trace, level=level, model=args.model, order=args.order, max_order=args.max_order
+                    trace, level=level, model=args.model, order=args.order, max_order=args.max_order, budget=budget
                 )
             except InvalidInput as exc:
                 flag = {"/model": "--model", "/order": "--order", "/max_order": "--max-order"}.get(exc.field)
@@ -123,7 +127,9 @@ def _run(args: argparse.Namespace) -> int:
     return run_guarded(body)
 
 
-def _folder_row(args: argparse.Namespace, path: str, level: Any, plant: Any) -> list[dict[str, Any]]:
+def _folder_row(
+    args: argparse.Namespace, path: str, level: Any, plant: Any, budget: Any = None
+) -> list[dict[str, Any]]:
     """The rows of one file of a folder: one per trace (CSV column), or one error row naming the field."""
     from kfio.errors import InvalidInput
     from kfio.fit import analyze_at_confidence, fit_trace, read_trace, with_trace
@@ -138,23 +144,23 @@ def _folder_row(args: argparse.Namespace, path: str, level: Any, plant: Any) -> 
             row: dict[str, Any] = {"file": name, "column": column if args.column else None}
             if plant is None:
                 row["fit"] = fit_trace(
-                    trace, level=level, model=args.model, order=args.order, max_order=args.max_order
+                    trace, level=level, model=args.model, order=args.order, max_order=args.max_order, budget=budget
                 ).to_dict()
             else:
                 from kfio.stability import analyze
 
                 request, found = with_trace(plant, trace, level)
-                point = analyze(request).verdict
+                point = analyze(request, budget=budget).verdict
                 row["fit"] = found.to_dict()
                 row["verdict"] = str(point)
-                row["confidence"] = analyze_at_confidence(request, found, point).to_dict()
+                row["confidence"] = analyze_at_confidence(request, found, point, budget).to_dict()
             rows.append(row)
     except InvalidInput as exc:
         rows.append({"file": name, "column": None, "error": {"field": exc.field, "rule": exc.rule}})
     return rows
 
 
-def _run_folder(args: argparse.Namespace, level: Any) -> int:
+def _run_folder(args: argparse.Namespace, level: Any, budget: Any = None) -> int:
     """``kfio fit FOLDER [--plant PLANT]``: every file of the folder, one row per trace; exit 8 if some failed."""
     from kfio._version import __version__
 
@@ -170,7 +176,7 @@ def _run_folder(args: argparse.Namespace, level: Any) -> int:
         for f in os.listdir(args.trace)
         if not f.startswith(".") and os.path.isfile(os.path.join(args.trace, f))
     )
-    rows = [row for path in files for row in _folder_row(args, path, level, plant)]
+    rows = [row for path in files for row in _folder_row(args, path, level, plant, budget)]
     if args.json:
         emit(dump_json({"kfio_version": __version__, "level": float(level), "traces": rows}))
     else:

@@ -20,6 +20,7 @@ from ..io import (
     read_request_text,
     request_budget,
     run_guarded,
+    time_budget,
 )
 from ..watchdog import run_supervised
 from .fit import TraceLoader, add_trace_arguments
@@ -192,13 +193,10 @@ def _lqg_without_gains(report: dict) -> str:
 
 def _run(args: argparse.Namespace) -> int:
     def body() -> int:
-        if args.time_budget is not None and not 0.01 <= args.time_budget <= 86400:
-            from kfio.errors import InvalidInput
-
-            raise InvalidInput("--time-budget", "must be in [0.01, 86400] seconds")
+        flag = time_budget(args)
         memory = memory_limit(args)
         data = read_request_text(args.file)
-        seconds = args.time_budget or request_budget(data) or DEFAULT_TIME_BUDGET_S
+        seconds = flag or request_budget(data) or DEFAULT_TIME_BUDGET_S
 
         def child() -> int:
             def work() -> int:

@@ -13,12 +13,13 @@ is missing (a broken install; ``--serial`` needs no Dask).
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
 import threading
 from typing import Any
 
 from .. import exitcodes
-from ..io import read_request_text, run_guarded
+from ..io import add_time_budget_argument, read_request_text, run_guarded, time_budget
 
 #: A sweep file may be larger than one request (JSON Lines of plant variants).
 MAX_SWEEP_BYTES = 64 << 20
@@ -47,6 +48,11 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="run in this process, without Dask (default: chosen by the work, in process for small sweeps)",
     )
     p.add_argument("--chunk-size", type=int, metavar="K", help="points per task (default: balanced, at most 2000)")
+    add_time_budget_argument(
+        p,
+        "of the whole sweep; default: options.time_budget_s of the file, else none; points not done by then "
+        "get budget-exceeded rows, exit 4",
+    )
     p.add_argument("--quiet", action="store_true", help="do not stream rows to standard output")
     prog = p.add_mutually_exclusive_group()
     prog.add_argument("--progress", dest="progress", action="store_true", default=None, help="show a progress bar")
@@ -108,7 +114,10 @@ def _run(args: argparse.Namespace) -> int:
             format_of(args.out)
         if args.plot and not args.plot.lower().endswith(".png"):
             raise InvalidInput("--plot", "the plot's file name must end in .png")
+        seconds = time_budget(args)
         spec = load_sweep(read_request_text(args.file, MAX_SWEEP_BYTES, "a sweep file"))
+        if seconds is not None:
+            spec = dataclasses.replace(spec, time_budget_s=seconds)
         columns = table_columns(spec)
         enabled = sys.stderr.isatty() if args.progress is None else args.progress
         bar = _Bar(spec.size, enabled)

@@ -118,7 +118,9 @@ def test_channel_errors_name_the_channel_argument():
         kfio.analyze(system)
     with pytest.raises(InvalidInput, match=r"^channel: expected a channel: kfio.bernoulli\(p\), .*; got a float$"):
         kfio.analyze(system, 0.5)
-    with pytest.raises(InvalidInput, match=r"^system: expected a kfio.System; got a list$"):
+    with pytest.raises(
+        InvalidInput, match=r"^system: expected a kfio.System or a discrete-time python-control StateSpace; got a list$"
+    ):
         kfio.analyze([[2]], kfio.bernoulli(0.5))
 
 

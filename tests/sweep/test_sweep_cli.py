@@ -150,7 +150,7 @@ def test_unreachable_scheduler_is_invalid_input(tmp_path, capsys):
 def test_sweep_budget_gives_every_point_a_row_and_exit_4(tmp_path, capsys, monkeypatch):
     import types
 
-    import kfio.sweep._evaluate as evaluate
+    from kfio.sweep import _evaluate as evaluate
 
     # the workers' clock reads one hour later than the sweep's start: the budget is spent for every point
     monkeypatch.setattr(evaluate, "time", types.SimpleNamespace(time=lambda: time.time() + 3600))

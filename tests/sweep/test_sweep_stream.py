@@ -105,7 +105,7 @@ def test_coordinates_at_agrees_with_point_at():
 def test_parquet_streamed_in_row_groups_equals_the_whole_table_at_once(tmp_path, monkeypatch, batch):
     pa = pytest.importorskip("pyarrow")
     pq = pytest.importorskip("pyarrow.parquet")
-    import kfio.sweep._table as table
+    from kfio.sweep import _table as table
 
     monkeypatch.setattr(table, "PARQUET_BATCH", batch)
     columns = ["index", "axis:x", "value", "flag", "error"]

@@ -55,5 +55,20 @@ def loop_needs(feedback: kfio.MatrixLike, estimator: kfio.MatrixLike) -> tuple[k
     return verdict, report.critical_actuator_arrival_probability
 
 
+def every_command(plant: kfio.System, sweep_file: str, check_file: str) -> list[object]:
+    """Each public function once, with one budget keyword, its typed result and an exact value."""
+    channel = kfio.bernoulli("3/5")
+    bounds: kfio.BoundsReport = kfio.bounds(plant, channel, budget=30)
+    sim: kfio.SimulationReport = kfio.simulate(plant, channel, steps=5, trajectories=10, seed=1, budget=30)
+    exact: kfio.FiniteHorizonReport = kfio.expected_covariance(plant, channel, 2, budget=kfio.Budget(seconds=30))
+    fitted: kfio.FitReport = kfio.fit("0110111011", model="bernoulli", budget=5)
+    swept: kfio.SweepResult = kfio.sweep(sweep_file, engine="serial", budget=60)
+    checked: kfio.CheckResult = kfio.check(check_file, workers=1, budget=60)
+    first: Fraction | kfio.ExactReal | None = swept.rows[0].exact_of("critical_arrival_probability")
+    measured: Fraction | kfio.ExactReal | None = checked.outcomes[0].exact_of("measured")
+    status: str = checked.status
+    return [bounds.verdict, sim.mean_diverged_at, exact.mean_trace, fitted.channel, first, measured, status]
+
+
 if __name__ == "__main__":
     print(critical_probability(Fraction(5, 4)), is_stable([[1.25]], 0.5), request_file(kfio.System(A=[[2]], C=[[1]])))

@@ -100,3 +100,36 @@ def test_kfio_loop_is_a_typed_function_with_keywords_not_a_module(downstream_pyt
     assert keywords[:6] == ["feedback", "estimator", "form", "lqg", "channel", "actuator_channel"], note
     assert keywords[-3:] == ["cost", "options", "budget"], note
     assert "feedback: typing.Sequence[typing.Sequence[" in note and "form: Literal['predictor']" in note
+
+
+PUBLIC = {
+    "analyze": "kfio.stability._verdict.StabilityReport",
+    "bounds": "kfio.riccati_bounds",
+    "simulate": "kfio.simulation",
+    "expected_covariance": "kfio.simulation",
+    "loop": "kfio.loop._report.LoopReport",
+    "fit": "kfio.fit._fit.FitReport",
+    "sweep": "kfio.sweep._engine.SweepResult",
+    "check": "kfio.check._run.CheckResult",
+}
+
+
+def test_every_public_function_is_a_typed_callable_with_its_parameters(downstream_python: Path, tmp_path: Path) -> None:
+    probe = tmp_path / "probe_all.py"
+    probe.write_text("import kfio\n" + "".join(f"reveal_type(kfio.{name})\n" for name in PUBLIC))
+    out = _mypy(downstream_python, tmp_path, probe)
+    notes = [line for line in out.splitlines() if "Revealed type is" in line]
+    assert len(notes) == len(PUBLIC), out
+    for (name, result), note in zip(PUBLIC.items(), notes):
+        assert '"def (' in note and "*args: Any" not in note and "**kwargs: Any" not in note, (name, note)
+        assert "budget: kfio._budget.Budget | typing.SupportsFloat" in note, (name, note)
+        assert f"-> {result}" in note, (name, note)
+        assert "module" not in note.lower(), (name, note)
+    sweep_note = notes[list(PUBLIC).index("sweep")]
+    assert all(f"{k}: " in sweep_note for k in ("spec", "engine", "scheduler", "workers", "chunk_size", "progress")), (
+        sweep_note
+    )
+    check_note = notes[list(PUBLIC).index("check")]
+    assert all(f"{k}: " in check_note for k in ("spec", "base", "allow_outside", "workers", "memory_bytes")), check_note
+    analyze_note = notes[0]
+    assert "system: kfio._system.System | kfio._typing.StateSpaceLike | kfio.model._types.Request" in analyze_note

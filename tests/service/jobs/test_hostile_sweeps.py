@@ -17,11 +17,11 @@ from typing import Any
 import pytest
 from fastapi.testclient import TestClient
 
-import kfio.sweep._spec as spec_module
 from kfio.errors import LimitExceeded
 from kfio.service.cli import main
 from kfio.service.settings import Settings
 from kfio.sweep import RationalRange, load_sweep, parse_sweep, sweep_size
+from kfio.sweep import _spec as spec_module
 
 from support.app_client import ready_client
 
@@ -135,7 +135,7 @@ def test_http_counts_points_against_the_deployments_limit(client):
 
 def test_the_server_validates_no_point_the_worker_does(client, monkeypatch):
     """A bad point is not looked at in the server process: the job's worker names it in the job's problem."""
-    import kfio.sweep._parse as server_side  # where the sweep calls the single-request validator
+    from kfio.sweep import _parse as server_side  # where the sweep calls the single-request validator
 
     def forbidden(*args: Any, **kwargs: Any) -> None:
         raise AssertionError("a sweep's point was validated in the server process")
