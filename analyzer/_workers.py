@@ -121,9 +121,7 @@ class Worker:
     reserved: bool = False  # a pool's own mark (the service's cheap lane)
 
     @classmethod
-    def start(
-        cls, ctx: Any, runner: Runner, memory_bytes: int | None = None, name: str = "kfio-worker"
-    ) -> Worker:
+    def start(cls, ctx: Any, runner: Runner, memory_bytes: int | None = None, name: str = "kfio-worker") -> Worker:
         """Start a worker of the :mod:`multiprocessing` context ``ctx`` running ``runner``.
 
         A function ``runner`` needs the ``fork`` context (nothing is pickled);
@@ -133,9 +131,7 @@ class Worker:
         """
         parent_end, child_end = ctx.Pipe(duplex=True)
         lifeline, keep_alive = ctx.Pipe(duplex=False)
-        proc = ctx.Process(
-            target=worker_main, args=(child_end, runner, lifeline, memory_bytes), daemon=True, name=name
-        )
+        proc = ctx.Process(target=worker_main, args=(child_end, runner, lifeline, memory_bytes), daemon=True, name=name)
         proc.start()
         child_end.close()  # so that the worker's death reads as EOF here
         lifeline.close()  # the worker has its own copy; the parent keeps only the write end

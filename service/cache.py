@@ -131,4 +131,9 @@ class AnswerCache:
 
     def stats(self) -> dict[str, int]:
         """Entries, bytes, hits and misses (for ``/readyz``)."""
-        return {"entries": len(self._items), "bytes": int(self._items.currsize), "hits": self.hits, "misses": self.misses}
+        return {
+            "entries": len(self._items),
+            "bytes": int(self._items.currsize),
+            "hits": self.hits,
+            "misses": self.misses,
+        }
