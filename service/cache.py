@@ -10,10 +10,11 @@ spells it, because the canonical form is built from the exact tree of
 from __future__ import annotations
 
 import json
-from collections import OrderedDict
 from dataclasses import dataclass
 from decimal import Decimal
 from typing import Any
+
+from cachetools import LRUCache
 
 
 def canonical_json(tree: Any) -> str:
@@ -65,8 +66,25 @@ class CachedAnswer:
     media_type: str
 
 
+class _Answers(LRUCache[str, tuple[CachedAnswer, int]]):
+    """cachetools' LRU bounded in bytes (each value carries its size), and here in entries too."""
+
+    def __init__(self, max_entries: int, max_bytes: int) -> None:
+        super().__init__(max_bytes, getsizeof=_size_of)
+        self.max_entries = max_entries
+
+    def __setitem__(self, key: str, value: tuple[CachedAnswer, int]) -> None:
+        super().__setitem__(key, value)  # evicts the least recently used until the bytes fit
+        while len(self) > self.max_entries:
+            self.popitem()
+
+
+def _size_of(value: tuple[CachedAnswer, int]) -> int:
+    return value[1]
+
+
 class AnswerCache:
-    """Least-recently-used cache bounded in entries and in bytes.
+    """Least-recently-used cache bounded in entries and in bytes (body and key).
 
     Parameters
     ----------
@@ -86,38 +104,36 @@ class AnswerCache:
     def __init__(self, max_entries: int, max_bytes: int) -> None:
         self.max_entries = max_entries
         self.max_bytes = max_bytes
-        self._items: OrderedDict[str, CachedAnswer] = OrderedDict()
-        self._bytes = 0
+        self._items = _Answers(max_entries, max_bytes)
         self.hits = 0
         self.misses = 0
 
     def get(self, key: str) -> CachedAnswer | None:
         """The answer for ``key``, marked as recently used, or ``None``."""
-        answer = self._items.get(key)
-        if answer is None:
+        found = self._items.get(key)
+        if found is None:
             self.misses += 1
             return None
-        self._items.move_to_end(key)
         self.hits += 1
-        return answer
+        return found[0]
 
     def put(self, key: str, answer: CachedAnswer) -> None:
         """Store ``answer``, evicting the least recently used ones to fit."""
         size = len(answer.content) + len(key)
         if self.max_entries == 0 or size > self.max_bytes:
             return
-        old = self._items.pop(key, None)
-        if old is not None:
-            self._bytes -= len(old.content) + len(key)
-        self._items[key] = answer
-        self._bytes += size
-        while len(self._items) > self.max_entries or self._bytes > self.max_bytes:
-            k, v = self._items.popitem(last=False)
-            self._bytes -= len(v.content) + len(k)
+        # dropped first, so that only other answers are evicted to make room for its new size
+        self._items.pop(key, None)
+        self._items[key] = (answer, size)
 
     def __len__(self) -> int:
         return len(self._items)
 
     def stats(self) -> dict[str, int]:
         """Entries, bytes, hits and misses (for ``/readyz``)."""
-        return {"entries": len(self._items), "bytes": self._bytes, "hits": self.hits, "misses": self.misses}
+        return {
+            "entries": len(self._items),
+            "bytes": int(self._items.currsize),
+            "hits": self.hits,
+            "misses": self.misses,
+        }

@@ -42,6 +42,14 @@ problem+json instead of Uvicorn's ``text/plain``.
 When the process runs out of descriptors anyway, asyncio stops accepting for a
 second and retries; :func:`install_accept_error_log` turns its traceback per
 retry into one log line per :data:`LOG_INTERVAL_S`.
+
+Why Uvicorn is pinned: the rules above live in a subclass of Uvicorn's HTTP
+protocol classes and read their private state (``cycle``, ``more_body``,
+``send_400_response``), which any Uvicorn release may change.  So the guard
+claims only the releases its tests passed on, :data:`PROVEN_UVICORN`, and
+``pyproject.toml`` pins exactly that range; a test fails when the pin and this
+range differ or when the installed Uvicorn lies outside it.  Widen both after
+the connection tests pass on the new release.
 """
 
 from __future__ import annotations
@@ -56,6 +64,10 @@ from typing import Any, Callable, cast
 from .problems import MEDIA_TYPE, Problem
 
 log = logging.getLogger("kfio.service")
+
+#: Uvicorn releases the guard was proven on: from the first, inclusive, to the second, exclusive
+#: (the ``uvicorn>=A,<B`` pin of pyproject.toml).
+PROVEN_UVICORN = ("0.29", "0.56")
 
 #: Descriptors kept free for the worker pools' pipes, the log and the app's own files.
 RESERVED_FDS = 64

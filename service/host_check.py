@@ -10,11 +10,21 @@ Trusted names come from ``KFIO_TRUSTED_HOSTS``: a comma-separated list of host
 names (without port; IPv6 addresses in brackets), ``*.example.org`` for every
 subdomain of ``example.org``, or ``*`` for any name.  The default is the
 loopback names ``localhost``, ``127.0.0.1`` and ``[::1]``.
+
+:class:`HostCheck` is Starlette's :class:`TrustedHostMiddleware` (its
+normalised list, its ``*`` and its check that a wildcard is only ever
+``*.domain``) with two rules of kfio's: the refusal is the 421 problem above,
+not Starlette's plain-text 400, and the port is split off by
+:func:`host_name`, which reads IPv6 literals in brackets the same way on every
+Starlette release the dependency range allows.
 """
 
 from __future__ import annotations
 
-from typing import Any
+from collections.abc import Sequence
+
+from starlette.middleware.trustedhost import TrustedHostMiddleware
+from starlette.types import ASGIApp, Receive, Scope, Send
 
 from .problems import Problem
 from .settings import LOOPBACK_HOSTS
@@ -48,7 +58,7 @@ def host_name(header: str) -> str:
     return header.rsplit(":", 1)[0] if header.count(":") == 1 else header
 
 
-def trusted(name: str, hosts: tuple[str, ...]) -> bool:
+def trusted(name: str, hosts: Sequence[str]) -> bool:
     """Whether host ``name`` is one of ``hosts`` (``*`` trusts every name, ``*.d`` every subdomain of ``d``).
 
     Examples
@@ -65,18 +75,25 @@ def trusted(name: str, hosts: tuple[str, ...]) -> bool:
     return any(name == h or (h.startswith("*.") and name.endswith(h[1:])) for h in hosts)
 
 
-class HostCheck:
-    """ASGI middleware: 421 problem+json for a request whose ``Host`` is not trusted."""
+class HostCheck(TrustedHostMiddleware):
+    """ASGI middleware: 421 problem+json for a request whose ``Host`` is not trusted.
 
-    def __init__(self, app: Any, hosts: tuple[str, ...]) -> None:
-        self.app = app
-        self.hosts = hosts
+    A wildcard anywhere but a leading ``*.`` is refused when the app is built
+    (``ValueError``): such a name could never match.
+    """
 
-    async def __call__(self, scope: dict[str, Any], receive: Any, send: Any) -> None:
-        if scope["type"] in ("http", "websocket") and "*" not in self.hosts:
+    def __init__(self, app: ASGIApp, hosts: Sequence[str]) -> None:
+        try:
+            super().__init__(app, allowed_hosts=list(hosts), www_redirect=False)
+        except AssertionError as exc:  # Starlette's pattern check
+            raise ValueError(f"KFIO_TRUSTED_HOSTS: {exc}") from None
+        self.hosts = tuple(self.allowed_hosts)
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] in ("http", "websocket") and not self.allow_any:
             raw = next((v for k, v in scope.get("headers", ()) if k == b"host"), b"")
             name = host_name(raw.decode("latin-1"))
-            if not trusted(name, self.hosts):
+            if not trusted(name, self.allowed_hosts):
                 detail = (
                     f"this server does not answer for the host name {name[:100]!r}; "
                     "its operator lists the names it answers for in KFIO_TRUSTED_HOSTS"

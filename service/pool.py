@@ -18,30 +18,30 @@ cheap task that outlasts ``reserved_budget_s`` there is stopped and runs again
 on a regular worker with what is left of its budget.  Other tasks never use
 reserved workers, so a few long tasks cannot hold every process.
 
-The worker protocol is pickled messages over the pipe.  A new worker says
-``"ready"`` once its imports are done, and only then joins the idle queue (a
-worker still importing does not read, and a large request written to it
-would block the event loop).  Then, per task, the parent sends
-``(args, budget_s)`` and the worker answers ``runner(*args, budget_s)``.
+The process mechanics (a worker with its pipe and lifeline, its memory limit,
+the message protocol, killing it) are :mod:`kfio._workers`, which the CLI's
+watchdog and ``kfio check`` use too; this module adds what a server needs on
+top: waiting for the pipes on the event loop, deadlines per task, the queues,
+the reserved workers and the drain.  A new worker says
+:data:`~kfio._workers.READY` once its imports are done, and only then joins
+the idle queue (a worker still importing does not read, and a large request
+written to it would block the event loop).
 """
 
 from __future__ import annotations
 
 import asyncio
-import fcntl
-import importlib
 import logging
 import multiprocessing
 import os
-import signal
 import time
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass
 from multiprocessing.connection import Connection
 from typing import Any, Callable, cast
 
+from kfio._workers import READY, Worker, died_of_allocation
+
 from .threads import one_thread_per_process
-from .watchdog import limit_memory
 
 log = logging.getLogger("kfio.service")
 
@@ -69,70 +69,12 @@ class WorkerOutOfMemory(WorkerCrashed):
     """The worker died of SIGABRT/SIGSEGV/SIGBUS under a memory limit: C code failed to allocate."""
 
 
-#: Signals of a worker whose C code failed an allocation (FLINT aborts, others crash).
-_MEMORY_SIGNALS = (signal.SIGABRT, signal.SIGSEGV, signal.SIGBUS)
-
-
 class _LaneOverrun(PoolError):
     """A cheap task outlasted the reserved workers' budget (it runs again on a regular worker)."""
 
 
 class PoolShuttingDown(PoolBusy):
     """The server is shutting down: the task was refused, or stopped when the grace period ended."""
-
-
-def _exit_with_server(lifeline: Connection) -> None:
-    """Let the kernel end this worker as soon as the server is gone, even mid-task.
-
-    ``lifeline`` is the read end of a pipe of this worker alone (``F_SETOWN``
-    is per open file description) whose write end only the server holds and
-    nobody writes to, so it hangs up exactly when the server has exited,
-    however it died, or has dropped this worker.  In ``O_ASYNC`` mode the
-    hang-up sends SIGIO, whose default action ends the process in the
-    kernel: no Python thread has to run, so a task stuck in a long C call
-    holding the GIL is ended too.  (Watching the parent process would not do: it is the forkserver,
-    which lives as long as any of its children.)
-    """
-    fd = lifeline.fileno()
-    signal.signal(signal.SIGIO, signal.SIG_DFL)
-    fcntl.fcntl(fd, fcntl.F_SETOWN, os.getpid())
-    fcntl.fcntl(fd, fcntl.F_SETFL, fcntl.fcntl(fd, fcntl.F_GETFL) | os.O_ASYNC)
-    if lifeline.poll(0):  # the server died before we were watching
-        os._exit(1)
-
-
-def _worker_main(conn: Connection, runner_path: str, lifeline: Connection, memory_bytes: int | None = None) -> None:
-    """Body of a worker process: answer tasks until killed or the server is gone."""
-    _exit_with_server(lifeline)
-    module, _, name = runner_path.partition(":")
-    runner: Callable[..., Any] = getattr(importlib.import_module(module), name)
-    limit_memory(memory_bytes)  # after the imports: the limit is for the work
-    conn.send("ready")
-    while True:
-        try:
-            msg = conn.recv()
-        except (EOFError, OSError):
-            return
-        args, budget_s = msg
-        conn.send(runner(*args, budget_s))
-
-
-@dataclass(eq=False)
-class _Worker:
-    process: Any  # multiprocessing.Process of the pool's context
-    conn: Connection
-    keep_alive: Connection  # write end of the worker's lifeline
-    reserved: bool = False  # one of the cheap lane's workers
-
-    def kill(self) -> None:
-        for end in (self.conn, self.keep_alive):
-            try:
-                end.close()
-            except OSError:  # pragma: no cover - already closed
-                pass
-        if self.process.is_alive():
-            self.process.kill()
-        self.process.join(timeout=5)
 
 
 class WorkerPool:
@@ -211,10 +153,10 @@ class WorkerPool:
         )
         if start_method == "forkserver" and preload:
             self._ctx.set_forkserver_preload(list(preload))
-        self._idle: asyncio.Queue[_Worker] | None = None
-        self._spare: asyncio.Queue[_Worker] = asyncio.Queue()  # idle reserved workers
+        self._idle: asyncio.Queue[Worker] | None = None
+        self._spare: asyncio.Queue[Worker] = asyncio.Queue()  # idle reserved workers
         self._spare_waiting = 0
-        self._all: set[_Worker] = set()
+        self._all: set[Worker] = set()
         self._waiting = 0
         self._busy = 0
         self._closed = False
@@ -239,22 +181,11 @@ class WorkerPool:
 
     # -- life cycle -------------------------------------------------------
 
-    def _spawn(self) -> _Worker:
-        parent_end, child_end = self._ctx.Pipe(duplex=True)
-        lifeline, keep_alive = self._ctx.Pipe(duplex=False)
-        proc = self._ctx.Process(
-            target=_worker_main,
-            args=(child_end, self.runner, lifeline, self.memory_bytes),
-            daemon=True,
-            name="kfio-worker",
-        )
-        proc.start()
-        child_end.close()  # so that the worker's death reads as EOF here
-        lifeline.close()  # the worker has its own copy; we keep only the write end
-        return _Worker(proc, parent_end, keep_alive)
+    def _spawn(self) -> Worker:
+        return Worker.start(self._ctx, self.runner, self.memory_bytes)
 
-    async def _new_worker(self) -> _Worker:
-        """A started worker that has said ``"ready"`` (its imports are done)."""
+    async def _new_worker(self) -> Worker:
+        """A started worker that has said :data:`~kfio._workers.READY` (its imports are done)."""
         worker = await self._in_thread(self._spawn)
         try:
             await _readable(worker.conn, self.start_timeout_s)
@@ -262,7 +193,7 @@ class WorkerPool:
         except (TimeoutError, EOFError, OSError):
             await self._in_thread(worker.kill)
             raise WorkerCrashed(f"a new worker did not become ready (exit code {worker.process.exitcode})") from None
-        if hello != "ready":  # pragma: no cover - protocol error
+        if hello != READY:  # pragma: no cover - protocol error
             await self._in_thread(worker.kill)
             raise WorkerCrashed(f"a new worker said {hello!r} instead of 'ready'")
         return worker
@@ -345,7 +276,7 @@ class WorkerPool:
             "moved": self.moved,
         }
 
-    def _release(self, worker: _Worker) -> None:
+    def _release(self, worker: Worker) -> None:
         """Put an idle worker back in its queue (the reserved ones in their own)."""
         if worker.reserved:
             self._spare.put_nowait(worker)
@@ -353,7 +284,7 @@ class WorkerPool:
             assert self._idle is not None
             self._idle.put_nowait(worker)
 
-    async def _replace(self, worker: _Worker) -> None:
+    async def _replace(self, worker: Worker) -> None:
         self._all.discard(worker)
         self.replaced += 1
         await self._in_thread(worker.kill)
@@ -367,13 +298,13 @@ class WorkerPool:
         self._all.add(fresh)
         self._release(fresh)
 
-    def _replace_soon(self, worker: _Worker) -> None:
+    def _replace_soon(self, worker: Worker) -> None:
         task = asyncio.get_running_loop().create_task(self._replace(worker))
         task.add_done_callback(_log_task_error)
 
     # -- running tasks ----------------------------------------------------
 
-    async def _checkout(self, deadline: float, cheap: bool = False) -> _Worker:
+    async def _checkout(self, deadline: float, cheap: bool = False) -> Worker:
         if self._draining:
             raise PoolShuttingDown("the server is shutting down and takes no new work")
         task = asyncio.current_task()
@@ -393,7 +324,7 @@ class WorkerPool:
         finally:
             self._queued.discard(task)
 
-    def _free_regular(self) -> _Worker | None:
+    def _free_regular(self) -> Worker | None:
         """A free regular worker that nobody is waiting for, if there is one."""
         while self._idle is not None and self._waiting == 0 and not self._idle.empty():
             worker = self._idle.get_nowait()
@@ -402,7 +333,7 @@ class WorkerPool:
             self._replace_soon(worker)  # died while idle (e.g. OOM killer)
         return None
 
-    async def _wait_for_spare(self, deadline: float) -> _Worker | None:
+    async def _wait_for_spare(self, deadline: float) -> Worker | None:
         """For a cheap task: a free regular worker, else a reserved one (waited for within ``deadline``).
 
         ``None`` sends the task to the regular queue: the pool has no reserved
@@ -421,7 +352,7 @@ class WorkerPool:
         finally:
             self._spare_waiting -= 1
 
-    async def _wait_for_worker(self, deadline: float) -> _Worker:
+    async def _wait_for_worker(self, deadline: float) -> Worker:
         if not self._ready.is_set():
             try:
                 await asyncio.wait_for(self._ready.wait(), max(0.0, deadline - time.monotonic()))
@@ -440,7 +371,7 @@ class WorkerPool:
         finally:
             self._waiting -= 1
 
-    async def _next_alive(self, queue: asyncio.Queue[_Worker], deadline: float) -> _Worker:
+    async def _next_alive(self, queue: asyncio.Queue[Worker], deadline: float) -> Worker:
         """The next live worker put on ``queue`` before ``deadline``; a dead one (e.g. the OOM killer's) is replaced."""
         while True:
             remaining = deadline - time.monotonic()
@@ -491,7 +422,7 @@ class WorkerPool:
         try:
             remaining = max(0.0, deadline - time.monotonic())
             try:
-                worker.conn.send((args, remaining))
+                worker.send(args, remaining)
             except (OSError, EOFError, ValueError):
                 raise WorkerCrashed("the worker died before it could take the task") from None
             try:
@@ -513,9 +444,8 @@ class WorkerPool:
             try:
                 value = worker.conn.recv()
             except (EOFError, OSError):
-                await self._in_thread(worker.process.join, 1.0)  # reap it, for the exit code
-                code = worker.process.exitcode
-                if self.memory_bytes is not None and code is not None and -code in _MEMORY_SIGNALS:
+                code = await self._in_thread(worker.exit_code, 1.0)  # reap it, for the exit code
+                if self.memory_bytes is not None and died_of_allocation(code, self.memory_bytes):
                     raise WorkerOutOfMemory(
                         f"the worker process died of signal {-code} during the task, most likely when an "
                         f"allocation in C code went past its memory limit of {self.memory_bytes >> 20} MiB"
@@ -557,7 +487,7 @@ async def _readable(conn: Connection, timeout: float) -> None:
             os.set_blocking(fd, True)
 
 
-def _kill_all(workers: list[_Worker]) -> None:
+def _kill_all(workers: list[Worker]) -> None:
     for worker in workers:
         worker.kill()
 

@@ -18,15 +18,14 @@ Examples
 from __future__ import annotations
 
 import io
-import os
-import pickle
-import select
 import signal
 import sys
 import time
 import traceback
 from contextlib import redirect_stderr, redirect_stdout
 from typing import Callable
+
+from kfio._workers import ALLOCATION_SIGNALS, Died, memory_limit, run_all
 
 from . import exitcodes
 
@@ -40,51 +39,30 @@ MAX_MEMORY_MB = 1 << 24
 #: Seconds past the budget before the child is killed (it may raise ``BudgetExceeded`` itself first).
 DEFAULT_GRACE_S = 2.0
 
-#: Signals by which a child under a memory limit dies when an allocation in C code fails.
-_MEMORY_SIGNALS = {signal.SIGABRT, signal.SIGSEGV, signal.SIGBUS, signal.SIGKILL}
+#: Signals by which a child under a memory limit dies when an allocation fails: in C code, or the
+#: kernel's OOM killer (SIGKILL: the watchdog's own kill at the deadline is told apart by the clock).
+_MEMORY_SIGNALS = ALLOCATION_SIGNALS | {signal.SIGKILL}
 
 
-#: The limit :func:`limit_memory` set in this process (for messages).
-_current_limit: int | None = None
-
-
-def limit_memory(memory_bytes: int | None) -> None:
-    """Cap this process's address space (``RLIMIT_AS``) at ``memory_bytes`` (``None``: no change)."""
-    global _current_limit
-    if memory_bytes is None:
-        return
-    _current_limit = memory_bytes
-    import resource
-
-    _soft, hard = resource.getrlimit(resource.RLIMIT_AS)
-    limit = memory_bytes if hard == resource.RLIM_INFINITY else min(memory_bytes, hard)
-    resource.setrlimit(resource.RLIMIT_AS, (limit, hard))
-
-
-def _child(work: Callable[[], int], memory_bytes: int | None, out_fd: int) -> None:
+def _captured(work: Callable[[], int], memory_bytes: int | None, _budget_s: float | None) -> tuple[int, str, str]:
+    """In the child: ``work()``'s exit code and what it printed, never an exception."""
     out, err = io.StringIO(), io.StringIO()
     code = exitcodes.INTERNAL
-    try:
-        with redirect_stdout(out), redirect_stderr(err):
-            try:
-                limit_memory(memory_bytes)
-                code = work()
-            except MemoryError:
-                code = exitcodes.BUDGET
-                print(memory_message(memory_bytes), file=sys.stderr)
-            except BaseException:  # noqa: BLE001 - reported to the parent as a bug
-                traceback.print_exc()
-                print("kfio: internal error (this is a bug; please report the request that caused it)", file=sys.stderr)
-        payload = pickle.dumps((code, out.getvalue(), err.getvalue()))
-        with os.fdopen(out_fd, "wb") as fh:
-            fh.write(payload)
-    finally:
-        os._exit(0)
+    with redirect_stdout(out), redirect_stderr(err):
+        try:
+            code = work()
+        except MemoryError:
+            code = exitcodes.BUDGET
+            print(memory_message(memory_bytes), file=sys.stderr)
+        except BaseException:  # noqa: BLE001 - reported to the parent as a bug
+            traceback.print_exc()
+            print("kfio: internal error (this is a bug; please report the request that caused it)", file=sys.stderr)
+    return code, out.getvalue(), err.getvalue()
 
 
 def memory_message(memory_bytes: int | None = None) -> str:
     """The one stderr line of a command that ran out of memory (default: this process's limit)."""
-    memory_bytes = memory_bytes if memory_bytes is not None else _current_limit
+    memory_bytes = memory_bytes if memory_bytes is not None else memory_limit()
     limit = f"the limit of {memory_bytes >> 20} MiB (--memory-mb)" if memory_bytes else "the available memory"
     return f"kfio: memory budget exceeded: the computation needs more than {limit}"
 
@@ -96,6 +74,9 @@ def run_supervised(
     memory_bytes: int | None = None,
 ) -> int:
     """Run ``work()`` (returning an exit code) in a forked child with a hard deadline.
+
+    The child is one worker of :func:`kfio._workers.run_all` (``fork``: ``work``
+    may be any function, nothing is pickled), which kills it at the deadline.
 
     Parameters
     ----------
@@ -117,48 +98,31 @@ def run_supervised(
     """
     for stream in (sys.stdout, sys.stderr):
         stream.flush()
-    read_fd, write_fd = os.pipe()
-    pid = os.fork()
-    if pid == 0:  # pragma: no cover - the child ends in os._exit
-        os.close(read_fd)
-        _child(work, memory_bytes, write_fd)
-    os.close(write_fd)
     deadline = None if budget_s is None else time.monotonic() + budget_s + grace_s
-    chunks: list[bytes] = []
-    killed = False
+
+    def child(budget: float | None) -> tuple[int, str, str]:
+        return _captured(work, memory_bytes, budget)
+
     try:
-        with os.fdopen(read_fd, "rb", buffering=0) as pipe:
-            while True:
-                timeout = None if deadline is None else max(0.0, deadline - time.monotonic())
-                ready, _, _ = select.select([pipe], [], [], timeout)
-                if not ready:
-                    os.kill(pid, signal.SIGKILL)
-                    killed = True
-                    break
-                chunk = pipe.read(1 << 16)
-                if not chunk:
-                    break
-                chunks.append(chunk)
-    except KeyboardInterrupt:
-        os.kill(pid, signal.SIGKILL)
-        os.waitpid(pid, 0)
+        answers = run_all(child, [((), budget_s)], workers=1, deadline=deadline, memory_bytes=memory_bytes)
+    except KeyboardInterrupt:  # run_all has killed the child
         print("kfio: interrupted", file=sys.stderr)
         return 130
-    _, status = os.waitpid(pid, 0)
-    if killed:
+    if 0 not in answers:
         print(
             f"kfio: budget exceeded: the computation did not finish within {budget_s:g} s; it was stopped",
             file=sys.stderr,
         )
         return exitcodes.BUDGET
-    if not chunks:
-        sig = os.WTERMSIG(status) if os.WIFSIGNALED(status) else None
+    answer = answers[0]
+    if isinstance(answer, Died):
+        sig = -answer.exit_code if answer.exit_code is not None and answer.exit_code < 0 else None
         if memory_bytes is not None and sig in _MEMORY_SIGNALS:
             print(memory_message(memory_bytes) + f" (the process died of signal {sig})", file=sys.stderr)
             return exitcodes.BUDGET
-        print(f"kfio: internal error: the computation process died (status {status})", file=sys.stderr)
+        print(f"kfio: internal error: the computation process died (exit code {answer.exit_code})", file=sys.stderr)
         return exitcodes.INTERNAL
-    code, out, err = pickle.loads(b"".join(chunks))
+    code, out, err = answer
     sys.stdout.write(out)
     sys.stderr.write(err)
     return int(code)

@@ -2,24 +2,26 @@
 
 The runs are the same functions as ``kfio analyze|bounds|simulate`` (each
 entry's requirements are judged on that command's JSON report, see
-:mod:`kfio.check._requirements`), in a pool of forked worker processes.  Each
-run has the check's ``point_budget_s`` as its cooperative :class:`kfio.Budget`;
-the whole check has ``time_budget_s``, after which the pool is terminated
+:mod:`kfio.check._requirements`), in forked worker processes (:func:`kfio._workers.run_all`).
+Each run has the check's ``point_budget_s`` as its cooperative :class:`kfio.Budget`;
+the whole check has ``time_budget_s``, after which every worker is killed
 (a run stuck in C code cannot outlive it) and the requirements not yet
-judged are errors of kind ``budget-exceeded``.
+judged are errors of kind ``budget-exceeded``.  A run whose worker died is an
+error too: ``budget-exceeded`` when it died of a failed allocation under the
+memory limit (as a ``MemoryError`` in Python is), else ``internal``.
 """
 
 from __future__ import annotations
 
-import multiprocessing
 import os
 import time
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any, Callable, ClassVar
+from typing import Any, Callable, ClassVar, cast
 
 from .._budget import Budget
 from .._reporting import Report, ReportPart
+from .._workers import Died, run_all
 from ..errors import AnalyzerError, BudgetExceeded, InvalidInput, MissingDependency, NumericalFailure
 from ..model import fraction_text, values_withheld
 from ._requirements import judge
@@ -203,13 +205,13 @@ def _run_quoting_nothing(command: str, tree: dict[str, Any], seconds: float) -> 
         return run_one(command, tree, seconds)
 
 
-def _limit_memory(memory_bytes: int | None) -> None:
-    if memory_bytes:
-        import resource
-
-        _soft, hard = resource.getrlimit(resource.RLIMIT_AS)
-        limit = memory_bytes if hard == resource.RLIM_INFINITY else min(memory_bytes, hard)
-        resource.setrlimit(resource.RLIMIT_AS, (limit, hard))
+def _from_worker(answer: Any) -> tuple[str, Any, float]:
+    """A run's answer as :func:`run_one` gives it, also when its worker died (:class:`kfio._workers.Died`)."""
+    if not isinstance(answer, Died):
+        return cast("tuple[str, Any, float]", answer)
+    if answer.out_of_memory:
+        return "error", ("budget-exceeded", "the run needs more memory than its limit"), 0.0
+    return "error", ("internal", f"the worker process died during the run (exit code {answer.exit_code})"), 0.0
 
 
 def _preload(commands: set[str]) -> None:
@@ -262,27 +264,16 @@ def run_check(
             if progress:
                 progress(k + 1, len(tasks))
     else:
-        _preload({c for _, c in tasks})
-        ctx = multiprocessing.get_context("fork")
-        pool = ctx.Pool(n, initializer=_limit_memory, initargs=(memory_bytes,))
-        try:
-            pending = {
-                (i, c): pool.apply_async(_run_quoting_nothing, (c, spec.entries[i].request_for(c), point))
-                for i, c in tasks
-            }
-            while pending and time.monotonic() < deadline:
-                for key in [k for k, r in pending.items() if r.ready()]:
-                    try:
-                        results[key] = pending.pop(key).get()
-                    except Exception as exc:  # noqa: BLE001 - a worker that died (e.g. in C code at its memory limit)
-                        results[key] = ("error", ("internal", f"the worker failed: {type(exc).__name__}: {exc}"), 0.0)
-                    if progress:
-                        progress(len(results), len(tasks))
-                if pending:
-                    next(iter(pending.values())).wait(min(0.05, max(0.0, deadline - time.monotonic())))
-        finally:
-            pool.terminate()
-            pool.join()
+        _preload({c for _, c in tasks})  # before the workers fork: they share the imports
+        answers = run_all(
+            _run_quoting_nothing,
+            [((c, spec.entries[i].request_for(c)), point) for i, c in tasks],
+            workers=n,
+            deadline=deadline,
+            memory_bytes=memory_bytes,
+            progress=progress,
+        )
+        results = {tasks[k]: _from_worker(a) for k, a in answers.items()}
     outcomes = []
     for i, entry in enumerate(spec.entries):
         for req in entry.requirements:

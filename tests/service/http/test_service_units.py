@@ -41,6 +41,17 @@ def test_lru_evicts_least_recently_used_by_entries_and_bytes() -> None:
     assert AnswerCache(0, 100).get("x") is None
 
 
+def test_lru_replacing_an_answer_counts_its_new_size_only() -> None:
+    cache = AnswerCache(max_entries=10, max_bytes=30)  # each entry: 2 key bytes + its content
+    cache.put("k1", CachedAnswer(b"x" * 8, "application/json"))
+    cache.put("k2", CachedAnswer(b"y" * 8, "application/json"))
+    cache.put("k1", CachedAnswer(b"z" * 12, "application/json"))  # 14 + 10 bytes fit: nothing evicted
+    assert cache.get("k2") is not None and cache.get("k1").content == b"z" * 12
+    assert cache.stats() == {"entries": 2, "bytes": 24, "hits": 2, "misses": 0}
+    cache.put("k3", CachedAnswer(b"w" * 8, "application/json"))  # k2 (read before k1) is the least recent
+    assert cache.get("k2") is None and cache.get("k1") is not None and cache.stats()["bytes"] == 24
+
+
 @pytest.mark.parametrize(
     ("exc", "status", "kind"),
     [
