@@ -36,7 +36,7 @@ class OptionField:
     """One option of a request: where it lives, what it accepts, its default and what it means.
 
     ``group`` is the command's option group (``"analyze"``, ``"bounds"``,
-    ``"simulate"``, ``"loop"``), ``""`` for a top-level option
+    ``"simulate"``, ``"loop"``; ``"sweep"`` for a sweep file's options), ``""`` for a top-level option
     (``options.time_budget_s``), or ``"<group>.<key>"`` for a key of an
     object-valued option.  ``default`` is ``None`` when the option has none
     (or it depends on the request; ``description`` says so).
@@ -53,12 +53,19 @@ class OptionField:
     default: Any = None
     enum: tuple[str, ...] = ()
     max_items: int | None = None
+    #: Most characters of a ``number`` written as JSON text, when shorter than any exact number's.
+    max_text: int | None = None
     properties: tuple[OptionField, ...] = ()
     required: tuple[str, ...] = ()
 
     @property
     def pointer(self) -> str:
-        """The JSON pointer of this option in a request, such as ``/options/bounds/grid``."""
+        """The JSON pointer of this option in a request, such as ``/options/bounds/grid``.
+
+        The ``sweep`` group is the sweep file's own ``options`` object: ``/options/chunk_size``.
+        """
+        if self.group == "sweep":
+            return "/options/" + self.name
         return "/options/" + "/".join([*self.group.split("."), self.name] if self.group else [self.name])
 
     def admits(self, value: Fraction | int) -> bool:
@@ -298,11 +305,32 @@ OPTION_FIELDS: tuple[OptionField, ...] = (
         minimum=2,
         maximum=41,
     ),
+    OptionField(
+        "sweep",
+        "point_budget_s",
+        "number",
+        "Seconds each point may take (an exact number).",
+        minimum=Fraction(1, 100),
+        maximum=3600,
+        default=60,
+        max_text=40,
+    ),
+    OptionField(
+        "sweep",
+        "time_budget_s",
+        "number",
+        "Seconds the whole sweep may take (an exact number); the points not reached are marked budget-exceeded.",
+        minimum=Fraction(1, 100),
+        maximum=86400,
+        max_text=40,
+    ),
+    OptionField("sweep", "chunk_size", "integer", "Points per task sent to a worker.", minimum=1, maximum=100_000),
 )
 
 #: The option groups of a request (one per command that reads a request) in the order the
 #: validator lists them; the loop request has its own group, ``loop``.
 REQUEST_GROUPS = ("analyze", "bounds", "simulate")
+#: The groups of a request and of the loop request; the table's ``sweep`` group is the sweep file's own ``options``.
 OPTION_GROUP_NAMES = (*REQUEST_GROUPS, "loop")
 
 

@@ -48,6 +48,8 @@ _LAZY = {
     "iter_sweep": "._engine",
     "jsonl_line": "._table",
     "load_sweep": "._spec",
+    "MAX_AXIS_VALUES": "._spec",
+    "MAX_POINTS": "._spec",
     "parse_sweep": "._spec",
     "point_at": "._spec",
     "points": "._spec",
@@ -75,6 +77,8 @@ if TYPE_CHECKING:
     from ._evaluate import cache_stats, clear_caches, evaluate_point
     from ._rows import FIELDS, coordinate_column, row_from_report
     from ._spec import (
+        MAX_AXIS_VALUES,
+        MAX_POINTS,
         Axis,
         RationalRange,
         SweepPointInvalid,
@@ -98,6 +102,8 @@ __all__ = [
     "Axis",
     "FIELDS",
     "FORMATS",
+    "MAX_AXIS_VALUES",
+    "MAX_POINTS",
     "RationalRange",
     "SweepPointInvalid",
     "SweepResult",

@@ -18,14 +18,23 @@ from fractions import Fraction
 from typing import Any, Callable, Iterator, Sequence
 
 from ..errors import InvalidInput, LimitExceeded
-from ..model import DEFAULT_LIMITS, Limits, fraction_text, load_json, parse_number
+from ..model import (
+    DEFAULT_LIMITS,
+    Limits,
+    OptionField,
+    fraction_text,
+    load_json,
+    option_field,
+    option_fields,
+    parse_number,
+)
 from ._parse import parse_point
 
 COMMANDS = ("analyze", "bounds", "simulate", "loop")
 COMBINES = ("grid", "zip")
 _TOP_KEYS = {"command", "base", "axes", "combine", "requests", "options"}
 _AXIS_KEYS = {"pointer", "values", "from", "to", "num", "name"}
-_OPTION_KEYS = {"point_budget_s", "time_budget_s", "chunk_size"}
+_OPTION_KEYS = {f.name for f in option_fields("sweep")}
 
 #: At most this many points in one sweep (a grid of 1000 x 1000).
 MAX_POINTS = 1_000_000
@@ -327,10 +336,14 @@ def parse_sweep(obj: Any, max_points: int = MAX_POINTS) -> SweepSpec:
     unknown = sorted(set(opts) - _OPTION_KEYS)
     if unknown:
         raise InvalidInput(f"/options/{unknown[0]}", f"unknown option; sweep options are {sorted(_OPTION_KEYS)}")
-    point_budget = float(_budget(opts.get("point_budget_s", 60), "/options/point_budget_s"))
+    point_field = option_field("sweep", "point_budget_s")
+    point_budget = float(_budget(opts.get("point_budget_s", point_field.default), point_field))
     total = opts.get("time_budget_s")
-    time_budget = None if total is None else float(_budget(total, "/options/time_budget_s", upper=86400))
-    chunk = None if "chunk_size" not in opts else _positive_int(opts["chunk_size"], "/options/chunk_size", 100_000)
+    time_budget = None if total is None else float(_budget(total, option_field("sweep", "time_budget_s")))
+    chunk_field = option_field("sweep", "chunk_size")
+    chunk = None
+    if "chunk_size" in opts:
+        chunk = _positive_int(opts["chunk_size"], "/options/chunk_size", int(chunk_field.maximum or 0))
     if ("requests" in obj) == ("base" in obj):
         raise InvalidInput("/", "give either 'base' with 'axes', or 'requests'")
     sweep_size(obj, min(max_points, MAX_POINTS))
@@ -357,12 +370,13 @@ def parse_sweep(obj: Any, max_points: int = MAX_POINTS) -> SweepSpec:
     return SweepSpec(command, base, axes, combine, None, point_budget, time_budget, chunk)
 
 
-def _budget(value: Any, field: str, upper: int = 3600) -> Fraction:
-    if isinstance(value, (Decimal, str)) and len(str(value)) > 40:
+def _budget(value: Any, spec: OptionField) -> Fraction:
+    field = spec.pointer
+    if isinstance(value, (Decimal, str)) and len(str(value)) > (spec.max_text or 0):
         raise InvalidInput(field, "expected a number of seconds")
     t = parse_number(value, field)
-    if not Fraction(1, 100) <= t <= upper:
-        raise InvalidInput(field, f"must lie in [0.01, {upper}] seconds")
+    if not spec.admits(t):
+        raise InvalidInput(field, f"must lie in [{float(spec.minimum or 0):g}, {spec.maximum}] seconds")
     return t
 
 

@@ -58,6 +58,8 @@ def option_schema(field: OptionField) -> dict[str, Any]:
         out = {"type": "integer", **number_bounds(field), "description": field.description}
     elif field.kind == "number":
         out = exact_number(field.description, **number_bounds(field))
+        if field.max_text is not None:
+            out["anyOf"][1] = {**NUMBER_TEXT, "maxLength": field.max_text}
     elif field.kind == "enum":
         out = {"enum": list(field.enum), "description": field.description}
     elif field.kind == "pointer":

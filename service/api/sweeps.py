@@ -15,9 +15,12 @@ from typing import TYPE_CHECKING, Any
 from fastapi import APIRouter
 from fastapi.responses import Response
 
+from kfio.model import option_fields
+from kfio.sweep import MAX_AXIS_VALUES
+
 from .deps import BodyDep
 from .jobs import STATUS_RESPONSE, JobStoreDep, validated
-from .schemas import NUMBER_PATTERN, problem_responses
+from .schemas import option_schema, problem_responses
 
 if TYPE_CHECKING:
     from kfio.sweep import SweepSpec
@@ -55,7 +58,7 @@ SWEEP_SCHEMA: dict[str, Any] = {
                     "values": {"type": "array", "minItems": 1},
                     "from": {"description": "exact number: first value of a range"},
                     "to": {"description": "exact number: last value of a range"},
-                    "num": {"type": "integer", "minimum": 1, "maximum": 100000},
+                    "num": {"type": "integer", "minimum": 1, "maximum": MAX_AXIS_VALUES},
                 },
                 "additionalProperties": False,
             },
@@ -73,23 +76,7 @@ SWEEP_SCHEMA: dict[str, Any] = {
         },
         "options": {
             "type": "object",
-            "properties": {
-                "point_budget_s": {
-                    "description": "each point's budget in seconds (0.01 to 3600, default 60)",
-                    "anyOf": [
-                        {"type": "number", "minimum": 0.01, "maximum": 3600},
-                        {"type": "string", "pattern": NUMBER_PATTERN, "maxLength": 40},
-                    ],
-                },
-                "time_budget_s": {
-                    "description": "the whole sweep's budget in seconds (0.01 to 86400)",
-                    "anyOf": [
-                        {"type": "number", "minimum": 0.01, "maximum": 86400},
-                        {"type": "string", "pattern": NUMBER_PATTERN, "maxLength": 40},
-                    ],
-                },
-                "chunk_size": {"type": "integer", "minimum": 1, "description": "points per task"},
-            },
+            "properties": {f.name: option_schema(f) for f in option_fields("sweep")},
             "additionalProperties": False,
         },
     },

@@ -40,6 +40,7 @@ from kfio.riccati_bounds._targets import parse_trace_target
 from kfio.simulation._outage_target import parse_outage_target
 from kfio.simulation._setup import parse_options as parse_simulate_options
 from kfio.simulation._stationary import parse_thresholds
+from kfio.sweep import parse_sweep
 
 from support.paths import ROOT
 
@@ -89,6 +90,9 @@ VALIDATORS: dict[str, Callable[[Request], None]] = {
 
 def _validate(group: str, options: dict[str, Any], base: str = "one") -> None:
     """Run the validator of ``group`` (``""``: the top-level options) on a request carrying ``options``."""
+    if group == "sweep":  # the sweep file's own options, beside its base request
+        parse_sweep({"command": "analyze", "base": BASES["one"], "axes": [], "options": options["sweep"]})
+        return
     if group == "loop" or (group == "" and base == "loop"):
         load_loop_request(json.dumps(dict(BASES["loop"], options=options)))
         return
@@ -123,8 +127,8 @@ def _all_fields() -> list[OptionField]:
 
 def _bases(field: OptionField) -> list[str]:
     key = f"{field.group}.{field.name}" if field.group else field.name
-    if field.group == "loop":
-        return ["loop"]
+    if field.group in ("loop", "sweep"):
+        return [field.group]
     if field.group == "":  # the top-level options: the request parser and the loop's
         return ["one", "loop"]
     return [NEEDS.get(key, "one")]
@@ -204,6 +208,24 @@ def test_the_validator_allows_exactly_the_tables_options(group: str) -> None:
     assert _allowed_by_refusal(group) == {f.name for f in option_fields(group)}
 
 
+@pytest.mark.parametrize("field", [f for f in OPTION_FIELDS if f.max_text], ids=lambda f: f.pointer)
+def test_the_text_length_limit_is_the_validators(field: OptionField) -> None:
+    inside = "1." + "0" * (field.max_text - 2)  # max_text characters, the value 1
+    assert len(inside) == field.max_text and field.admits(Fraction(inside))
+    _validate(field.group, _options(field, inside), _bases(field)[0])
+    with pytest.raises(InvalidInput) as err:  # one character more, the same value
+        _validate(field.group, _options(field, inside + "0"), _bases(field)[0])
+    assert err.value.field == field.pointer
+
+
+def test_the_sweep_file_allows_exactly_the_tables_sweep_options() -> None:
+    with pytest.raises(InvalidInput, match="sweep options are") as err:
+        _validate("sweep", {"sweep": {"no_such_option": 1}})
+    assert err.value.field == "/options/no_such_option"
+    allowed = set(re.findall(r"'([a-z_]+)'", err.value.rule))
+    assert allowed == {f.name for f in option_fields("sweep")}
+
+
 def test_the_top_level_options_are_the_groups_and_the_tables_top_level_fields() -> None:
     assert _allowed_by_refusal("") == {*REQUEST_GROUPS, *(f.name for f in option_fields(""))}
     assert OPTION_KEYS == {g: frozenset(f.name for f in option_fields(g)) for g in REQUEST_GROUPS}
@@ -247,6 +269,8 @@ def _published(field: OptionField) -> dict[str, Any]:
     top, _, sub = field.group.partition(".")
     if top == "loop":
         options = _schema("loop")["properties"]["options"]["properties"]
+    elif top == "sweep":
+        return dict(_schema("sweep")["properties"]["options"]["properties"][field.name])
     else:
         options = _schema("request")["$defs"]["Options"]["properties"]
     node = options if not top else options[top]["properties"]
@@ -272,6 +296,8 @@ def test_the_published_schema_states_the_tables_range_enum_and_default(field: Op
         assert schema["enum"] == list(field.enum)
     if field.kind == "number_list":
         assert schema["maxItems"] == field.max_items
+    if field.max_text is not None:
+        assert schema["anyOf"][1]["maxLength"] == field.max_text
     if field.default is not None and field.kind != "fixed":
         assert schema["default"] == _json_number(field.default) if field.kind != "enum" else field.default
 
