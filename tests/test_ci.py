@@ -59,9 +59,7 @@ def test_the_fast_tier_runs_first_and_the_tiers_partition_the_suite() -> None:
 
 def _strict_flags() -> dict[str, bool]:
     """``{config name: value}`` of the flags this mypy's ``--strict`` enables, read from ``mypy --help``."""
-    text = subprocess.run(
-        [sys.executable, "-m", "mypy", "--help"], capture_output=True, text=True, check=True
-    ).stdout
+    text = subprocess.run([sys.executable, "-m", "mypy", "--help"], capture_output=True, text=True, check=True).stdout
     listing = re.search(r"--strict\s+Strict mode; enables the following flags:(.*?)\n  --", text, flags=re.S)
     assert listing, "mypy --help no longer lists what --strict enables"
     flags = re.findall(r"--([a-z-]+)", re.sub(r"-\n\s*", "-", listing.group(1)))
