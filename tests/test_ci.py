@@ -53,7 +53,8 @@ def test_the_fast_tier_runs_first_and_the_tiers_partition_the_suite() -> None:
     runs = [shlex.split(part) for line in CI_LINES for part in line.split("&&") if "-m pytest" in part]
     markers = [words[words.index("-m", words.index("pytest")) + 1] for words in runs]
     assert markers == ["not slow", "slow"]
-    assert "--cov=kfio" in runs[0]  # line coverage of the library and the service, on the fast tier
+    assert all("--cov=kfio" in words for words in runs)  # line coverage of the library and the service
+    assert "--cov-append" in runs[1]  # one report over both tiers
 
 
 def _strict_flags() -> dict[str, bool]:
