@@ -12,7 +12,7 @@ argument gets the JSON route's message with the Python argument as the field
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Callable, TypeVar
 
 from ._budget import Budget
 from ._system import System, plant_of
@@ -67,7 +67,8 @@ def request_dict(
 'options': {'time_budget_s': 10}}
     """
     tree, _ = _tree(system, channel, command, options, budget, Q=Q, R=R)
-    return json_ready(tree)
+    ready: dict[str, Any] = json_ready(tree)
+    return ready
 
 
 def _tree(
@@ -188,7 +189,10 @@ def _build_request(
         raise renamed(exc, routes) from None
 
 
-def _run(fn: Any, routes: Sequence[Route], *args: Any, **kwargs: Any) -> Any:
+_R = TypeVar("_R")
+
+
+def _run(fn: Callable[..., _R], routes: Sequence[Route], *args: Any, **kwargs: Any) -> _R:
     try:
         return fn(*args, **kwargs)
     except InvalidInput as exc:

@@ -12,18 +12,24 @@ computation stopped by its budget leaves nothing behind.
 from __future__ import annotations
 
 from collections import OrderedDict
-from typing import TYPE_CHECKING, Any, Callable, Hashable, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Generic, Hashable, Sequence, TypeVar
 
 from ._budget import Budget
 
 if TYPE_CHECKING:
     from .structure import FmoBlock
 
+#: What a plant's analysis derives from the plant alone, by key (see :func:`reused_plant` and :func:`kept`).
+Memo = dict[Hashable, Any]
+
 #: Plants whose blocks each process keeps.
 STRUCTURE_ENTRIES = 256
 
 
-class LRU:
+V = TypeVar("V")
+
+
+class LRU(Generic[V]):
     """A least-recently-used map with hit and miss counts.
 
     Examples
@@ -37,11 +43,11 @@ class LRU:
 
     def __init__(self, size: int):
         self.size = size
-        self.data: OrderedDict[Hashable, Any] = OrderedDict()
+        self.data: OrderedDict[Hashable, V] = OrderedDict()
         self.hits = 0
         self.misses = 0
 
-    def get(self, key: Hashable, make: Callable[[], Any]) -> Any:
+    def get(self, key: Hashable, make: Callable[[], V]) -> V:
         """The value of ``key``, made by ``make()`` (and kept) when missing."""
         if key in self.data:
             self.data.move_to_end(key)
@@ -60,10 +66,10 @@ class LRU:
         self.hits = self.misses = 0
 
 
-_BLOCKS = LRU(STRUCTURE_ENTRIES)
+_BLOCKS: LRU[tuple[Sequence[FmoBlock], Memo]] = LRU(STRUCTURE_ENTRIES)
 
 
-def kept(memo: dict | None, key: Hashable, compute: Callable[[], Any]) -> Any:
+def kept(memo: Memo | None, key: Hashable, compute: Callable[[], Any]) -> Any:
     """``compute()``, kept in ``memo`` under ``key`` when a memo is given (a plant's memo, see :func:`reused_plant`).
 
     Without a memo it is computed every time; with one, only the first time.
@@ -91,7 +97,7 @@ def reused_fmo_blocks(system: Any, budget: Budget | None = None) -> Sequence[Fmo
     return reused_plant(system, budget)[0]
 
 
-def reused_plant(system: Any, budget: Budget | None = None) -> tuple[Sequence[FmoBlock], dict]:
+def reused_plant(system: Any, budget: Budget | None = None) -> tuple[Sequence[FmoBlock], Memo]:
     """The FMO blocks of ``system`` (as :func:`reused_fmo_blocks`) and the memo kept with them.
 
     The memo is a dict that belongs to these blocks alone (same key: exact
@@ -105,17 +111,17 @@ def reused_plant(system: Any, budget: Budget | None = None) -> tuple[Sequence[Fm
     last = _LAST_PLANT  # one read of an immutable pair: threads never see half of another call's
     if last is not None and last[0] is system:  # the very object of the last call (a sweep's plant): no hashing
         _BLOCKS.hits += 1
-        return last[1]  # type: ignore[no-any-return]
+        return last[1]
     plant = _BLOCKS.get(structure_key(system), lambda: (fmo_blocks(system, budget), {}))
     _LAST_PLANT = (system, plant)  # holds the object, so its identity is never another's
-    return plant  # type: ignore[no-any-return]
+    return plant
 
 
 #: ``(system, (blocks, memo))`` of the last call to :func:`reused_plant`.
-_LAST_PLANT: tuple[Any, Any] | None = None
+_LAST_PLANT: tuple[Any, tuple[Sequence[FmoBlock], Memo]] | None = None
 
 
-def structure_cache() -> LRU:
+def structure_cache() -> LRU[tuple[Sequence[FmoBlock], Memo]]:
     """This process's cache of FMO blocks (for statistics and tests)."""
     return _BLOCKS
 

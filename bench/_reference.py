@@ -17,7 +17,7 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
-#: The layout commit before issue 15's work.
+#: The reference library of the speed benchmarks: the package layout before the kernel and service speed work.
 REFERENCE_COMMIT = "736f7c6"
 ROOT = Path(__file__).resolve().parents[1]
 

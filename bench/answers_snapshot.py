@@ -3,7 +3,7 @@
     python bench/answers_snapshot.py OUTDIR [--reference COMMIT] [--commands analyze,bounds,simulate]
     diff -r OUTDIR_BEFORE OUTDIR_AFTER
 
-Issue 25 asks that speed work keep every answer identical: run this on this
+Speed work must keep every answer identical: run this on this
 checkout and with ``--reference COMMIT`` (that commit's library, unpacked by
 :mod:`_reference`) and ``diff -r`` the two directories (empty = identical).
 Each file holds the exit code on its first line, then standard output, then

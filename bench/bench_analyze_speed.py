@@ -1,4 +1,4 @@
-"""Uncached ``analyze`` at FLINT speed (issue 25): new random 3x3 plants and dense plants up to n = 120.
+"""Uncached ``analyze`` at FLINT speed: new random 3x3 plants and dense plants up to n = 120.
 
     python bench/bench_analyze_speed.py [--reference 13e923d] [--plants 60] [--sizes 40,80,120]
 

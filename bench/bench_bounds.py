@@ -1,4 +1,4 @@
-"""Benchmark of ``kfio bounds`` (issue 3), each measurement against a naive baseline run in the same process.
+"""Benchmark of ``kfio bounds``, each measurement against a naive baseline run in the same process.
 
     python bench/bench_bounds.py [--systems 6] [--repeats 3] [--seed 0] [--sizes 10,20,40] [--reference-max-n 20]
 

@@ -1,4 +1,4 @@
-"""``kfio bounds`` end to end (issue 25): CPU of ``compute_bounds`` against a reference commit, same run.
+"""``kfio bounds`` end to end: CPU of ``compute_bounds`` against a reference commit, same run.
 
     python bench/bench_bounds_speed.py [--reference 13e923d] [--sizes 3,10,20] [--examples FILE,...] [--repeat R] [--rounds K]
 

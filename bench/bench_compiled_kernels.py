@@ -1,4 +1,4 @@
-"""Benchmark: what a compiled kernel would buy the two-sensor front proof (issue 25, decision data).
+"""Benchmark: what a compiled kernel would buy the two-sensor front proof.
 
 kfio has no compiled code of its own and does not depend on Numba; this script measures what
 two of the blind walk's hot functions would cost compiled, so that the decision to add such a

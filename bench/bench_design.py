@@ -1,4 +1,4 @@
-"""Benchmark: design answers on top of ``analyze`` (issue 11).
+"""Benchmark: design answers on top of ``analyze``.
 
 * The exact Gilbert-Elliott (p, q) map on a 41 x 41 grid for seed systems
   (target: under 5 s), against ``analyze`` alone on the same request, and

@@ -2,7 +2,7 @@
 
     python bench/bench_exact_fields.py [--repeats 20]
 
-Issue 12, item 1: ``critical_arrival_probability_exact`` and ``sigma_exact``
+``critical_arrival_probability_exact`` and ``sigma_exact``
 were recognised from floats by ``sympy.nsimplify`` (PSLQ), which was wrong at
 ordinary inputs and the main cost of an uncached analysis.  The baseline below
 re-installs that route (the code as it was) by monkeypatching, in the same

@@ -1,7 +1,7 @@
-"""Issue 22's hostile sweeps, measured now and on an earlier commit (a benchmark, not a test; loopback only).
+"""Hostile sweeps, measured on this checkout and on a reference commit (a benchmark, not a test; loopback only).
 
 Starts ``kfio serve`` of this checkout, then (unless ``--reference none``) of
-``--reference`` (default ``13e923d``, the code issue 22 measured), each with
+``--reference`` (default ``13e923d``, the service before its hostile-input limits), each with
 one analysis worker and one job worker, and for each prints:
 
 * ``150-axis body``: seconds until ``POST /v1/sweeps`` with 150 axes of
@@ -44,7 +44,7 @@ from bench_service import reference_server  # noqa: E402
 from support.hostile import SMALL, heavy_sweep, rss_mb, values_sweep, wide_sweep  # noqa: E402
 from support.live_server import JSON_HEADERS, LiveServer  # noqa: E402
 
-#: The code issue 22 measured (main when it was filed).
+#: The reference: the service before its hostile-input limits.
 HOSTILE_REFERENCE = "13e923d"
 ENV = {"KFIO_JOB_WORKERS": "1", "KFIO_SHUTDOWN_GRACE_S": "3"}
 

@@ -1,4 +1,4 @@
-"""Benchmark of one Riccati step over a batch (issue 15 item 1): achieved GFLOP/s against a flat GEMM.
+"""Benchmark of one Riccati step over a batch: achieved GFLOP/s against a flat GEMM.
 
     python bench/bench_kernel.py [--sizes 3,6,12,20,40] [--work 6e6] [--repeats 5] [--reference COMMIT]
 
@@ -42,7 +42,7 @@ from _reference import run_reference  # noqa: E402
 
 from kfio.simulation._packed import PackedRiccatiStep  # noqa: E402
 
-#: main before the blocked kernel (the packed kernel of issue 15's first pass, with the filtered unpack).
+#: The reference: the packed kernel before blocking, with the filtered unpack.
 PREVIOUS_COMMIT = "7299885"
 
 

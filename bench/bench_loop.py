@@ -1,4 +1,4 @@
-"""Seconds to decide a loop exactly: ``n = 4``, two sensors, Gilbert-Elliott links on both sides (issue 24).
+"""Seconds to decide a loop exactly: ``n = 4``, two sensors, Gilbert-Elliott links on both sides.
 
     python bench/bench_loop.py
 

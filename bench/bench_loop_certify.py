@@ -1,4 +1,4 @@
-"""CPU seconds of the certified loop verdict and cost enclosure at sizes the exact route cannot reach (issue 38).
+"""CPU seconds of the certified loop verdict and cost enclosure at sizes the exact route cannot reach.
 
     python bench/bench_loop_certify.py [--exact]
 

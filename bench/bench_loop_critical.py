@@ -1,4 +1,4 @@
-"""Seconds to compute the polynomial det(I - T(x)) behind a loop's exact critical values (issue 24 item 5).
+"""Seconds to compute the polynomial det(I - T(x)) behind a loop's exact critical values.
 
     python bench/bench_loop_critical.py
 

@@ -1,12 +1,12 @@
 """Small analyze latency beside four budget-length loop requests, without and with the cheap lane (loopback only).
 
-Issue 39, item 4: with the default 2 workers and four 8-second loop requests
+With the default 2 workers and four 8-second loop requests
 in flight, a 1x1 analyze waited 7.7 s (p50).  This starts ``kfio serve`` of
 this checkout twice, with the default worker count (``--workers``, 2), the
 cache off and a fresh job database:
 
 * ``no lane``: ``KFIO_LANE_WORKERS=0`` (every request shares the regular
-  workers, as before the lane);
+  workers, none reserved);
 * ``lane``: the default, one reserved worker for cheap requests
   (:mod:`kfio.service.lanes`).
 

@@ -1,4 +1,4 @@
-"""Benchmark: several sensors on long periods (issue 10, item 3) against a previous checkout, same run.
+"""Benchmark: several sensors on long periods against a previous checkout, same run.
 
 Two sensors (three in the last cases), one Bernoulli channel each (arrival probability 1/2), on
 ``2 * companion(Phi_m)`` blocks of periods 15, 21, 36 (``Phi_4``, ``Phi_9``)
@@ -49,7 +49,7 @@ def cases() -> list[tuple[str, str]]:
         dense = [[rng.randint(-3, 3) for _ in range(n)] for _ in range(2)]
         out.append((f"period {period}, rows e_1, e_2", body(A, unit)))
         out.append((f"period {period}, random dense rows", body(A, dense)))
-    # Issue 25: two dense sensors at period 84, three dense sensors at periods 20, 21 and 36.
+    # Two dense sensors at period 84, three dense sensors at periods 20, 21 and 36.
     A = block_diagonal(cyclotomic_companion(3), cyclotomic_companion(4), cyclotomic_companion(7))
     rng = random.Random(84)
     out.append(

@@ -68,7 +68,7 @@ from kfio.service.api.schemas import REQUEST_EXAMPLES  # noqa: E402
 
 from support.live_server import SLOW_PATH, LiveServer, slow_request  # noqa: E402
 
-#: The code issue 15 measured (main when the second wave of issues was filed).
+#: The reference: the service before its worker and cache speed work.
 SERVICE_REFERENCE = "73d6773"
 
 #: One-packet seed systems (per-sensor systems are left out: simulate/bounds treat them alike).

@@ -1,4 +1,4 @@
-"""Benchmark of ``kfio simulate`` (issue 5).  A script, not a test: ``python bench/bench_simulate.py``.
+"""Benchmark of ``kfio simulate``.  A script, not a test: ``python bench/bench_simulate.py``.
 
 1. The target: 10^5 trajectories x 200 steps of Sinopoli et al. (2004)'s 3x3 system (A = [[1.25,1,0],[0,0.9,7],
    [0,0,0.6]], C = [1 0 2], Q = 20 I, R = 2.5, Bernoulli lambda = 0.6) in under 10 s, vectorized.
@@ -8,7 +8,7 @@
 3. Masking versus grouping by arrival pattern for a two-packet channel.
 4. The exact enumeration of E[P_t] over 2^20 arrival sequences.
 
-``--end-to-end`` runs instead the target of issue 25: ``simulate`` in process, 10^5 trajectories x 9 steps of the
+``--end-to-end`` runs instead the end-to-end target: ``simulate`` in process, 10^5 trajectories x 9 steps of the
 same system, everything the report holds (per-step means, bands and percentiles of the predictor and the filtered
 covariance, the final quantiles and tail exponent, the exact verdict beside them), against the **flat-GEMM bound**:
 the step's flop count (``bench/bench_kernel.py``: ``2 N^2 + 2 p n N + p(p+1) N + 2 p N + 2 p^2 n`` per
@@ -125,7 +125,7 @@ def python_loop(A, C, Q, R, lam: float, P0, trajectories: int, steps: int, seed:
     return traces
 
 
-#: main before issue 25's statistics work (per-step percentiles on fresh copies, unpacked final batches).
+#: The reference: statistics without the in-place route (per-step percentiles on fresh copies, unpacked final batches).
 E2E_REFERENCE = "4d603a0"
 E2E_TIMED = """
 import hashlib, json, time

@@ -1,4 +1,4 @@
-"""Peak memory of ``kfio simulate`` at n = 40 (issue 25: at most two batch copies in memory).
+"""Peak memory of ``kfio simulate`` at n = 40: at most two batch copies in memory.
 
 A script, not a test: ``python bench/bench_simulate_memory.py [--trajectories M]``.
 

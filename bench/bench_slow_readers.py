@@ -1,6 +1,6 @@
 """Server memory under rounds of slow readers of the ReDoc bundle, now and on an earlier commit (loopback only).
 
-Issue 39, item 3: three rounds of 300 clients that request the ReDoc bundle
+Three rounds of 300 clients that request the ReDoc bundle
 (``/docs-assets/redoc.standalone.js``, about 1 MiB) and read 1 byte a second
 took the server from 62 to 328-392 MiB resident, kept after they left.
 
@@ -53,7 +53,7 @@ from bench_service import reference_server  # noqa: E402
 from support.hostile import rss_mb  # noqa: E402
 from support.live_server import JSON_HEADERS, LiveServer  # noqa: E402
 
-#: The commit before issue 39's fixes.
+#: The reference: the service before slow readers were bounded.
 SLOW_READERS_REFERENCE = "e31a5da"
 PATH = "/docs-assets/redoc.standalone.js"
 

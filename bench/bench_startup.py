@@ -1,4 +1,4 @@
-"""Benchmark: start-up CPU of the ``kfio`` command and of ``import kfio`` (issue 9, item 4).
+"""Benchmark: start-up CPU of the ``kfio`` command and of ``import kfio``.
 
 Each command runs as a whole fresh process; the CPU time (user + system) of
 the child is read from ``os.wait4``, so the load of other processes on the

@@ -1,4 +1,4 @@
-"""Benchmark: certified exact structure (issue 10) against the previous code, in the same run.
+"""Benchmark: certified exact structure against the previous code, in the same run.
 
 Each case runs ``analyze`` end to end in a child process, once with the
 current ``kfio`` and once with a previous checkout (``--before``: the folder
@@ -12,7 +12,7 @@ Cases: dense random integer matrices (entries -3..3, ``C = e_1``, Bernoulli
 1/2) of size 16, 24, 40; the seed systems and structured cases of
 ``bench_verdict.py`` (period 60, 12 x 12 repeated Jordan blocks); two sensors
 on periods 15, 21, 36, 60 (``2 * companion(Phi_m)`` blocks, rows ``e_1`` and
-``e_2``); one sensor at periods 120, 168, 210 (companion of ``1.1 zeta_N``, issue 25).
+``e_2``); one sensor at periods 120, 168, 210 (companion of ``1.1 zeta_N``).
 
 Run: ``git worktree add /tmp/kfio-before 736f7c6`` then
 ``python bench/bench_structure.py --before /tmp/kfio-before [--limit 120] [--only TEXT]``.
@@ -99,7 +99,7 @@ def zeta_companion(N: int) -> tuple[str, list, list, dict]:
     """Companion of the minimal polynomial of ``1.1 zeta_N`` (``C = e_1``, Bernoulli 1/2): one sensor at period ``N``.
 
     The monic polynomial ``(11/10)^d Phi_N(10 x / 11)``, ``d = phi(N)``: its roots
-    ``1.1 zeta_N^k`` form one FMO block over ``Q(zeta_N)`` (issue 25).
+    ``1.1 zeta_N^k`` form one FMO block over ``Q(zeta_N)``.
     """
     c = [int(x) for x in fmpz_poly.cyclotomic(N).coeffs()]
     d = len(c) - 1

@@ -41,7 +41,7 @@ SEED = {
 }
 
 
-#: The commit this round of sweep work started from (issue 25).
+#: The commit this round of sweep work started from.
 START_COMMIT = "4d603a0"
 
 #: Runs ``kfio sweep`` in this interpreter and prints its resource use as the last JSON line.

@@ -1,4 +1,4 @@
-"""CPU of ``is_psd``'s exact route against the size bound that replaced its 10 s clock (issue 12, item 15).
+"""CPU of ``is_psd``'s exact route against the size bound that replaced its 10 s clock.
 
     python bench/bench_validation.py
 

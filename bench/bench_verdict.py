@@ -1,4 +1,4 @@
-"""Benchmark: kfio's exact verdict vs the naive route (issue 2).
+"""Benchmark: kfio's exact verdict vs the naive route.
 
 The naive route is ``sympy.Matrix.jordan_form`` followed by a brute force
 over all ``2^N`` phase subsets for the largest blind set.  It runs in a child

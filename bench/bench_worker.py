@@ -1,4 +1,4 @@
-"""Worker CPU per uncached analysis, the cost behind the service's uncached latency (issue 15, item 3).
+"""Worker CPU per uncached analysis, the cost behind the service's uncached latency.
 
     python bench/bench_worker.py [--reference COMMIT] [--requests 300]
 

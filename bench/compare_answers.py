@@ -2,7 +2,7 @@
 
     python bench/compare_answers.py BEFORE_DIR AFTER_DIR [--tolerance 1e-7]
 
-Issue 25's rule for speed work: every exact field and verdict identical; floats that come out of a
+The rule for speed work: every exact field and verdict identical; floats that come out of a
 numerical solver may move in their last bits.  Each answer file's JSON is walked in both
 directories.  Strings, integers, booleans, nulls and the structure must be equal.  A list of
 numbers (a matrix row or a whole matrix) is compared as one array, relative to its largest

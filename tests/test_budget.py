@@ -1,4 +1,4 @@
-"""The work budget reads the clock at every tick (issue 12, item 13).
+"""The work budget reads the clock at every tick.
 
 One tick can stand for a long C call, so a budget that looked at the clock
 only every 64th tick could overrun by 63 such calls.  No timing here: the

@@ -1,4 +1,4 @@
-"""Every "Author (YEAR)" citation in shipped text is an entry of docs/references.md (issue 21, item 5).
+"""Every "Author (YEAR)" citation in shipped text is an entry of docs/references.md.
 
 One citation per paper: the bold headings of docs/references.md are the cite keys
 (``Rohr, Marelli and Fu (2014)``), and every author-year citation in the README,
@@ -36,7 +36,7 @@ MONTHS = {
 }
 TEXT_SUFFIXES = {".md", ".py", ".js", ".html", ".css", ".json", ".txt"}
 
-#: Citations in files other engineers own, fixed on their branches (issue 21): each entry is
+#: Citations in files other engineers own, fixed on their branches: each entry is
 #: (file, citation as written).  The test fails on any other bad citation, and also when a
 #: listed one is gone, so the list shrinks to nothing as the fixes land.
 PENDING: set[tuple[str, str]] = set()

@@ -1,4 +1,4 @@
-"""Every code block of README.md and docs/*.md does what it says (issue 21, item 5).
+"""Every code block of README.md and docs/*.md does what it says.
 
 * ```` ```python ```` blocks run, in order and in one namespace per file, in a
   temporary directory that holds the repository's ``examples/``.  A block that

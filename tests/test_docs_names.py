@@ -1,4 +1,4 @@
-"""Report attributes carry their JSON keys' names, with one documented exception (issue 21, item 5).
+"""Report attributes carry their JSON keys' names, with one documented exception.
 
 ``StabilityReport.gilbert_elliott`` is ``gilbert_elliott_region`` in the JSON;
 ``gilbert_elliott_region`` is also an attribute (the same object), and the docs say so.

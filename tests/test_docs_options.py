@@ -1,4 +1,4 @@
-"""The option tables of the docs are the validator's options (issue 21, item 5).
+"""The option tables of the docs are the validator's options.
 
 The README's table lists every option as ``group.key``; docs/bounds.md and
 docs/simulation.md list ``options.bounds`` and ``options.simulate``.  The names

@@ -146,7 +146,9 @@ def _symbolic_group_matrix(channel: MarkovChannel, period: int, phases: set[int]
     return prod
 
 
-def _boundary_poly(beta: Fraction, N: int, F: frozenset, channels: Sequence[MarkovChannel], param: Parameter) -> Any:
+def _boundary_poly(
+    beta: Fraction, N: int, F: frozenset[tuple[int, int]], channels: Sequence[MarkovChannel], param: Parameter
+) -> Any:
     """``det(beta^(-N) I - P_F(x))`` as a polynomial in ``x``."""
     M = sympy.Matrix([[1]])
     for g, ch in enumerate(channels):
@@ -166,7 +168,7 @@ class ParameterConstraint(ReportPart):
     beta: Any
     beta_float: float
     period: int
-    blind_set: frozenset
+    blind_set: frozenset[tuple[int, int]]
 
 
 def _constraints(
@@ -181,7 +183,7 @@ def _constraints(
             block=i, eigenvalues=block.eigenvalue_texts, beta=block.modulus_sq, beta_float=block.modulus_sq_float
         )
         if res.fully_blind:
-            sets: Sequence[frozenset] = [frozenset((n, g) for n in range(N) for g in range(n_groups))]
+            sets: Sequence[frozenset[tuple[int, int]]] = [frozenset((n, g) for n in range(N) for g in range(n_groups))]
         elif n_groups == 1 and not res.degenerate:
             sets = [frozenset()]
         elif res.maximal_blind_sets:

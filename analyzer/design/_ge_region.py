@@ -109,7 +109,8 @@ class GePattern:
 
     def rho(self, p: Fraction, q: Fraction) -> Fraction:
         """``rho(P_F) = prod_m u_{a_m+1}(p, q)``, exactly."""
-        return _rho(self.gaps, p, q, Fraction(1))
+        rho: Fraction = _rho(self.gaps, p, q, Fraction(1))
+        return rho
 
     def rho_float(self, p: np.ndarray, q: np.ndarray) -> np.ndarray:
         """:meth:`rho` in floating point (the same recurrence on NumPy arrays), for drawing."""
@@ -129,7 +130,7 @@ class GePattern:
         if self.beta is None:
             v = self.beta_float**self.period * float(rho) - 1
             return (v > 0) - (v < 0)
-        return self.beta.compare_power(self.period, 1 / rho)
+        return int(self.beta.compare_power(self.period, 1 / rho))
 
     @property
     def exact(self) -> bool:

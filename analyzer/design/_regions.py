@@ -51,9 +51,8 @@ from .._verdicts import Verdict
 from ..errors import InvalidInput
 from ..model import PerSensorChannel, Request, packets_of, require_assumption_1, value_text
 from ..sigma import VERDICTS, SigmaResult
-from ..structure import FmoBlock
+from ..structure import DIGITS, FmoBlock
 from ._regions_constraints import (
-    DIGITS,
     SEPARATION,
     BlindPattern,
     BlockConstraints,
@@ -144,10 +143,10 @@ def _log_value(block: BlockConstraints, rest: Fraction, z: int) -> Any:
         return (block.log_beta_power() + mpmath.log(mpmath.mpf(rest.numerator) / rest.denominator)) / z
 
 
-def _exact_greater(a: tuple, b: tuple) -> int | None:
+def _exact_greater(a: tuple[BlockConstraints, Fraction, int], b: tuple[BlockConstraints, Fraction, int]) -> int | None:
     """Sign of ``(beta_a^N_a P_a)^(z_b) - (beta_b^N_b P_b)^(z_a)`` when both ``beta`` are rational, else ``None``."""
     (ba, Pa, za), (bb, Pb, zb) = a, b
-    if ba.beta is None or bb.beta is None or not (ba.beta.is_rational and bb.beta.is_rational):
+    if ba.beta is None or bb.beta is None or ba.beta.rational is None or bb.beta.rational is None:
         return None
     va = (ba.beta.rational**ba.period * Pa) ** zb
     vb = (bb.beta.rational**bb.period * Pb) ** za

@@ -127,7 +127,7 @@ class BlockConstraints:
         return self.beta.approx(DIGITS) if self.beta is not None else mpmath.mpf(self.beta_float)
 
 
-def _misses(slots: frozenset, period: int, sensors: int) -> tuple[int, ...]:
+def _misses(slots: frozenset[tuple[int, int]], period: int, sensors: int) -> tuple[int, ...]:
     return tuple(period - sum(1 for n, g in slots if g == s) for s in range(sensors))
 
 

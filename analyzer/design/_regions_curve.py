@@ -46,7 +46,8 @@ import mpmath
 import sympy
 
 from .._reporting import ReportPart
-from ._regions_constraints import DIGITS, SEPARATION, BlindPattern, BlockConstraints
+from ..structure import DIGITS
+from ._regions_constraints import SEPARATION, BlindPattern, BlockConstraints
 
 LAMBDA_1 = sympy.Symbol("lambda_1")
 #: Default number of samples of ``h`` on ``[0, 1]``.

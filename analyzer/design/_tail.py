@@ -41,7 +41,7 @@ import sympy
 from sympy import CRootOf, Poly
 
 from .._reporting import ReportPart
-from .._reuse import kept
+from .._reuse import Memo, kept
 from ..model import MarkovChannel
 from ..sigma import (
     SigmaResult,
@@ -184,7 +184,7 @@ def _largest_real_root(P: Sequence[Sequence[Fraction]]) -> Any:
     return sympy.nsimplify(best) if best.is_rational else best
 
 
-def _worst_set(res: SigmaResult, channels: Sequence[MarkovChannel]) -> frozenset:
+def _worst_set(res: SigmaResult, channels: Sequence[MarkovChannel]) -> frozenset[tuple[int, int]]:
     sets = res.maximal_blind_sets or (res.worst_blind_set,)
     if len(sets) == 1:
         return sets[0]
@@ -215,7 +215,7 @@ def _worst_factor(
     return c_rational, c_expr, P
 
 
-def _kappa_float(block: FmoBlock, N: int, c_rational: Fraction | None, c_expr: Any, memo: dict | None) -> float:
+def _kappa_float(block: FmoBlock, N: int, c_rational: Fraction | None, c_expr: Any, memo: Memo | None) -> float:
     """``log(1 / sigma^N) / (N log beta)`` at 40 digits, rounded to a float (``log beta`` kept in ``memo``)."""
     beta = block.modulus_sq
     with mpmath.workdps(40):
@@ -249,7 +249,7 @@ def block_tail(
     res: SigmaResult,
     channels: Sequence[MarkovChannel],
     lambdas: Sequence[Fraction] | None,
-    memo: dict | None = None,
+    memo: Memo | None = None,
 ) -> BlockTail:
     """The tail exponent of one block with ``|alpha| > 1`` (Mo and Sinopoli, 2012; kfio's extension).
 
@@ -389,7 +389,7 @@ def _bernoulli_lambdas(channels: Sequence[MarkovChannel]) -> list[Fraction] | No
     return None
 
 
-def _on_circle(block: FmoBlock, memo: dict | None) -> bool:
+def _on_circle(block: FmoBlock, memo: Memo | None) -> bool:
     """``|alpha_k| = 1``, exactly when ``beta_k`` is known exactly (a property of the block alone, kept in ``memo``)."""
     beta = block.modulus_sq
     return bool(
@@ -404,7 +404,7 @@ def _on_circle(block: FmoBlock, memo: dict | None) -> bool:
 def tail_kappa(
     items: Sequence[tuple[FmoBlock, SigmaResult | None]],
     channels: Sequence[MarkovChannel],
-    memo: Sequence[dict] | None = None,
+    memo: Sequence[Memo] | None = None,
 ) -> float | None:
     """``kappa = min_k kappa_k`` alone: the float :func:`tail_report` gives as ``TailReport.kappa``.
 
@@ -434,7 +434,7 @@ def tail_kappa(
 def tail_report(
     items: Sequence[tuple[FmoBlock, SigmaResult | None]],
     channels: Sequence[MarkovChannel],
-    memo: Sequence[dict] | None = None,
+    memo: Sequence[Memo] | None = None,
 ) -> TailReport:
     """Tail exponents of every block with ``|alpha| > 1`` and the overall ``kappa = min_k kappa_k``.
 

@@ -176,7 +176,9 @@ def actuator_above(nu: Fraction, crit: ActuatorCritical) -> bool | None:
     return None
 
 
-def _solve(A: np.ndarray, C: np.ndarray, Q: np.ndarray, R: np.ndarray, p: float, equation: str) -> Any:
+def _solve(
+    A: np.ndarray, C: np.ndarray, Q: np.ndarray, R: np.ndarray, p: float, equation: str
+) -> tuple[Any, RiccatiSolve]:
     from ..riccati_bounds import mare_fixed_point
 
     fp = mare_fixed_point(A, C, Q, R, p)

@@ -58,13 +58,15 @@ def lqg_floats(req: Any) -> tuple[np.ndarray, ...]:
 def filtered(X: np.ndarray, C: np.ndarray, R: np.ndarray, lam: float) -> np.ndarray:
     """``(1 - lam) X + lam (X - X C'(C X C' + R)^-1 C X)``: the expected measurement update of ``X`` (one packet)."""
     G = C @ X @ C.T + R
-    return X - lam * X @ C.T @ np.linalg.solve(G, C @ X)
+    arr: np.ndarray = X - lam * X @ C.T @ np.linalg.solve(G, C @ X)
+    return arr
 
 
 def control_weight(A: np.ndarray, B: np.ndarray, W: np.ndarray, U: np.ndarray, S: np.ndarray, nu: float) -> np.ndarray:
     """``M = nu A'SB (B'SB + U)^-1 B'SA`` (``= A'SA + W - S`` at the fixed point), symmetric and ``>= 0``."""
     M = nu * A.T @ S @ B @ np.linalg.solve(B.T @ S @ B + U, B.T @ S @ A)
-    return (M + M.T) / 2
+    result: np.ndarray = (M + M.T) / 2
+    return result
 
 
 def cost_at(S: np.ndarray, M: np.ndarray, Q: np.ndarray, P_filtered: np.ndarray) -> float:

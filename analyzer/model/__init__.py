@@ -32,6 +32,7 @@ from ._fields import (
     MAX_SENSOR_NAME,
     OPTION_FIELDS,
     OPTION_GROUP_NAMES,
+    OPTION_KEYS,
     REQUEST_GROUPS,
     OptionField,
     option_field,
@@ -41,7 +42,6 @@ from ._limits import DEFAULT_LIMITS, Limits
 from ._pointer import json_pointer, pointer_tokens
 from ._request import (
     MIN_TIME_BUDGET_S,
-    OPTION_KEYS,
     check_keys,
     check_symmetric,
     is_positive_definite,

@@ -8,11 +8,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Any, Mapping, Union
+from typing import TYPE_CHECKING, Any, Mapping, Union
 
 import numpy as np
 
 from ._pointer import json_pointer
+
+if TYPE_CHECKING:
+    from sympy.polys.matrices import DomainMatrix
 
 Matrix = tuple[tuple[Fraction, ...], ...]
 
@@ -22,7 +25,7 @@ def to_float(m: Matrix) -> np.ndarray:
     return np.array([[float(x) for x in row] for row in m], dtype=float).reshape(len(m), -1 if m else 0)
 
 
-def to_domain(m: Matrix):  # -> DomainMatrix over QQ
+def to_domain(m: Matrix) -> DomainMatrix:
     """The matrix as a SymPy :class:`DomainMatrix` over ``QQ``, exactly."""
     from sympy import QQ
     from sympy.polys.matrices import DomainMatrix
@@ -116,7 +119,8 @@ class MarkovChannel:
         b = np.zeros(k + 1)
         b[-1] = 1.0
         pi, *_ = np.linalg.lstsq(M, b, rcond=None)
-        return np.clip(pi, 0.0, None) / np.clip(pi, 0.0, None).sum()
+        result: np.ndarray = np.clip(pi, 0.0, None) / np.clip(pi, 0.0, None).sum()
+        return result
 
     def mean_arrival_rate(self) -> float:
         """Long-run fraction of packets that arrive."""

@@ -31,7 +31,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any, Sequence
+from typing import Any, Iterable, Sequence
 
 import numpy as np
 
@@ -86,7 +86,7 @@ class StabilityCertificate(ReportPart):
 
 
 def lyapunov_certificate(
-    model: ArrivalModel, K: Sequence[np.ndarray], near: Sequence | None = None
+    model: ArrivalModel, K: Sequence[np.ndarray], near: Sequence[Any] | None = None
 ) -> np.ndarray | None:
     """The ``X`` with ``X - L_K(X) = I``, or ``None`` if singular.
 
@@ -148,18 +148,18 @@ def float_check(model: ArrivalModel, K: Sequence[np.ndarray], X: np.ndarray) -> 
     return float(em[0] / ex[-1])
 
 
-def _fmpq_mat(rows) -> Any:
+def _fmpq_mat(rows: Iterable[Iterable[float | Fraction]]) -> Any:
     """A python-flint ``fmpq_mat`` from rows of floats (exactly: each float is a dyadic rational) or Fractions."""
     import flint
 
-    def q(x) -> Any:
+    def q(x: float | Fraction) -> Any:
         if isinstance(x, Fraction):
             return flint.fmpq(x.numerator, x.denominator)
         a, b = float(x).as_integer_ratio()
         return flint.fmpq(a, b)
 
-    rows = [list(r) for r in rows]
-    return flint.fmpq_mat(len(rows), len(rows[0]) if rows else 0, [q(x) for r in rows for x in r])
+    matrix = [list(r) for r in rows]
+    return flint.fmpq_mat(len(matrix), len(matrix[0]) if matrix else 0, [q(x) for r in matrix for x in r])
 
 
 def positive_definite_exact(M: Any) -> bool:
@@ -292,7 +292,7 @@ def certify(
     solver_margin: float | None,
     exact: bool = True,
     route: str = "LMI",
-    near: Sequence | None = None,
+    near: Sequence[Any] | None = None,
 ) -> StabilityCertificate | None:
     """Re-check gains ``K`` (user coordinates) at ``lambdas``; a certificate or ``None``.
 

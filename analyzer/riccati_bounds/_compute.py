@@ -23,9 +23,10 @@ from typing import Any, Mapping
 import numpy as np
 
 from .._budget import Budget
+from .._verdicts import Verdict
 from ..errors import InvalidInput
 from ..model import Request, to_float
-from ._certificate import ExactPlant
+from ._certificate import ExactPlant, StabilityCertificate
 from ._filtered import filtered_bounds, filtered_mean
 from ._options import BoundsOptions, parse_bounds_options
 from ._phat import PHat, p_hat_sequence
@@ -91,21 +92,27 @@ def _interval(search: CertifiedSearch, s: int, opts: BoundsOptions, rho: float) 
     return CriticalInterval(opts.packets[s], lams[s], lower, upper, opts.tolerance)
 
 
-def _verdict(search: CertifiedSearch, model: ArrivalModel, rho: float, lams: tuple[Fraction, ...]):
+def _verdict(
+    search: CertifiedSearch, model: ArrivalModel, rho: float, lams: tuple[Fraction, ...]
+) -> tuple[Verdict, str, StabilityCertificate | None]:
     if model.loss_probability * rho * rho >= 1.0:
         return (
-            "unstable",
+            Verdict.UNSTABLE,
             "prod (1 - lambda) rho(A)^2 >= 1: the lower bound S_bar diverges (Sinopoli et al. 2004, Theorem 3)",
             None,
         )
     cert = search.certify(lams)
     if cert is not None:
         return (
-            "stable",
+            Verdict.STABLE,
             "the stability LMI is feasible here, certificate re-checked (Sinopoli et al. 2004, Theorems 3 and 5)",
             cert,
         )
-    return "undecided", "between the bounds: the lower bound does not diverge and no LMI certificate was found", None
+    return (
+        Verdict.UNDECIDED,
+        "between the bounds: the lower bound does not diverge and no LMI certificate was found",
+        None,
+    )
 
 
 def _covariance(model: ArrivalModel, budget: Budget, opts: BoundsOptions) -> CovarianceBounds:
@@ -129,7 +136,9 @@ def _covariance(model: ArrivalModel, budget: Budget, opts: BoundsOptions) -> Cov
     return CovarianceBounds(S, res, it, v_bar_sdp(model), None, filtered)
 
 
-def _p_hat(A, C, Q, R, lam: float, horizon: int, budget: Budget) -> PHatBounds:
+def _p_hat(
+    A: np.ndarray, C: np.ndarray, Q: np.ndarray, R: np.ndarray, lam: float, horizon: int, budget: Budget
+) -> PHatBounds:
     """Rohr, Marelli and Fu (2010)'s ``P_hat_N`` for ``N = 1, 2, 4, ...`` and ``horizon``.
 
     ``P_hat_1 = V_bar``: :func:`solve_v_bar` remembers the covariance part's answer for the same

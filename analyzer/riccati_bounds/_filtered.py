@@ -65,7 +65,8 @@ def filtered_mean(model: ArrivalModel, P: np.ndarray) -> np.ndarray:
     for w, C, R in model.active():
         CP = C @ P
         out -= w * CP.T @ np.linalg.solve(C @ P @ C.T + R, CP)
-    return 0.5 * (out + out.T)
+    result: np.ndarray = 0.5 * (out + out.T)
+    return result
 
 
 @dataclass(frozen=True)

@@ -44,7 +44,8 @@ def unstable_subspace(A: np.ndarray) -> np.ndarray:
     """
     A = np.asarray(A, float)
     _, Z, k = scipy.linalg.schur(A, output="real", sort=lambda re, im: re * re + im * im >= 1.0)
-    return Z[:, :k]
+    result: np.ndarray = Z[:, :k]
+    return result
 
 
 def annihilating_gains(A: np.ndarray, C_S: Sequence[np.ndarray]) -> tuple[np.ndarray, ...] | None:

@@ -17,7 +17,7 @@ import threading
 import warnings
 from collections import OrderedDict
 from dataclasses import dataclass
-from typing import Sequence
+from typing import Any, Sequence
 
 import cvxpy as cp
 import numpy as np
@@ -114,7 +114,7 @@ class StabilityLMI:
         # This instance's own Clarabel instance, kept between its solves (``warm_start``) and
         # never seen by another instance of the same shape: the answers are those of a problem
         # of its own, whatever else the process solved before or in between.
-        self._solver_cache: dict = {}
+        self._solver_cache: dict[Any, Any] = {}
 
     def is_dpp(self) -> bool:
         return bool(self._compiled.problem.is_dcp(dpp=True))  # type: ignore[call-arg]  # CVXPY's stub lacks dpp

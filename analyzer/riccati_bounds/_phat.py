@@ -32,6 +32,8 @@ from ._vech import congruence_matrix, unvech, vech, vech_layout
 
 #: The batch at the bottom of the tree holds at most ``2**CHUNK_LEVELS`` matrices.
 CHUNK_LEVELS = 13
+#: :meth:`PHat._descend`'s ``w`` when ``ws`` is given: never read, the weights are then ``ws[k]``.
+_NO_WEIGHTS = np.empty(0)
 
 #: Work allowance per application of ``g_N``: ``2^N m^2`` with ``m = n(n+1)/2`` is the cost
 #: of the ``A X A'`` GEMMs; the allowance is that of ``N = 20`` at ``n = 4``.
@@ -91,17 +93,19 @@ class BatchedMare:
         """``vech(A X C'(C X C' + R)^-1 C X A')`` for a batch ``h`` of ``vech(X)`` rows."""
         if self.p == 1:
             G = self._one_output_gain(h)
-            return G[:, self._iu] * G[:, self._ju]
+            products: np.ndarray = G[:, self._iu] * G[:, self._ju]
+            return products
         AXC = h @ self._AXC
         S = h @ self._CXC
         S += self._r
         L = _cholesky(S.reshape(-1, self.p, self.p))
         G = _solve(L, AXC.reshape(-1, self.n, self.p).transpose(0, 2, 1))
-        return np.einsum("bki,bki->bi", G[:, :, self._iu], G[:, :, self._ju])
+        values_out: np.ndarray = np.einsum("bki,bki->bi", G[:, :, self._iu], G[:, :, self._ju])
+        return values_out
 
     def _one_output_gain(self, h: np.ndarray) -> np.ndarray:
         """With one output: the rows ``vec(A X C') / sqrt(C X C' + R)`` for a batch ``h`` of ``vech(X)`` (divided in place)."""
-        G = h @ self._AXC
+        G: np.ndarray = h @ self._AXC
         S = h @ self._CXC
         S += self._r
         np.sqrt(S, out=S)
@@ -159,7 +163,9 @@ class BatchedMare:
         c *= Gt.take(self._ju, 0)
         return c.T
 
-    def _descend(self, level: np.ndarray, k: int, depth: int, ws: list[np.ndarray] | None, w=None) -> np.ndarray:
+    def _descend(
+        self, level: np.ndarray, k: int, depth: int, ws: list[np.ndarray] | None, w: np.ndarray = _NO_WEIGHTS
+    ) -> np.ndarray:
         """Weighted sum over the ``2^depth`` continuations of the batch ``level``.
 
         The weights are ``ws[k]`` (the whole level ``k`` of the tree from one root) or, for a
@@ -172,9 +178,10 @@ class BatchedMare:
             if b > 1 and b << (depth - 1) > 1 << CHUNK_LEVELS:
                 w = ws[k] if ws is not None else w
                 half = b // 2  # depth first above the chunk size keeps memory bounded
-                return self._descend(level[:half], k, depth, None, w[:half]) + self._descend(
+                total: np.ndarray = self._descend(level[:half], k, depth, None, w[:half]) + self._descend(
                     level[half:], k, depth, None, w[half:]
                 )
+                return total
             nxt = np.empty((2 * b, m))
             phi0 = nxt[:b]
             np.matmul(level, AXA, out=phi0)
@@ -189,7 +196,8 @@ class BatchedMare:
             w, wq = ws[k], self._wq[len(ws)]
         else:
             wq = w.sum() * q
-        return (w @ level) @ AXA + wq - lam * (w @ self._last_correction(level))
+        result: np.ndarray = (w @ level) @ AXA + wq - lam * (w @ self._last_correction(level))
+        return result
 
 
 @dataclass(frozen=True)

@@ -103,7 +103,7 @@ class ArrivalModel:
 
     @property
     def n(self) -> int:
-        return self.A.shape[0]
+        return int(self.A.shape[0])
 
     @property
     def loss_probability(self) -> float:
@@ -152,7 +152,8 @@ def spectral_radius(A: np.ndarray) -> float:
 
 
 def _sym(X: np.ndarray) -> np.ndarray:
-    return 0.5 * (X + X.T)
+    result: np.ndarray = 0.5 * (X + X.T)
+    return result
 
 
 # --- the maps ----------------------------------------------------------------------------------
@@ -365,11 +366,11 @@ def _newton_from(model: ArrivalModel, V: np.ndarray, max_steps: int = 60) -> tup
 
 #: The latest answers of :func:`solve_v_bar` (the model's bytes and the options -> the answer): ``kfio bounds``
 #: asks for the same ``V_bar`` twice, for the covariance bounds and as ``P_hat_1`` (Rohr, Marelli and Fu 2010).
-_V_BAR_CACHE: dict[tuple, VBarIteration] = {}
+_V_BAR_CACHE: dict[tuple[Any, ...], VBarIteration] = {}
 _V_BAR_CACHE_SIZE = 4
 
 
-def _model_key(model: ArrivalModel) -> tuple:
+def _model_key(model: ArrivalModel) -> tuple[Any, ...]:
     arrays = (model.A, model.Q, *model.C_S, *model.R_S)
     return tuple((a.shape, np.ascontiguousarray(a, float).tobytes()) for a in arrays) + (model.weights,)
 

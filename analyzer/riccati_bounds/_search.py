@@ -26,7 +26,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Callable, Sequence
+from typing import Any, Callable, Sequence
 
 import numpy as np
 import scipy.linalg
@@ -260,7 +260,7 @@ class CertifiedSearch:
         K: Sequence[np.ndarray],
         solver_margin: float | None = None,
         route: str = "LMI",
-        near: Sequence | None = None,
+        near: Sequence[Any] | None = None,
     ) -> StabilityCertificate | None:
         """Re-check gains ``K`` (user coordinates) at ``lambdas`` without solving anything.
 
@@ -308,7 +308,9 @@ class CertifiedSearch:
         closed = [self.A] + [self.A + k @ c for k, c in zip(K, self.C_S)]
         terms: list[np.ndarray] = []  # the congruence matrices, formed at the first dense solve
         rhs = vech(np.eye(n))
-        near: list = []  # above DENSE_MAX_N states: the LU factors of the last operator factored, the latest solution
+        near: list[
+            Any
+        ] = []  # above DENSE_MAX_N states: the LU factors of the last operator factored, the latest solution
 
         def stable(x: float) -> bool:
             self._tick("slide")
@@ -466,7 +468,16 @@ class CertifiedSearch:
             route = "MARE gains by policy iteration"
         return hi, cert
 
-    def _bisection(self, at, lo, hi, cert, tol, steps0, certify_at) -> UpperBound:
+    def _bisection(
+        self,
+        at: Callable[[Fraction], list[Fraction]],
+        lo: Fraction,
+        hi: Fraction,
+        cert: StabilityCertificate,
+        tol: Fraction,
+        steps0: int,
+        certify_at: Callable[[list[Fraction], Sequence[np.ndarray]], StabilityCertificate | None],
+    ) -> UpperBound:
         """Plain bisection of ``(lo, hi]`` with ``certify_at(lambdas, prior_gains)``, sliding after each success."""
         while hi - lo > tol:
             slid = self._slide(at, lo, hi, cert.K, tol, cert.route)

@@ -28,7 +28,7 @@ of that size are the dense solve's.
 
 from __future__ import annotations
 
-from typing import Sequence
+from typing import Callable, Sequence
 
 import numpy as np
 import scipy.linalg
@@ -90,7 +90,8 @@ class _SteinInverse:
     def __call__(self, R: np.ndarray) -> np.ndarray:
         Z = self.Vi @ R @ self.Vih
         Z /= self.denom
-        return (self.V @ Z @ self.Vh).real
+        solution: np.ndarray = (self.V @ Z @ self.Vh).real
+        return solution
 
 
 def _preconditioner(terms: Sequence[Term]) -> _SteinInverse | None:
@@ -104,7 +105,14 @@ def _preconditioner(terms: Sequence[Term]) -> _SteinInverse | None:
     return None
 
 
-def _gmres(op, pre, b: np.ndarray, x: np.ndarray, tol: float, cycles: int = 0) -> np.ndarray:
+def _gmres(
+    op: Callable[[np.ndarray], np.ndarray],
+    pre: Callable[[np.ndarray], np.ndarray],
+    b: np.ndarray,
+    x: np.ndarray,
+    tol: float,
+    cycles: int = 0,
+) -> np.ndarray:
     """Right-preconditioned restarted GMRES (Saad and Schultz 1986) for ``op(x) = b`` from ``x``.
 
     The Arnoldi basis is orthogonalized twice by classical Gram-Schmidt (as matrix products);
@@ -184,7 +192,8 @@ def solve_stein(
 
     def op(x: np.ndarray) -> np.ndarray:
         X = x.reshape(n, n)
-        return (X - apply(terms, X)).ravel()
+        image: np.ndarray = (X - apply(terms, X)).ravel()
+        return image
 
     def pre(x: np.ndarray) -> np.ndarray:
         return P(x.reshape(n, n)).ravel()
@@ -226,10 +235,12 @@ def solve_near(
 
     def op(h: np.ndarray) -> np.ndarray:
         X = unvech(h, n)
-        return h - (apply(terms, X))[iu, ju]
+        values_out: np.ndarray = h - (apply(terms, X))[iu, ju]
+        return values_out
 
     def pre(h: np.ndarray) -> np.ndarray:
-        return scipy.linalg.lu_solve(factor, h, check_finite=False)
+        arr: np.ndarray = scipy.linalg.lu_solve(factor, h, check_finite=False)
+        return arr
 
     tol = RESIDUAL_RTOL * float(np.linalg.norm(rhs))
     with np.errstate(all="ignore"):

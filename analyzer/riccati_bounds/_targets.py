@@ -89,7 +89,9 @@ class TraceTarget(ReportPart):
         )
 
 
-def _trace_upper(A, C, Q, R, lam: float, budget: Budget | None) -> float | None:
+def _trace_upper(
+    A: np.ndarray, C: np.ndarray, Q: np.ndarray, R: np.ndarray, lam: float, budget: Budget | None
+) -> float | None:
     it = solve_v_bar(one_packet_model(A, C, Q, R, lam), budget=budget)
     return None if it.matrix is None else float(np.trace(it.matrix))
 

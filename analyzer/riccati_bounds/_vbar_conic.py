@@ -19,6 +19,7 @@ of the data, without its compilation (about 4 ms of a 3x3 request).
 from __future__ import annotations
 
 from functools import lru_cache
+from typing import Any
 
 import clarabel
 import numpy as np
@@ -56,7 +57,7 @@ def _triangle(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return i, j, scale
 
 
-def conic_program(model: ArrivalModel) -> tuple[np.ndarray, sp.csc_array, np.ndarray, list]:
+def conic_program(model: ArrivalModel) -> tuple[np.ndarray, sp.csc_array, np.ndarray, list[Any]]:
     """``(q, A, b, cones)`` of the ``V_bar`` SDP for Clarabel (see the module docstring)."""
     A, Q, n = model.A, model.Q, model.n
     active = model.active()

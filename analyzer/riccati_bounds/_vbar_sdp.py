@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass
+from typing import Any
 
 import cvxpy as cp
 import numpy as np
@@ -46,7 +47,7 @@ def _solve(problem: cp.Problem, V: cp.Variable, **options: object) -> SDPSolutio
     try:
         with warnings.catch_warnings():  # an inaccurate answer shows in the status and in the cross-check
             warnings.simplefilter("ignore", UserWarning)
-            problem.solve(solver=SOLVER, **options)  # type: ignore[arg-type]
+            problem.solve(solver=SOLVER, **options)
     except cp.SolverError:
         return SDPSolution("solver_error", None, None)
     status = str(problem.status)
@@ -82,7 +83,7 @@ def v_bar_sdp(model: ArrivalModel) -> SDPSolution:
     return SDPSolution(status, V, solve_time)
 
 
-def lmi_blocks(model: ArrivalModel, V: np.ndarray | cp.Expression) -> list[list]:
+def lmi_blocks(model: ArrivalModel, V: np.ndarray | cp.Expression) -> list[list[Any]]:
     """The blocks of the constraint matrix of :func:`v_bar_sdp` at ``V``, row by row.
 
     ``[[A V A' + Q - V, sqrt(pi_1) A V C_1', ...], [sqrt(pi_1) C_1 V A', C_1 V C_1' + R_1, 0, ...], ...]``

@@ -82,7 +82,7 @@ def congruence_matrix(M: np.ndarray) -> np.ndarray:
     if n <= SMALL_CONGRUENCE_N:  # the same products and sums as below, in fewer NumPy calls
         ik, jl, il, jk, halves = _small_congruence_layout(n)
         m = M.ravel()
-        T = m.take(ik) * m.take(jl)  # the products M_ik M_jl and M_il M_jk, summed in that order
+        T: np.ndarray = m.take(ik) * m.take(jl)  # the products M_ik M_jl and M_il M_jk, summed in that order
         T += m.take(il) * m.take(jk)
         T *= halves  # k = l: both terms are M_ik M_jk, and halving 2ab is exact (elsewhere times 1, exact too)
         return T
@@ -99,7 +99,8 @@ def congruence_matrix(M: np.ndarray) -> np.ndarray:
 def vech(X: np.ndarray) -> np.ndarray:
     """The upper triangle of ``X``, row by row."""
     iu, ju, _ = vech_layout(X.shape[0])
-    return X[iu, ju]
+    result: np.ndarray = X[iu, ju]
+    return result
 
 
 def unvech(h: np.ndarray, n: int) -> np.ndarray:

@@ -164,12 +164,12 @@ class SlotSpace:
     @property
     def size(self) -> int:
         """``S = N0 * G``, the number of base slots."""
-        return self.rows.shape[0]
+        return int(self.rows.shape[0])
 
     @property
     def n_columns(self) -> int:
         """``L``."""
-        return self.rows.shape[2]
+        return int(self.rows.shape[2])
 
     def slots(self, mask: np.ndarray) -> list[Slot]:
         """The ``(n, g)`` slots of a boolean mask."""
@@ -268,7 +268,8 @@ class Flat:
         if self.cut_rank == 0:
             return self.basis
         _, _, vh = np.linalg.svd(self.cut)
-        return self.basis @ vh[self.cut_rank :].conj().T
+        values_out: np.ndarray = self.basis @ vh[self.cut_rank :].conj().T
+        return values_out
 
 
 @dataclass(frozen=True)
@@ -434,7 +435,8 @@ def canonical_possible(space: SlotSpace, W: int, masks: np.ndarray, cores: np.nd
     misses = G - masks.reshape(C, space.n_phases, G).sum(axis=2)
     wrapped = np.concatenate([np.zeros((C, 1), dtype=int), misses, misses[:, : W - 1]], axis=1).cumsum(axis=1)
     per_window = wrapped[:, W : W + space.n_phases] - wrapped[:, : space.n_phases]
-    return (c0 <= j_max) & (per_window.min(axis=1) >= c0)
+    arr: np.ndarray = (c0 <= j_max) & (per_window.min(axis=1) >= c0)
+    return arr
 
 
 @dataclass(frozen=True)
@@ -511,7 +513,8 @@ class _Incumbent:
 
     def promising(self, masks: np.ndarray) -> np.ndarray:
         """Rows that miss few enough slots to beat the incumbent (a cheap test before scoring)."""
-        return self.space.size - masks.sum(axis=1) <= self.max_misses()
+        result: np.ndarray = self.space.size - masks.sum(axis=1) <= self.max_misses()
+        return result
 
     def offer(self, masks: np.ndarray) -> None:
         """Record maximal blind sets (rows of ``masks``)."""

@@ -185,7 +185,8 @@ def _line_residuals(rows: np.ndarray, e: np.ndarray) -> np.ndarray:
     u = ue / np.linalg.norm(ue, axis=1)[:, None]
     coef = rows @ u.conj()[:, :, None]
     diff = rows - coef * u[:, None, :]
-    return np.sqrt(np.einsum("csd,csd->cs", diff, diff.conj()).real)
+    arr: np.ndarray = np.sqrt(np.einsum("csd,csd->cs", diff, diff.conj()).real)
+    return arr
 
 
 def _real_line_residuals(rows: np.ndarray, e: np.ndarray) -> np.ndarray:
@@ -204,7 +205,8 @@ def _real_line_residuals(rows: np.ndarray, e: np.ndarray) -> np.ndarray:
     for k in range(rows.shape[2]):
         np.multiply(coef, u[:, k, None], out=diff[:, :, k])
     np.subtract(rows, diff, out=diff)
-    return np.sqrt(np.einsum("csd,csd->cs", diff, diff))
+    result: np.ndarray = np.sqrt(np.einsum("csd,csd->cs", diff, diff))
+    return result
 
 
 def gap_canonical_possible(space: SlotSpace, masks: np.ndarray, cores: np.ndarray) -> np.ndarray:

@@ -65,7 +65,8 @@ def _component_distance(q: int, residues: Sequence[int], budget: Budget) -> int:
 
 
 def _count(masks: np.ndarray) -> np.ndarray:
-    return masks.sum(axis=1).astype(float)
+    result: np.ndarray = masks.sum(axis=1).astype(float)
+    return result
 
 
 def largest_blind_bound(n_phases: int, exponents: Sequence[int], budget: Budget) -> int | None:

@@ -89,7 +89,10 @@ class Front:
     def misses(self, masks: np.ndarray) -> np.ndarray:
         """``z`` per row of ``masks``: per group, the phases not held."""
         C = masks.shape[0]
-        return self.space.n_phases - masks.reshape(C, self.space.n_phases, self.space.n_groups).sum(axis=1)
+        values_out: np.ndarray = self.space.n_phases - masks.reshape(C, self.space.n_phases, self.space.n_groups).sum(
+            axis=1
+        )
+        return values_out
 
     def dead(self, bounds: np.ndarray) -> np.ndarray:
         """Rows ``b`` of ``bounds`` such that every ``z >= b`` is dominated by or equal to a front vector."""
@@ -319,7 +322,8 @@ def _most_misses(size: int, best: float) -> int:
 
 
 def _held(masks: np.ndarray) -> np.ndarray:
-    return masks.sum(axis=1).astype(float)
+    arr: np.ndarray = masks.sum(axis=1).astype(float)
+    return arr
 
 
 @dataclass(frozen=True)

@@ -175,7 +175,8 @@ class _BigFlats:
         return ok
 
     def alive_hulls(self, hulls: np.ndarray) -> np.ndarray:
-        return hulls.sum(axis=1) >= self.T
+        result: np.ndarray = hulls.sum(axis=1) >= self.T
+        return result
 
     def visit(self, masks: np.ndarray, kernels: np.ndarray) -> None:
         if kernels.shape[2] == 0:

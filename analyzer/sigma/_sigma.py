@@ -36,6 +36,7 @@ from typing import Sequence
 import numpy as np
 
 from .._budget import Budget
+from .._reuse import Memo
 from ..errors import AssumptionViolation, BudgetExceeded, InvalidInput, NumericalFailure
 from ..model import MarkovChannel
 from ..search import (
@@ -49,7 +50,7 @@ from ..search import (
     pareto_search,
     search,
 )
-from ..structure import PhaseBlock
+from ..structure import PhaseBlock, Slot
 
 #: Closure-search steps allowed when the caller passes no budget.
 DEFAULT_MAX_STEPS = 200_000
@@ -105,9 +106,9 @@ class SigmaResult:
     rho_period: float
     degenerate: bool
     fully_blind: bool
-    worst_blind_set: frozenset
-    maximal_blind_sets: tuple
-    bernoulli_exponents: tuple | None
+    worst_blind_set: frozenset[tuple[int, int]]
+    maximal_blind_sets: tuple[frozenset[tuple[int, int]], ...]
+    bernoulli_exponents: tuple[Fraction, ...] | None
     certified: bool
     notes: tuple[str, ...]
 
@@ -126,7 +127,7 @@ def sigma_period(base_period: int, channels: Sequence[MarkovChannel]) -> int:
     return base_period * -(-nu // base_period)
 
 
-def _check_inputs(block: PhaseBlock, channels: Sequence[MarkovChannel], memo: dict | None = None) -> None:
+def _check_inputs(block: PhaseBlock, channels: Sequence[MarkovChannel], memo: Memo | None = None) -> None:
     if memo is None or "block checked" not in memo:  # the block alone: once per memo
         if block.n_columns == 0:
             raise InvalidInput("/system", "a phase block needs at least one column")
@@ -187,7 +188,8 @@ class _GroupRho:
     def __call__(self, allowed: np.ndarray) -> np.ndarray:
         """``log rho`` per row of ``allowed`` (``(C, N0)``: phases where arrivals are allowed)."""
         if not self.tables:
-            return (~allowed).sum(axis=1) * self.log_loss
+            log_rho: np.ndarray = (~allowed).sum(axis=1) * self.log_loss
+            return log_rho
         batch = max(1, _BATCH_ENTRIES // self.k**2)
         return np.concatenate([self._log_rho(allowed[i : i + batch]) for i in range(0, allowed.shape[0], batch)])
 
@@ -203,7 +205,8 @@ class _GroupRho:
             top = prod.max(axis=(1, 2))
             prod /= top[:, None, None]
             log_scale += np.log(top)
-        return np.log(np.abs(np.linalg.eigvals(prod)).max(axis=1)) + log_scale
+        log_rho: np.ndarray = np.log(np.abs(np.linalg.eigvals(prod)).max(axis=1)) + log_scale
+        return log_rho
 
 
 class _LogRho:
@@ -262,7 +265,8 @@ class _RenewalScore:
         # First missed phase at or after each index of the doubled cycle.
         first = np.minimum.accumulate(np.where(twice, np.arange(2 * N), 2 * N)[:, ::-1], axis=1)[:, ::-1]
         gaps = np.clip(first[:, 1 : N + 1] - np.arange(1, N + 1), 0, N - 1)
-        return np.where(missed, self.log_f[gaps], 0.0).sum(axis=1)
+        values_out: np.ndarray = np.where(missed, self.log_f[gaps], 0.0).sum(axis=1)
+        return values_out
 
 
 class _WindowBound:
@@ -453,11 +457,12 @@ def _objective(channels: Sequence[MarkovChannel], base_period: int, period: int,
 
 
 def _count(masks: np.ndarray) -> np.ndarray:
-    return masks.sum(axis=1).astype(float)
+    arr: np.ndarray = masks.sum(axis=1).astype(float)
+    return arr
 
 
 def period_transfer_matrix(
-    period: int, blind_set: frozenset, channels: Sequence[MarkovChannel], budget: Budget | None = None
+    period: int, blind_set: frozenset[tuple[int, int]], channels: Sequence[MarkovChannel], budget: Budget | None = None
 ) -> list[list[Fraction]]:
     """Exact one-period transfer matrix ``P_F`` over the joint channel history.
 
@@ -625,7 +630,7 @@ def _route(space: SlotSpace, channels: Sequence[MarkovChannel], degenerate: bool
     return "pareto" if all(ch.order == 0 for ch in channels) else "orbits"
 
 
-def _lift(space: SlotSpace, mask: np.ndarray, period: int) -> frozenset:
+def _lift(space: SlotSpace, mask: np.ndarray, period: int) -> frozenset[tuple[int, int]]:
     """Slots over ``[0, N)`` of a base mask (blindness depends on ``n mod N0`` only)."""
     return frozenset((n + k * space.n_phases, g) for n, g in space.slots(mask) for k in range(period // space.n_phases))
 
@@ -654,7 +659,7 @@ def _exact_checks(
     phase0: np.ndarray,
     degenerate: bool,
     bernoulli: bool = False,
-) -> list:
+) -> list[tuple[list[Slot], bool, str]]:
     """``(slots, expect_blind, what)`` for every rank decision that matters.
 
     A rank drop must be confirmed on the whole set; full rank may be
@@ -676,7 +681,7 @@ def _exact_checks(
     return checks
 
 
-def _certify(block: PhaseBlock, checks: list, budget: Budget) -> tuple[bool, str]:
+def _certify(block: PhaseBlock, checks: list[tuple[list[Slot], bool, str]], budget: Budget) -> tuple[bool, str]:
     """Confirm ``checks`` with ``block.exact_rank``.
 
     Raises
@@ -698,7 +703,9 @@ def _certify(block: PhaseBlock, checks: list, budget: Budget) -> tuple[bool, str
     return True, f"certified: {len(checks)} rank decisions confirmed in exact arithmetic"
 
 
-def _unblind_shares(space: SlotSpace, mask: np.ndarray, channels: Sequence[MarkovChannel]) -> tuple | None:
+def _unblind_shares(
+    space: SlotSpace, mask: np.ndarray, channels: Sequence[MarkovChannel]
+) -> tuple[Fraction, ...] | None:
     """``z_g / N = (phases of [0, N0) where g is not in F) / N0`` if all channels are Bernoulli."""
     if any(ch.order != 0 for ch in channels):
         return None
@@ -707,7 +714,11 @@ def _unblind_shares(space: SlotSpace, mask: np.ndarray, channels: Sequence[Marko
 
 
 def _sigma_values(
-    space: SlotSpace, found: _Found, channels: Sequence[MarkovChannel], period: int, exponents: tuple | None
+    space: SlotSpace,
+    found: _Found,
+    channels: Sequence[MarkovChannel],
+    period: int,
+    exponents: tuple[Fraction, ...] | None,
 ) -> tuple[float, float]:
     """``(sigma, rho_period)``, in closed form where Rohr, Marelli and Fu (2014) gives one (Lemma 2, Corollary 2)."""
     if found.worst.all():
@@ -826,7 +837,7 @@ def compute_sigma(
     channels: Sequence[MarkovChannel],
     budget: Budget | None = None,
     *,
-    memo: dict | None = None,
+    memo: Memo | None = None,
 ) -> SigmaResult:
     """``sigma_k`` of a reduced FMO block (Rohr, Marelli and Fu (2014), Lemmas 2-3, Corollary 2).
 

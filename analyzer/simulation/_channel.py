@@ -69,7 +69,8 @@ class JointChannel:
         """``P(g = pattern | h)`` for a batch of joint histories ``(..., m)``."""
         p1 = self.arrival_probability(hist)
         g = np.asarray(pattern, dtype=bool)
-        return np.prod(np.where(g, p1, 1.0 - p1), axis=-1)
+        result: np.ndarray = np.prod(np.where(g, p1, 1.0 - p1), axis=-1)
+        return result
 
     def per_packet_initial(self, how: str) -> list[np.ndarray]:
         """Distribution of each packet's history before ``t = 0``."""

@@ -60,7 +60,8 @@ def filtered_covariance(P: np.ndarray, C: np.ndarray, R: np.ndarray, rowmask: np
     else:
         corr = np.matmul(np.swapaxes(CP, 1, 2), np.linalg.solve(S, CP))
         corr = 0.5 * (corr + np.swapaxes(corr, 1, 2))
-    return P - corr
+    result: np.ndarray = P - corr
+    return result
 
 
 __all__ = ["filtered_covariance"]

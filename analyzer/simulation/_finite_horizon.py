@@ -104,7 +104,8 @@ class FiniteHorizonReport(Report):
     @property
     def mean_trace(self) -> np.ndarray:
         """``trace(E[P_t])`` for ``t = 0..T`` (NaN after divergence)."""
-        return np.einsum("tii->t", self.mean_covariance)
+        result: np.ndarray = np.einsum("tii->t", self.mean_covariance)
+        return result
 
     @property
     def diverged_at(self) -> int | None:

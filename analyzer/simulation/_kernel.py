@@ -61,7 +61,8 @@ def _whiten(S: np.ndarray, B: np.ndarray) -> np.ndarray:
     """
     p = S.shape[-1]
     if p == 1:
-        return B / np.sqrt(S)
+        whitened: np.ndarray = B / np.sqrt(S)
+        return whitened
     if p > _SMALL_P:
         try:
             return np.linalg.solve(np.linalg.cholesky(S), B)
@@ -92,7 +93,8 @@ def _lift(S: np.ndarray, floor: np.ndarray) -> np.ndarray:
     indefinite (a prior beyond :data:`PRECISION_RATIO`), this restores it.
     """
     w, U = np.linalg.eigh(S - floor)
-    return floor + np.matmul(U * np.maximum(w, 0.0)[:, None, :], np.swapaxes(U, -1, -2))
+    values_out: np.ndarray = floor + np.matmul(U * np.maximum(w, 0.0)[:, None, :], np.swapaxes(U, -1, -2))
+    return values_out
 
 
 def _whiten_safe(S: np.ndarray, B: np.ndarray, floor: Callable[[np.ndarray], np.ndarray]) -> np.ndarray:
@@ -142,6 +144,7 @@ class RiccatiStep:
     def open_loop(self, P: np.ndarray) -> np.ndarray:
         """``Phi_0(P) = A P A' + Q`` for a batch of symmetric ``P``."""
         M, n = P.shape[0], self.A.shape[0]
+        out: np.ndarray
         if self.kron_t is not None:
             out = np.matmul(P.reshape(M, 1, n * n), self.kron_t).reshape(M, n, n)
         else:
@@ -250,7 +253,8 @@ class GroupedRiccatiStep:
 
 def traces(P: np.ndarray) -> np.ndarray:
     """``trace(P_m)`` for a batch."""
-    return np.einsum("mii->m", P)
+    result: np.ndarray = np.einsum("mii->m", P)
+    return result
 
 
 def healthy(P: np.ndarray, tr: np.ndarray) -> np.ndarray:

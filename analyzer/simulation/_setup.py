@@ -115,7 +115,7 @@ class SimSystem:
 
     @property
     def n(self) -> int:
-        return self.A.shape[0]
+        return int(self.A.shape[0])
 
     def rows_of(self, arrived: tuple[bool, ...]) -> tuple[int, ...]:
         """Rows of ``C`` carried by the packets flagged in ``arrived`` (sorted)."""

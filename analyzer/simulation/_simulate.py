@@ -157,7 +157,8 @@ class SimulationReport(Report):
 
     def percentile(self, q: int) -> np.ndarray:
         """The ``q``-th percentile of ``trace(P_t)`` over time (``+inf`` where diverged)."""
-        return self.stats.percentiles[PERCENTILES.index(q)]
+        result: np.ndarray = self.stats.percentiles[PERCENTILES.index(q)]
+        return result
 
     @property
     def mean_diverged_at(self) -> int | None:

@@ -23,7 +23,7 @@ from flint import fmpq_mat
 from .._budget import Budget
 from .._json import json_float
 from .._reporting import Report, ShortRepr
-from .._reuse import kept
+from .._reuse import Memo, kept
 from .._verdicts import Verdict
 from ..design import (
     CriticalParameter,
@@ -327,7 +327,7 @@ def sigma_bracket_json(block: FmoBlock, bracket: SigmaBracket) -> dict[str, Any]
 
 
 def _analyze_block(
-    block: FmoBlock, channels: list[MarkovChannel], basis: str, budget: Budget, memo: dict | None = None
+    block: FmoBlock, channels: list[MarkovChannel], basis: str, budget: Budget, memo: Memo | None = None
 ) -> tuple[BlockReport, Optional[SigmaResult]]:
     modulus = kept(memo, "modulus", lambda: (_modulus_float(block), _modulus_text(block)))  # the block alone
     base: dict[str, Any] = dict(
@@ -422,7 +422,7 @@ def _analyze_block(
     return report, res
 
 
-def _bernoulli_exponents(F: frozenset, N: int, groups: int) -> tuple[Fraction, ...]:
+def _bernoulli_exponents(F: frozenset[tuple[int, int]], N: int, groups: int) -> tuple[Fraction, ...]:
     """``z_g / N``: the share of phases at which group ``g`` is *not* in the blind set ``F``."""
     return tuple(Fraction(N - sum(1 for n, g in F if g == grp), N) for grp in range(groups))
 
@@ -499,7 +499,7 @@ def _critical_probability(
 
 
 def _reused_critical_probability(
-    blocks: Sequence[BlockReport], display: dict[str, str], memo: dict | None
+    blocks: Sequence[BlockReport], display: dict[str, str], memo: Memo | None
 ) -> tuple[float | None, str | None, list[str]]:
     """:func:`_critical_probability`, kept in the plant's ``memo`` by what it reads besides the plant.
 
@@ -543,7 +543,11 @@ GE_AUTO_MAX_STEPS = 20_000
 
 
 def _with_ge_region(
-    report: StabilityReport, items: list, channel: MarkovChannel, budget: Budget, opts: Any
+    report: StabilityReport,
+    items: list[tuple[FmoBlock, SigmaResult | None]],
+    channel: MarkovChannel,
+    budget: Budget,
+    opts: Any,
 ) -> StabilityReport:
     """Add the Gilbert-Elliott region; unasked (no ``ge_grid``), it never costs more than a small budget."""
     if opts.ge_grid is not None:
@@ -567,7 +571,7 @@ def analyze(
     budget: Budget | None = None,
     *,
     fmo: Sequence[FmoBlock] | None = None,
-    memo: dict | None = None,
+    memo: Memo | None = None,
     tail: str = "report",
 ) -> StabilityReport:
     """Decide stability of the expected error covariance (Rohr, Marelli and Fu (2014), Theorem 1).

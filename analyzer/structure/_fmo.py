@@ -275,7 +275,7 @@ def _eigen_text(f: EigenFactor, index: int) -> str:
     return f"root of {_poly_text_of(f)} near {z.real:.12g}{z.imag:+.12g}i"
 
 
-_POLY_TEXTS: dict[int, tuple[weakref.ref, str]] = {}
+_POLY_TEXTS: dict[int, tuple[weakref.ref[Any], str]] = {}
 
 
 def _poly_text_of(f: EigenFactor) -> str:
@@ -590,7 +590,8 @@ def build_block(
 
     def ball(prec: int) -> arb:
         z = head_factor.root_ball(ri0, prec)
-        return (z * z.conjugate()).real
+        squared_modulus: arb = (z * z.conjugate()).real
+        return squared_modulus
 
     block_notes = list(notes)
     if mod_sq is None:

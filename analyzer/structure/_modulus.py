@@ -121,7 +121,8 @@ def modulus_squared(f: EigenFactor, index: int) -> AlgebraicReal | None:
 
     def beta_ball(prec: int) -> arb:
         z = f.root_ball(index, prec) * a
-        return (z * z.conjugate()).real
+        beta: arb = (z * z.conjugate()).real
+        return beta
 
     prec = START_PREC
     while prec <= MAX_PREC:

@@ -59,7 +59,7 @@ class PhaseBlock:
     @property
     def n_columns(self) -> int:
         """``L``: the number of Jordan chains in the block."""
-        return self.c_hat.shape[1]
+        return int(self.c_hat.shape[1])
 
     def omega_powers(self, n: int) -> np.ndarray:
         """``omega_j^n`` for every column ``j``."""
@@ -69,7 +69,8 @@ class PhaseBlock:
     def rows(self, n: int, group: int | None = None) -> np.ndarray:
         """``r_n`` (or its rows of one group): ``C_hat[rows] diag(omega^n)``."""
         ch = self.c_hat if group is None else self.c_hat[list(self.row_groups[group]), :]
-        return ch * self.omega_powers(n)[None, :]
+        result: np.ndarray = ch * self.omega_powers(n)[None, :]
+        return result
 
     def stacked(self, slots: Iterable[Slot]) -> np.ndarray:
         """The rows of all ``slots`` stacked, shape ``(k, L)``."""

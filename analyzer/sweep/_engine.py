@@ -327,7 +327,19 @@ def _row(spec: SweepSpec, index: int, fields: dict[str, Any]) -> SweepRow:
     return SweepRow(index, coordinates_at(spec, index), fields)
 
 
-def _iter_dask(spec, text, deadline, scheduler, workers, chunk_size, progress, cancel, reuse, info, first=0):
+def _iter_dask(
+    spec: SweepSpec,
+    text: str,
+    deadline: float | None,
+    scheduler: str | None,
+    workers: int | None,
+    chunk_size: int | None,
+    progress: Progress | None,
+    cancel: threading.Event | None,
+    reuse: bool,
+    info: dict[str, Any],
+    first: int = 0,
+) -> Iterator[SweepRow]:
     try:
         from distributed import Client, LocalCluster, as_completed
     except ImportError:  # a regular dependency: missing only in a broken install

@@ -26,8 +26,8 @@ from ._rows import analyze_row, error_row, row_from_report
 from ._spec import SweepSpec, parse_sweep, point_at
 
 _STRUCTURE = structure_cache()
-_VERDICT_ROWS = LRU(4096)
-_SPECS = LRU(8)
+_VERDICT_ROWS: LRU[dict[str, Any]] = LRU(4096)
+_SPECS: LRU[SweepSpec] = LRU(8)
 
 
 def cache_stats() -> dict[str, int]:

@@ -16,12 +16,12 @@ import pickle
 from typing import Any
 
 from .._reuse import LRU
-from ..model import DEFAULT_LIMITS, Limits, Request, parse_request
+from ..model import DEFAULT_LIMITS, Limits, Request, SystemRecord, parse_request
 
 #: Distinct plants each process keeps validated.
 SYSTEM_ENTRIES = 256
 
-_SYSTEMS = LRU(SYSTEM_ENTRIES)
+_SYSTEMS: LRU[SystemRecord] = LRU(SYSTEM_ENTRIES)
 
 
 def parse_point(tree: Any, limits: Limits = DEFAULT_LIMITS) -> Request:
@@ -39,7 +39,7 @@ def parse_point(tree: Any, limits: Limits = DEFAULT_LIMITS) -> Request:
         return parse_request(tree, limits)
     made: list[Request] = []
 
-    def first() -> Any:
+    def first() -> SystemRecord:
         made.append(parse_request(tree, limits))
         return made[0].system
 
@@ -48,6 +48,6 @@ def parse_point(tree: Any, limits: Limits = DEFAULT_LIMITS) -> Request:
     return made[0] if made else parse_request(tree, limits, system=system)
 
 
-def system_cache() -> LRU:
+def system_cache() -> LRU[SystemRecord]:
     """This process's cache of validated plants (for statistics and tests)."""
     return _SYSTEMS

@@ -42,7 +42,7 @@ MAX_POINTS = 1_000_000
 MAX_AXIS_VALUES = 100_000
 
 
-class RationalRange(SequenceABC):
+class RationalRange(SequenceABC[Fraction]):
     """The exactly spaced values ``from + (to - from) i / (num - 1)``, ``i = 0 .. num - 1``, built on demand.
 
     A range axis is held as its three numbers, never as a list: the sweep's

@@ -46,7 +46,7 @@ def csv_text(columns: Sequence[str], records: Iterable[dict[str, Any]]) -> str:
     return buf.getvalue()
 
 
-def _csv_writer(fh: IO[str], columns: Sequence[str]) -> csv.DictWriter:
+def _csv_writer(fh: IO[str], columns: Sequence[str]) -> csv.DictWriter[str]:
     w = csv.DictWriter(fh, fieldnames=list(columns), lineterminator="\n")
     w.writeheader()
     return w

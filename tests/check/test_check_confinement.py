@@ -1,4 +1,4 @@
-"""A check file reads only what it owns (issue 39, item 1).
+"""A check file reads only what it owns.
 
 Every plant, channel and loop path must lead, symlinks followed, to a regular
 file under the check file's directory (or under a directory given with

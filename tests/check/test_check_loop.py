@@ -1,4 +1,4 @@
-"""``kfio check`` requirements on closed loops (issue 24), judged exactly on the loop report.
+"""``kfio check`` requirements on closed loops, judged exactly on the loop report.
 
 The loop is ``examples/loop_scalar.json`` (TCP-like, ``a = 5/4``, ``k = 1/2``,
 ``c = 1``).  The critical sensor probability is checked against the closed

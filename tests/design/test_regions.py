@@ -1,4 +1,4 @@
-"""Exact partial-loss regions (issue 6): Liu and Goldsmith (2004)'s cases, the one-sensor case, the bounds, the API.
+"""Exact partial-loss regions: Liu and Goldsmith (2004)'s cases, the one-sensor case, the bounds, the API.
 
 The exact region is an *extension* of Rohr, Marelli and Fu (2014), Theorem 1 (docs/theory.md,
 "Beyond the seeds"), so every closed form asserted here was first checked by

@@ -1,4 +1,4 @@
-"""The exact per-sensor region against the brute-force blind probability (issue 6).
+"""The exact per-sensor region against the brute-force blind probability.
 
 Random small systems with two sensors, ``A = T D T^-1`` with ``T`` integer
 unimodular and ``D`` block diagonal with eigenvalues of modulus 2 and 3/2
@@ -118,7 +118,7 @@ def _ge(p: str, q: str) -> dict:
 
 @pytest.mark.parametrize("i", range(10))
 def test_analyze_per_sensor_markov_matches_bruteforce(i: int) -> None:
-    """``analyze`` with any channel per sensor (issue 6, first point): block rates against the DP."""
+    """``analyze`` with any channel per sensor: block rates against the DP."""
     A, Cs, _ = random_system(100 + i)
     rng = np.random.default_rng([SEED, 200 + i])
     specs = []

@@ -1,4 +1,4 @@
-"""Simulation spot checks of the exact region on both sides of its boundary (issue 6).
+"""Simulation spot checks of the exact region on both sides of its boundary.
 
 Liu and Goldsmith (2004)'s last example (Section VI.B-C): ``A = [[1.25, 0], [1, 1.1]]``,
 ``C_1 = [1 0]``, ``C_2 = [1 1]``, ``Q = 20 I``, ``R = 2.5 I``.  The exact

@@ -1,4 +1,4 @@
-"""The loop's verdict proved from floats (issue 38, item 1): any size, checked against the exact route.
+"""The loop's verdict proved from floats: any size, checked against the exact route.
 
 * the 8-, 9- and 10-state plants of python-control (``c2d``, ``dlqe``, ``dlqr``) answer a report
   through Python, the CLI and HTTP, with the cost's certified enclosure and capped exact texts;

@@ -1,4 +1,4 @@
-"""Degenerate loops: a link that changes nothing and ``rho(T) = 1`` exactly (issue 39, item 6).
+"""Degenerate loops: a link that changes nothing and ``rho(T) = 1`` exactly.
 
 ``A = [[1]], B = [[0]], C = [[0]]`` (any gains) and ``A = 1, B = 1, C = 0, L = 0``: the plant's state
 is a random walk no packet touches, so ``T`` has the eigenvalue 1 whatever the links do.  The answer is

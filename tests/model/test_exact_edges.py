@@ -1,4 +1,4 @@
-"""Edges of the exact number grammar (issue 21's mutants): floats mean their decimal text, and the exponent limit.
+"""Edges of the exact number grammar (mutants of bench/mutation.py): floats mean their decimal text, and the exponent limit.
 
 A Python float is read through its shortest ``repr``: ``0.1`` is exactly ``1/10``,
 never the binary double ``3602879701896397/36028797018963968``.  The exponent of

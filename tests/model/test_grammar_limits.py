@@ -1,4 +1,4 @@
-"""The number grammar is ASCII and every limit is checked from the text (issue 12, items 11 and lower severity).
+"""The number grammar is ASCII and every limit is checked from the text.
 
 Reproducers: ``"options": {"bounds": {"horizon": 1e999999999}}`` hung the CLI;
 ``"\\u0661.\\u0662\\u0665"`` (Arabic-Indic digits) parsed as 5/4; vertical tab and

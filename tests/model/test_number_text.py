@@ -1,4 +1,4 @@
-"""What a number in a string is, and what an error may quote (issue 39, item 5).
+"""What a number in a string is, and what an error may quote.
 
 A string holds a number and nothing else: ``" 1"`` is not a number, ``"-0"``
 is zero.  A decimal's written exponent may reach ``+-4 D`` (``D`` digits per

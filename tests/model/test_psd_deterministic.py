@@ -1,4 +1,4 @@
-"""``is_psd`` decides by size, not by the clock (issue 12, item 15).
+"""``is_psd`` decides by size, not by the clock.
 
 It gave up after 10 s of wall-clock time, so the same request could be
 accepted or refused depending on the machine's load.  The exact route is now

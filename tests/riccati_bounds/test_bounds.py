@@ -1,7 +1,7 @@
 """The bounds report on the reference cases of docs/theory.md, and its soundness against the exact verdict.
 
 Sources are given per case.  Tolerances: the bisection runs to 1e-6; "the bounds
-coincide" is asserted as ``lambda_upper - lambda_lower <= 1e-4`` (issue 3).
+coincide" is asserted as ``lambda_upper - lambda_lower <= 1e-4``.
 """
 
 from __future__ import annotations

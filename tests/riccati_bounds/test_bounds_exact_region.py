@@ -1,4 +1,4 @@
-"""``kfio bounds --grid``: the bounds' region map carries kfio's exact labels (issue 6)."""
+"""``kfio bounds --grid``: the bounds' region map carries kfio's exact labels."""
 
 from __future__ import annotations
 

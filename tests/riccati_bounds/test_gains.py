@@ -1,7 +1,8 @@
 """The solver-free routes to ``lambda_upper`` (kfio.riccati_bounds._gains) against the LMI and closed forms.
 
 Sources: Sinopoli et al. (2004) Theorem 5 (the equivalence of MARE, gains and LMI
-feasibility) and Sec. IV (bounds that coincide); the reproducer of issue 12, item 2.
+feasibility) and Sec. IV (bounds that coincide), on a plant where the LMI route alone stops short of the
+closed form.
 """
 
 from __future__ import annotations

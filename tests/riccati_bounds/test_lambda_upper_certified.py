@@ -3,8 +3,8 @@
 ``lambda_upper`` is the upper end of the bracket ``(lower_end, lambda_upper]``: the
 stability LMI of Sinopoli et al. (2004), Theorem 5, is proved feasible *at* that
 exact arrival probability by a certificate ``(K, X)`` with ``X > 0`` and
-``X - L_K(X) > 0`` decided over the rationals.  Issue 21: reporting the midpoint
-``(lower_end + upper) / 2`` instead survived the tests.
+``X - L_K(X) > 0`` decided over the rationals.  Reporting the midpoint
+``(lower_end + upper) / 2`` instead (the ``lambda-upper-midpoint`` mutants) must fail here.
 """
 
 from __future__ import annotations

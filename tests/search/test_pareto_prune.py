@@ -1,6 +1,6 @@
 """Subtree bounds of the Pareto search and of the big-flat walk, against the walks without them.
 
-Three bounds cut subtrees (issue 25, several sensors):
+Three bounds cut subtrees (several sensors):
 
 * :meth:`Front.dead` looks dominance up in a table of the grid of miss vectors;
 * :meth:`Front.alive` cuts a flat with a two-dimensional kernel when no chain

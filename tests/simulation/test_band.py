@@ -6,7 +6,7 @@
 ``P_t`` is a finite mixture over the ``2^t`` arrival sequences, so its exact
 standard deviation is a sum the test computes itself.  The band's half-width
 must match ``1.96 sd / sqrt(M)`` within the sampling error of ``s`` (a few per
-cent at ``M = 20000``); a band half as wide (issue 21's mutant) is off by 50%.
+cent at ``M = 20000``); a band half as wide (the ``band-halved`` mutant) is off by 50%.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Bursty versus i.i.d. losses at the same average arrival rate (issue 5; docs/simulation.md).
+"""Bursty versus i.i.d. losses at the same average arrival rate (docs/simulation.md).
 
 Scalar plant a = 1.5, C = Q = R = 1.  Bernoulli lambda = 0.75 and Gilbert-Elliott with failure
 rate p = 0.1 and recovery rate q = 0.3 deliver the same long-run fraction of packets,

@@ -1,4 +1,4 @@
-"""Validation of the exact verdict by the exact finite-horizon mean (issue 5).
+"""Validation of the exact verdict by the exact finite-horizon mean.
 
 When ``analyze`` says ``unstable``, ``trace E[P_t]`` (Rohr, Marelli and Fu (2014), eq. (7), computed by enumeration)
 must grow like ``rate^t`` with ``rate`` the largest block ``|alpha_k|^2 sigma_k``; when it says

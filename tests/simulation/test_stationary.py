@@ -71,7 +71,7 @@ def test_outage_against_independent_sampler():
 
 
 def test_warning_where_kappa_at_most_two():
-    # issue 11: A = -1.25, lambda = 0.3 (critical 0.36): exact E[P_t] grows 1.094 per step
+    # A = -1.25, lambda = 0.3 (critical 0.36): exact E[P_t] grows 1.094 per step
     r = sim([[-1.25]], [[1]], BERN("0.3"), steps=60, trajectories=2000)
     st = r.stationary
     assert st.mean_unreliable and st.growth_rate == pytest.approx(1.5625 * 0.7)

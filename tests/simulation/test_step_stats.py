@@ -1,4 +1,4 @@
-"""The in-place statistics of the simulation give numpy's floats bit for bit (issue 25).
+"""The in-place statistics of the simulation give numpy's floats bit for bit.
 
 Each new path is compared with the one it replaced, written here as it was:
 ``numpy`` mean, ``std(ddof=1)`` and ``quantile(method="inverted_cdf")`` on a copy

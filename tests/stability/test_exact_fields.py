@@ -1,4 +1,4 @@
-"""Every exact field of the verdict is exact (issue 12, item 1).
+"""Every exact field of the verdict is exact.
 
 ``critical_arrival_probability_exact`` and ``sigma_exact`` used to be
 rewritten by ``nsimplify`` (PSLQ on floats), which returned wrong numbers for

@@ -3,7 +3,7 @@
 Only blocks with ``|alpha| < 1`` may be reported stable without computing ``sigma``.  A mode
 on the unit circle that no packet observes has ``sigma = 1``, so its rate
 ``|alpha|^2 sigma`` is exactly 1: the theorem's boundary case, never "stable"
-(issue 21: skipping ``|alpha| <= 1`` blocks turned ``A = [[1]], C = [[0]]`` stable).
+(the ``unit-modulus-skipped`` mutant, which skips ``|alpha| <= 1`` blocks, calls ``A = [[1]], C = [[0]]`` stable).
 """
 
 from __future__ import annotations

@@ -310,7 +310,7 @@ def test_stable_block_certified_from_an_enclosure():
 
 
 def test_budget_is_checked_inside_the_eigenstructure_steps():
-    """Issue 10 item 2: the eigenstructure steps check the budget (counted in steps, not seconds)."""
+    """The eigenstructure steps check the budget (counted in steps, not seconds)."""
     from kfio._budget import Budget
     from kfio.errors import BudgetExceeded
 

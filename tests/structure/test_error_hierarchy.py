@@ -1,4 +1,4 @@
-"""Every error the library raises is in its hierarchy (issue 12, item 8).
+"""Every error the library raises is in its hierarchy.
 
 ``ValueError`` and ``ArithmeticError`` escaped from the eigenstructure, the
 algebraic comparisons, the rate decision, the Riccati/``P_hat`` helpers and the

@@ -1,4 +1,4 @@
-"""Bodies and probes of issue 22's campaign (loopback only), shared by tests and ``bench/bench_hostile.py``."""
+"""Hostile bodies and probes against the service (loopback only), shared by tests and ``bench/bench_hostile.py``."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Sweeps over loop requests (``"command": "loop"``, issue 24): rows are the loop report's, by CLI and HTTP.
+"""Sweeps over loop requests (``"command": "loop"``): rows are the loop report's, by CLI and HTTP.
 
 The base is ``examples/loop_scalar.json`` (TCP-like scalar loop, fixed
 gains).  Each row must equal :func:`kfio.loop.analyze_loop` on its own

@@ -1,4 +1,4 @@
-"""Floats derived from exact values never overflow silently (issue 12, item 3).
+"""Floats derived from exact values never overflow silently.
 
 Reproducer: ``A = [["1e160"]]`` gave exit 70 from ``kfio analyze --json``
 (``Out of range float values are not JSON compliant: inf``), ``|alpha| = inf``

@@ -1,4 +1,4 @@
-"""Hostile JSON at the CLI, in process: every outcome is a documented exit code (issue 12).
+"""Hostile JSON at the CLI, in process: every outcome is a documented exit code.
 
 A seeded, bounded hypothesis campaign feeds ``kfio analyze``, ``bounds`` and
 ``simulate`` (through :func:`kfio.service.cli.main`, not subprocesses) with

@@ -1,4 +1,4 @@
-"""The CLI's budgets and memory limit hold even inside C calls (issue 12, items 12 and 13).
+"""The CLI's budgets and memory limit hold even inside C calls.
 
 No wall-clock assertions: a run either ends with the watchdog's exit 4 or it
 does not; the subprocess timeouts here only guard against a hang.

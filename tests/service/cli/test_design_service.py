@@ -1,4 +1,4 @@
-"""Issue 11 through the shells: the GE region plot endpoint, the CLI options, the new report fields."""
+"""The design answers through the shells: the GE region plot endpoint, the CLI options, the report fields."""
 
 from __future__ import annotations
 

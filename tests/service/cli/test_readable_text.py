@@ -1,4 +1,4 @@
-"""Summaries, reprs and help read well and headline the exact verdict (issue 21, items 1 and 4).
+"""Summaries, reprs and help read well and headline the exact verdict.
 
 Before: ``kfio simulate --help`` showed "95%% band"; a simulation summary led
 with Monte Carlo; reprs embedded ``CRootOf(1562500000...*x**3 - ...)`` and

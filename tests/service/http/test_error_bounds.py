@@ -1,4 +1,4 @@
-"""Error bodies are small whatever the request held (issue 39, item 5).
+"""Error bodies are small whatever the request held.
 
 A 1 MB unknown key or a 1 MB ``options.loop.protocol`` value was answered with
 a 2 MB 422 body (the value twice, in ``field``/``rule`` and in ``detail``).

@@ -1,4 +1,4 @@
-"""The OpenAPI document says what the server does (issue 22, item 13): one test per point that disagreed.
+"""The OpenAPI document says what the server does: one test per point that disagreed.
 
 Responses are validated against the checked-in ``openapi/openapi.json`` (the
 document clients read), not against the code that generates it.

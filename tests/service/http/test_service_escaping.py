@@ -1,4 +1,4 @@
-"""User text is escaped where it leaves kfio: JSON pointers per RFC 6901, terminal text without controls (issue 22, items 8 and 9)."""
+"""User text is escaped where it leaves kfio: JSON pointers per RFC 6901, terminal text without controls."""
 
 from __future__ import annotations
 

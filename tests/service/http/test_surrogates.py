@@ -1,4 +1,4 @@
-"""Lone surrogates are refused with a clear error, never a UnicodeEncodeError (issue 12, item 6).
+"""Lone surrogates are refused with a clear error, never a UnicodeEncodeError.
 
 Reproducers: ``"\\ud800"`` in a field name, a per-sensor channel key, a Markov
 history key or an option key gave HTTP 500 (the problem document could not be

@@ -1,4 +1,4 @@
-"""Issue 22, item 12: a ``KFIO_DASK_SCHEDULER`` that cannot work is the server's fault, not the client's.
+"""A ``KFIO_DASK_SCHEDULER`` that cannot work is the server's fault, not the client's.
 
 Reproducer: with the setting naming a scheduler that is down (or with Dask
 missing), every sweep got 422 "invalid input at /engine", ``in: body``.  Now:

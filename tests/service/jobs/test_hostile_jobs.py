@@ -1,4 +1,4 @@
-"""Issue 22, item 11: a job is validated, sized and refused as its synchronous twin, at submit time.
+"""A job is validated, sized and refused as its synchronous twin, at submit time.
 
 Reproducer: ``POST /v1/jobs/simulate`` with 10,000 steps x 20,000
 trajectories answered 202 and the job then failed with 422, while ``POST
@@ -80,7 +80,7 @@ def test_a_simulation_job_without_a_count_equals_its_synchronous_twin(client):
 
 
 def test_kept_results_are_bounded_by_bytes_the_first_finished_forgotten_first():
-    """Issue 22, item 14: results were kept by count only (64 sweeps of 100,000 points held about 2 GiB)."""
+    """Finished results are evicted by bytes as well as by count (64 sweeps of 100,000 points would hold about 2 GiB)."""
     from kfio.service.jobstore import Job, JobStore
 
     store = JobStore(Settings(job_workers=1, job_retention=10, job_retention_bytes=2500))  # its lane is never started

@@ -1,4 +1,4 @@
-"""Issue 22: with three validation-heavy sweeps in flight, the server keeps answering and stops on SIGTERM.
+"""With three validation-heavy sweeps in flight, the server keeps answering and stops on SIGTERM.
 
 Reproducer: seven sweeps of 100,000 points with a near-singular 40 x 40 ``Q``
 (24 KB each) were validated in the server's threads: every client timed out,

@@ -1,4 +1,4 @@
-"""Issue 22, item 1: worker replacement does not wait for the threads that request handlers use.
+"""Worker replacement does not wait for the threads that request handlers use.
 
 Reproducer: sweep validations filled the event loop's default executor; a
 killed worker was then counted "replaced: 1" while the pool stayed at

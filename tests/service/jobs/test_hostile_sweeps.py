@@ -1,4 +1,4 @@
-"""Issue 22, items 1-3: sweeps are sized from their axes before anything is built, and validated in workers.
+"""Sweeps are sized from their axes before anything is built, and validated in workers.
 
 Reproducers: 150 axes of ``num: 100000`` (12.8 KB) once cost minutes of server
 CPU and a gigabyte before a 422; a sweep of more than 10^4300 points was a 500
@@ -234,7 +234,7 @@ def _wait(client: TestClient, location: str) -> dict[str, Any]:
 
 
 def test_json_lines_of_requests_are_a_sweep_over_http_as_for_the_cli(client, tmp_path, capsys):
-    """Issue 22, item 10: the job store used to re-parse the body as one JSON document and refuse it."""
+    """A body of JSON lines is a sweep for the job store too, never re-parsed as one JSON document and refused."""
     variants = [{**BASE, "system": {**BASE["system"], "A": [[a, 0], [1, 1.1]]}} for a in (1.25, 2)]
     text = "\n".join(json.dumps(v) for v in variants) + "\n"
     r = client.post("/v1/sweeps", content=text, headers={"content-type": "application/json"})

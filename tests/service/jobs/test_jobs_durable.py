@@ -1,4 +1,4 @@
-"""Issue 39, item 2: accepted jobs survive the process (SQLite under ``KFIO_DATA_DIR``).
+"""Accepted jobs survive the process (SQLite under ``KFIO_DATA_DIR``).
 
 Reproducer: after a SIGKILL and a restart, 11 accepted jobs (10 queued, 1
 running) answered 404 ``unknown-job``.  Here a real ``kfio serve`` accepts four

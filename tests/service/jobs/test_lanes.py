@@ -1,4 +1,4 @@
-"""Issue 39, item 4: cheap work is not stuck behind heavy work (the cheap lane).
+"""Cheap work is not stuck behind heavy work (the cheap lane).
 
 Reproducer: with the default 2 workers and four 8-second loop requests in
 flight, a 1x1 analyze waited 7.7 s (p50).  The rule (which request is cheap)

@@ -1,4 +1,4 @@
-"""The Gilbert-Elliott boundary drawn under a (p, q) sweep is the --ge-plot curve, and that curve is exact (issue 21).
+"""The Gilbert-Elliott boundary drawn under a (p, q) sweep is the --ge-plot curve, and that curve is exact.
 
 Reproducer: a 20 x 20 sweep of (failure rate p, recovery rate q) for
 ``A = 1.25 diag(1, -1)``, ``C = [1 1]`` drew its "exact boundary" by sorting

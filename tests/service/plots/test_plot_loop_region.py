@@ -1,4 +1,4 @@
-"""The loop region plot draws what the loop report says (issue 24): read back from the figure's artists.
+"""The loop region plot draws what the loop report says: read back from the figure's artists.
 
 The scalar loop of ``examples/loop_scalar.json`` (TCP-like, fixed gains):
 the cells of the map, the boundary line, the dashed critical values and

@@ -1,4 +1,4 @@
-"""Sensor names are drawn as plain text (issue 12, item 7).
+"""Sensor names are drawn as plain text.
 
 Reproducer: a sensor named ``$\\nosuchcmd$`` reached matplotlib's mathtext
 parser through the region plot's axis labels (HTTP 500, ValueError); nested

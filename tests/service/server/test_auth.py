@@ -1,4 +1,4 @@
-"""Who may use the service: bearer tokens (issue 39, item 7).
+"""Who may use the service: bearer tokens.
 
 With ``KFIO_API_TOKEN`` (or ``KFIO_API_TOKEN_FILE``) set, every route but
 ``/healthz`` and the page's and docs' files answers 401 problem+json without

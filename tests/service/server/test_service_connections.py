@@ -1,4 +1,4 @@
-"""Slow, idle, excess and vanishing clients against a real Uvicorn on 127.0.0.1 (issue 22, items 4 and 5).
+"""Slow, idle, excess and vanishing clients against a real Uvicorn on 127.0.0.1.
 
 The server runs in a thread of this process with the options ``kfio serve``
 uses (:func:`kfio.service.connection_guard.uvicorn_options`) and short

@@ -1,4 +1,4 @@
-"""Issue 12, the service half: the event loop never parses, media types, budgets, memory.
+"""The service under hostile requests: the event loop never parses, media types, budgets, memory.
 
 No assertion here depends on the clock: "the loop was not blocked" is shown by
 ``/healthz`` answering while two body parses are provably still running (they

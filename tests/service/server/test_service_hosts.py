@@ -1,4 +1,4 @@
-"""Only trusted ``Host`` names are answered: 421 for the rest, against DNS rebinding (issue 22, item 14)."""
+"""Only trusted ``Host`` names are answered: 421 for the rest, against DNS rebinding."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Settings and flags are range-checked; ``kfio serve`` refuses bad ones and never serves a dead pool (issue 22, item 7)."""
+"""Settings and flags are range-checked; ``kfio serve`` refuses bad ones and never serves a dead pool."""
 
 from __future__ import annotations
 

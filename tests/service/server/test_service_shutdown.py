@@ -1,4 +1,4 @@
-"""SIGTERM while requests run (issue 12, item 9): every client gets a problem document.
+"""SIGTERM while requests run: every client gets a problem document.
 
 A real ``kfio serve`` with one worker: one request computes, one waits for
 the worker.  On SIGTERM the waiting one is refused at once, the running one

@@ -1,4 +1,4 @@
-"""Issue 39, item 3: slow readers are bounded (flow control, a send deadline, eviction at the cap).
+"""Slow readers are bounded (flow control, a send deadline, eviction at the cap).
 
 Reproducer: 300 clients that request the ReDoc bundle and read 1 byte/s took
 the server from 62 to 328-392 MiB: each connection buffered a whole copy of

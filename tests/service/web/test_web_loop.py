@@ -1,4 +1,4 @@
-"""The page's Loop command, read in Chromium and checked against the loop report (issue 24).
+"""The page's Loop command, read in Chromium and checked against the loop report.
 
 The shipped loop example (``examples/loop_scalar.json``) is loaded and run
 with the Loop button: the headline is the exact verdict of the report the

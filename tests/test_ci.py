@@ -1,0 +1,91 @@
+"""CI and the contributors' tools run the same checks with the same configuration.
+
+* ``.ci/run``'s install line and test command are, joined, the README's second
+  quick-start command: what a contributor runs is what CI runs.
+* Every install in CI uses ``constraints.txt`` (the versions the container
+  ships), and the fast tier runs before the slow one, each test in exactly one.
+* The library is type-checked as ``mypy --strict`` would: pyproject's override
+  for ``analyzer.*`` lists every flag that this mypy's ``--strict`` enables
+  (``strict`` itself cannot be set per module), and the pre-commit hook runs
+  the same mypy command as CI.
+"""
+
+from __future__ import annotations
+
+import re
+import shlex
+import subprocess
+import sys
+import tomllib
+
+from support.paths import ROOT
+
+CI = (ROOT / ".ci" / "run").read_text()
+CI_LINES = [line for line in CI.splitlines() if line and not line.startswith(("#", "set ", "cd ", "export "))]
+README = (ROOT / "README.md").read_text()
+PYPROJECT = tomllib.loads((ROOT / "pyproject.toml").read_text())
+#: Flags of --strict that mypy accepts only in the global section.
+GLOBAL_ONLY = {"warn_redundant_casts", "warn_unused_configs"}
+
+
+def _console_blocks(text: str) -> list[str]:
+    return re.findall(r"^```console\n(.*?)^```$", text, flags=re.M | re.S)
+
+
+def test_the_readme_test_command_is_what_ci_runs() -> None:
+    install = next(line for line in CI_LINES if "pip install" in line)
+    test = next(line for line in CI_LINES if "-m pytest" in line)
+    quick_start = [b.strip() for b in _console_blocks(README.split("## Quick start", 1)[1]) if "pytest" in b]
+    assert quick_start, "the README's quick start has no test command"
+    assert quick_start[0] == f"{install} && {test}"
+
+
+def test_ci_installs_under_the_constraints() -> None:
+    installs = [part for line in CI_LINES for part in line.split("&&") if "pip install" in part]
+    assert installs
+    for part in installs:
+        words = shlex.split(part)
+        assert "-c" in words and words[words.index("-c") + 1] == "constraints.txt", part
+    assert (ROOT / "constraints.txt").is_file()
+
+
+def test_the_fast_tier_runs_first_and_the_tiers_partition_the_suite() -> None:
+    runs = [shlex.split(part) for line in CI_LINES for part in line.split("&&") if "-m pytest" in part]
+    markers = [words[words.index("-m", words.index("pytest")) + 1] for words in runs]
+    assert markers == ["not slow", "slow"]
+    assert all("--cov=kfio" in words for words in runs)  # line coverage of the library and the service
+    assert "--cov-append" in runs[1]  # one report over both tiers
+
+
+def _strict_flags() -> dict[str, bool]:
+    """``{config name: value}`` of the flags this mypy's ``--strict`` enables, read from ``mypy --help``."""
+    text = subprocess.run([sys.executable, "-m", "mypy", "--help"], capture_output=True, text=True, check=True).stdout
+    listing = re.search(r"--strict\s+Strict mode; enables the following flags:(.*?)\n  --", text, flags=re.S)
+    assert listing, "mypy --help no longer lists what --strict enables"
+    flags = re.findall(r"--([a-z-]+)", re.sub(r"-\n\s*", "-", listing.group(1)))
+    out = {}
+    for flag in flags:
+        if flag.startswith("no-"):
+            out[flag[3:].replace("-", "_")] = False
+        else:
+            out[flag.replace("-", "_")] = True
+    return out
+
+
+def test_the_library_is_checked_with_every_strict_flag() -> None:
+    mypy = PYPROJECT["tool"]["mypy"]
+    library = [o for o in mypy.get("overrides", []) if "analyzer.*" in o["module"]]
+    assert len(library) == 1
+    strict = _strict_flags()
+    assert len(strict) >= 10
+    for name, value in strict.items():
+        where = mypy if name in GLOBAL_ONLY else library[0]
+        assert where.get(name) is value, f"{name} = {str(value).lower()} is missing for the library"
+    assert "strict" not in library[0]  # set per module, mypy applies it to every module
+
+
+def test_the_pre_commit_hook_runs_the_mypy_command_of_ci() -> None:
+    ci = next(line for line in CI_LINES if "mypy" in line)
+    hooks = (ROOT / ".pre-commit-config.yaml").read_text()
+    entries = re.findall(r"entry: (.*mypy.*)$", hooks, flags=re.M)
+    assert entries == [ci.strip()]
