@@ -16,16 +16,12 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..errors import InvalidInput
-from ..model import budget_seconds
+from ..model import MAX_CHECK_BUDGET_S, budget_seconds
 from ._run import CheckResult, run_check
 from ._spec import CheckSpec, load_check, parse_check
 
 if TYPE_CHECKING:
     from .._typing import BudgetLike
-
-#: The largest check budget in seconds, as ``kfio check --time-budget``.
-MAX_CHECK_BUDGET_S = 86400
-
 
 def check(
     spec: CheckSpec | Mapping[str, Any] | str | os.PathLike[str],

@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal
 
 from ..errors import InvalidInput
-from ..model import budget_seconds, python_tree
+from ..model import budget_seconds, option_field, python_tree
 from ._engine import Progress, SweepResult, run_sweep
 from ._spec import SweepSpec, load_sweep, parse_sweep
 
@@ -23,7 +23,7 @@ if TYPE_CHECKING:
     from .._typing import BudgetLike
 
 #: The largest sweep budget in seconds, as ``options.time_budget_s`` of a sweep file.
-MAX_SWEEP_BUDGET_S = 86400
+MAX_SWEEP_BUDGET_S = int(option_field("sweep", "time_budget_s").maximum or 0)
 
 #: The largest sweep file read from a path.
 MAX_SWEEP_FILE_BYTES = 64 << 20
