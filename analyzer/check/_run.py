@@ -278,25 +278,16 @@ def run_check(
     for i, entry in enumerate(spec.entries):
         for req in entry.requirements:
             got = results.get((i, req.command))
-            if got is None:
-                message = f"the check's time budget of {budget:g} s ran out before this run finished"
-                outcomes.append(
-                    Outcome(
-                        entry.name,
-                        req.key,
-                        "error",
-                        "none",
-                        req.required,
-                        message,
-                        0.0,
+            if got is None or got[0] == "error":
+                kind, message, seconds = (
+                    (
                         "budget-exceeded",
-                        required_exact=req.required_exact,
+                        f"the check's time budget of {budget:g} s ran out before this run finished",
+                        0.0,
                     )
+                    if got is None
+                    else (*got[1], got[2])
                 )
-                continue
-            status, payload, seconds = got
-            if status == "error":
-                kind, message = payload
                 outcomes.append(
                     Outcome(
                         entry.name,
@@ -311,6 +302,7 @@ def run_check(
                     )
                 )
                 continue
+            status, payload, seconds = got
             j = judge(req, payload)
             kind = "numerical-failure" if j.status == "error" else None
             outcomes.append(

@@ -13,12 +13,11 @@ import dataclasses
 import json
 import re
 from fractions import Fraction
-from typing import Any, Callable
+from typing import Any
 
 import pytest
 
 from kfio import load_request
-from kfio.design._design_options import analyze_options
 from kfio.errors import InvalidInput
 from kfio.loop import load_loop_request
 from kfio.model import (
@@ -33,30 +32,15 @@ from kfio.model import (
     OptionField,
     option_fields,
 )
-from kfio.model._types import Request
-from kfio.riccati_bounds._options import parse_bounds_options
 from kfio.riccati_bounds._phat import max_horizon
-from kfio.riccati_bounds._targets import parse_trace_target
-from kfio.simulation._outage_target import parse_outage_target
-from kfio.simulation._setup import parse_options as parse_simulate_options
-from kfio.simulation._stationary import parse_thresholds
 from kfio.sweep import parse_sweep
 
+from support.option_requests import BASES as OPTION_BASES
+from support.option_requests import NEEDS, VALIDATORS
 from support.paths import ROOT
 
-ONE = {"A": [[2]], "C": [[1]], "Q": [[1]], "R": [[1]]}
-TWO = {"A": [[2, 0], [0, 1.5]], "C": [[1, 0], [0, 1]], "Q": [[1, 0], [0, 1]], "R": [[1, 0], [0, 1]]}
-SENSORS = [{"name": "a", "rows": [0]}, {"name": "b", "rows": [1]}]
 BASES: dict[str, dict[str, Any]] = {
-    "one": {"system": ONE, "channel": {"model": "bernoulli", "arrival_probability": 0.9}},
-    "ge": {"system": ONE, "channel": {"model": "gilbert_elliott", "failure_rate": 0.1, "recovery_rate": 0.6}},
-    "two": {
-        "system": dict(TWO, sensors=SENSORS),
-        "channel": {
-            "model": "per_sensor",
-            "channels": {n: {"model": "bernoulli", "arrival_probability": 0.9} for n in "ab"},
-        },
-    },
+    **OPTION_BASES,
     "loop": {
         "system": {"A": [[1.25]], "B": [[1]], "C": [[1]], "Q": [[1]], "R": [[0.5]]},
         "channel": {"model": "bernoulli", "arrival_probability": 0.8},
@@ -64,28 +48,8 @@ BASES: dict[str, dict[str, Any]] = {
         "controller": {"gains": {"feedback": [[0.6]], "estimator": [[0.5]]}},
     },
 }
-#: The base request an option needs to be valid at all.
-NEEDS = {"analyze.ge_grid": "ge", "bounds.grid": "two"}
 #: What the rest of an object-valued option must hold while one of its keys is probed.
 OBJECT_REST: dict[str, dict[str, Any]] = {"simulate.outage_target": {"threshold": 1, "epsilon": "1/2"}}
-
-
-def _validate_bounds(r: Request) -> None:
-    parse_bounds_options(r)
-    parse_trace_target(r)
-
-
-def _validate_simulate(r: Request) -> None:
-    parse_simulate_options(r)
-    parse_thresholds(r)
-    parse_outage_target(r)
-
-
-VALIDATORS: dict[str, Callable[[Request], None]] = {
-    "analyze": lambda r: (analyze_options(r), None)[1],
-    "bounds": _validate_bounds,
-    "simulate": _validate_simulate,
-}
 
 
 def _validate(group: str, options: dict[str, Any], base: str = "one") -> None:
