@@ -23,6 +23,7 @@ from ._spec import CheckSpec, load_check, parse_check
 if TYPE_CHECKING:
     from .._typing import BudgetLike
 
+
 def check(
     spec: CheckSpec | Mapping[str, Any] | str | os.PathLike[str],
     *,

@@ -31,12 +31,11 @@ import functools
 import math
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Sequence
+from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
 
 from .._budget import Budget
-from .._reuse import Memo
 from ..errors import AssumptionViolation, BudgetExceeded, InvalidInput, NumericalFailure
 from ..model import MarkovChannel
 from ..search import (
@@ -51,6 +50,10 @@ from ..search import (
     search,
 )
 from ..structure import PhaseBlock, Slot
+
+if TYPE_CHECKING:  # annotations only: sigma's layer does not import kfio._reuse at run time
+    from .._reuse import Memo
+
 
 #: Closure-search steps allowed when the caller passes no budget.
 DEFAULT_MAX_STEPS = 200_000
