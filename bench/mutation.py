@@ -366,6 +366,58 @@ MUTANTS: tuple[Mutant, ...] = (
         ("tests/service/server/test_auth.py",),
         "a route other than /healthz, the page and the docs answers without a token",
     ),
+    Mutant(
+        "host-wildcard-suffix",
+        "service/host_check.py",
+        "name.endswith(h[1:])",
+        "name.endswith(h[2:])",
+        (
+            "tests/service/server/test_service_hosts.py",
+            "tests/service/server/test_host_patterns.py",
+            "tests/test_doctests.py",
+        ),
+        "'*.example.org' trusts 'example.org' and 'evilexample.org' too, not only its subdomains",
+    ),
+    Mutant(
+        "worker-memory-unlimited",
+        "analyzer/_workers.py",
+        "    resource.setrlimit(resource.RLIMIT_AS, (limit, hard))\n",
+        "    del limit\n",
+        ("tests/service/cli/test_cli_watchdog.py", "tests/check/test_check_cli.py", "tests/test_workers.py"),
+        "the shared worker mechanics set no address-space limit: a runaway allocation takes the machine",
+    ),
+    Mutant(
+        "sweep-chunk-past-table",
+        "analyzer/sweep/_spec.py",
+        "int(chunk_field.maximum or 0))",
+        "int(chunk_field.maximum or 0) + 1)",
+        ("tests/model/test_fields.py",),
+        "the sweep parser admits one more than the option table (and the published schema) allows",
+    ),
+    Mutant(
+        "sweep-budget-ignored",
+        "analyzer/sweep/_api.py",
+        "        parsed = dataclasses.replace(parsed, time_budget_s=seconds)\n",
+        "        parsed = parsed\n",
+        ("tests/api/test_api_shape.py",),
+        "kfio.sweep(..., budget=) runs on the file's budget, ignoring the argument",
+    ),
+    Mutant(
+        "cache-entries-unbounded",
+        "service/cache.py",
+        "        while len(self) > self.max_entries:\n",
+        "        while len(self) > self.max_entries + 1:\n",
+        ("tests/service/http/test_service_units.py", "tests/test_doctests.py"),
+        "the answer cache keeps one entry more than KFIO_CACHE_ENTRIES",
+    ),
+    Mutant(
+        "check-unfinished-not-budget",
+        "analyzer/check/_run.py",
+        '                        "budget-exceeded",\n',
+        '                        "internal",\n',
+        ("tests/check/test_check_cli.py", "tests/api/test_api_shape.py"),
+        "a check run the budget cut off is reported as an internal error, not budget-exceeded (exit code)",
+    ),
 )
 
 
