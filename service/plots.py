@@ -16,7 +16,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from kfio import Budget, InvalidInput, Request
-from kfio.errors import AnalyzerError
+from kfio.errors import AnalyzerError, NumericalFailure
 from kfio.model import MarkovChannel, PerSensorChannel, to_float
 
 _SIZE = (7.0, 4.5)
@@ -338,6 +338,8 @@ def region(request: Request, budget: Budget, params: Mapping[str, Any]) -> bytes
     grid_options = {**request.options.get("bounds", {}), "grid": points}
     gridded = dataclasses.replace(request, options={**request.options, "bounds": grid_options})
     bounds = compute_bounds(gridded, budget=budget)
+    if bounds.region is None:  # options.bounds.grid with two sensors always adds it; say so if it ever does not
+        raise NumericalFailure("/options/bounds/grid", "the bounds computation returned no region map")
     report = bounds.region.to_dict()
     values = np.array(report["values"], dtype=float)
     labels = np.array([[_LABEL_CODE.get(x, 0.0) for x in row] for row in report["labels"]])

@@ -5,9 +5,11 @@
 * Every install in CI uses ``constraints.txt`` (the versions the container
   ships), and the fast tier runs before the slow one, each test in exactly one.
 * The library is type-checked as ``mypy --strict`` would: pyproject's override
-  for ``analyzer.*`` lists every flag that this mypy's ``--strict`` enables
-  (``strict`` itself cannot be set per module), and the pre-commit hook runs
-  the same mypy command as CI.
+  for ``kfio.*`` lists every flag that this mypy's ``--strict`` enables
+  (``strict`` itself cannot be set per module), the more specific one for
+  ``kfio.service.*`` turns each back off, and the pre-commit hook runs the
+  same type-check command as CI (``scripts/typecheck.py``, which checks the
+  package as it installs, so the service's calls into the library are typed).
 """
 
 from __future__ import annotations
@@ -72,20 +74,49 @@ def _strict_flags() -> dict[str, bool]:
     return out
 
 
-def test_the_library_is_checked_with_every_strict_flag() -> None:
+def _override(module: str) -> dict[str, object]:
+    found = [o for o in PYPROJECT["tool"]["mypy"].get("overrides", []) if module in o["module"]]
+    assert len(found) == 1, module
+    return found[0]
+
+
+def test_the_library_is_checked_with_every_strict_flag_and_the_service_with_none() -> None:
     mypy = PYPROJECT["tool"]["mypy"]
-    library = [o for o in mypy.get("overrides", []) if "analyzer.*" in o["module"]]
-    assert len(library) == 1
+    library, service = _override("kfio.*"), _override("kfio.service.*")
     strict = _strict_flags()
     assert len(strict) >= 10
     for name, value in strict.items():
-        where = mypy if name in GLOBAL_ONLY else library[0]
+        where = mypy if name in GLOBAL_ONLY else library
         assert where.get(name) is value, f"{name} = {str(value).lower()} is missing for the library"
-    assert "strict" not in library[0]  # set per module, mypy applies it to every module
+        if name not in GLOBAL_ONLY:
+            assert service.get(name) is (not value), f"{name} of --strict is not turned back off for the service"
+    assert "strict" not in library  # set per module, mypy applies it to every module
 
 
-def test_the_pre_commit_hook_runs_the_mypy_command_of_ci() -> None:
-    ci = next(line for line in CI_LINES if "mypy" in line)
+def test_ci_and_the_pre_commit_hook_type_check_the_installed_package() -> None:
+    ci = next(line for line in CI_LINES if "typecheck" in line)
+    assert ci.strip() == ".venv/bin/python scripts/typecheck.py"
     hooks = (ROOT / ".pre-commit-config.yaml").read_text()
-    entries = re.findall(r"entry: (.*mypy.*)$", hooks, flags=re.M)
+    entries = re.findall(r"entry: (.*typecheck.*)$", hooks, flags=re.M)
     assert entries == [ci.strip()]
+    assert not [line for line in CI_LINES if re.search(r"\bmypy\b", line)]  # no second, folder-named run
+
+
+def test_the_type_check_resolves_kfio_to_the_checkout() -> None:
+    """The link tree maps kfio to analyzer/ and kfio.service to service/, so no kfio import is Any."""
+    sys.path.insert(0, str(ROOT / "scripts"))
+    try:
+        import typecheck
+    finally:
+        sys.path.pop(0)
+    links = typecheck.link_tree(ROOT, ROOT / ".mypy_cache" / "kfio-links-test")
+    try:
+        package = links / "kfio"
+        assert (package / "_api.py").resolve() == (ROOT / "analyzer" / "_api.py").resolve()
+        assert (package / "service" / "app.py").resolve() == (ROOT / "service" / "app.py").resolve()
+        names = {p.name for p in (ROOT / "analyzer").iterdir() if p.name != "__pycache__"}
+        assert {p.name for p in package.iterdir()} == names | {"service"}
+    finally:
+        import shutil
+
+        shutil.rmtree(links)
