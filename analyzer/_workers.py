@@ -40,7 +40,7 @@ import time
 from collections import deque
 from dataclasses import dataclass
 from multiprocessing.connection import Connection, wait
-from typing import Any, Callable, Sequence, cast
+from typing import Any, Callable, Sequence, TypeGuard, cast
 
 #: The first message of a worker: its imports are done, it reads tasks now.
 READY = "ready"
@@ -162,8 +162,11 @@ class Worker:
         self.process.join(timeout=5)
 
 
-def died_of_allocation(exit_code: int | None, memory_bytes: int | None) -> bool:
-    """Whether a worker under a memory limit that ended with ``exit_code`` died of a failed C allocation."""
+def died_of_allocation(exit_code: int | None, memory_bytes: int | None) -> TypeGuard[int]:
+    """Whether a worker under a memory limit that ended with ``exit_code`` died of a failed C allocation.
+
+    True only for a signal's (negative) exit code, which the caller may then print as ``-exit_code``.
+    """
     return bool(memory_bytes) and exit_code is not None and -exit_code in ALLOCATION_SIGNALS
 
 

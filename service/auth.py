@@ -172,7 +172,7 @@ def is_open(path: str) -> bool:
 
 def _presented(scope: dict[str, Any]) -> bytes | None:
     """The token of the request's ``Authorization: Bearer`` header (scheme case-insensitive), if any."""
-    raw = next((v for k, v in scope.get("headers", ()) if k == b"authorization"), None)
+    raw: bytes | None = next((v for k, v in scope.get("headers", ()) if k == b"authorization"), None)
     if raw is None:
         return None
     scheme, _, token = raw.strip().partition(b" ")

@@ -37,13 +37,15 @@ import os
 import time
 from concurrent.futures import ThreadPoolExecutor
 from multiprocessing.connection import Connection
-from typing import Any, Callable, cast
+from typing import Any, Callable, TypeVar, cast
 
 from kfio._workers import READY, Worker, died_of_allocation
 
 from .threads import one_thread_per_process
 
 log = logging.getLogger("kfio.service")
+
+T = TypeVar("T")
 
 #: Threads of a pool's own for starting, killing and reaping its workers.
 _POOL_THREADS = 2
@@ -172,7 +174,7 @@ class WorkerPool:
         # replacement back: "replaced: 1" and "alive: 1" for as long as it stayed full).
         self._threads = ThreadPoolExecutor(_POOL_THREADS, thread_name_prefix="kfio-pool")
 
-    async def _in_thread(self, fn: Callable[..., Any], *args: Any) -> Any:
+    async def _in_thread(self, fn: Callable[..., T], *args: Any) -> T:
         """``fn(*args)`` in one of the pool's own threads (inline once the pool is closed)."""
         try:
             return await asyncio.get_running_loop().run_in_executor(self._threads, fn, *args)

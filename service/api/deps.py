@@ -16,7 +16,7 @@ async def get_dispatcher(request: Request) -> Dispatcher:
     ``async`` although it awaits nothing: FastAPI runs a plain ``def`` dependency in a thread,
     a hop that cost more than the rest of a cached answer (bench/bench_service.py).
     """
-    dispatcher = getattr(request.app.state, "dispatcher", None)
+    dispatcher: Dispatcher | None = getattr(request.app.state, "dispatcher", None)
     if dispatcher is None:
         raise ProblemError(Problem(503, "not-ready", "Service not ready", "the service is starting", retry_after=1))
     return dispatcher

@@ -66,7 +66,7 @@ JobId = Annotated[str, Path(description="the id from the `Location` of `POST /v1
 
 def get_jobstore(request: Request) -> JobStore:
     """The app's job store (created by the lifespan; 503 before it runs)."""
-    store = getattr(request.app.state, "jobs", None)
+    store: JobStore | None = getattr(request.app.state, "jobs", None)
     if store is None:
         raise ProblemError(Problem(503, "not-ready", "Service not ready", "the service is starting", retry_after=1))
     return store

@@ -11,7 +11,7 @@ from ..io import add_request_arguments, dump_json, emit, run_request_command
 from .fit import TraceLoader, add_trace_arguments
 
 
-def register(sub: argparse._SubParsersAction) -> None:
+def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "analyze",
         help="exact stability verdict (Rohr, Marelli and Fu (2014), Theorem 1)",

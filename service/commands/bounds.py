@@ -13,7 +13,7 @@ from .. import exitcodes
 from ..io import add_request_arguments, dump_json, emit, run_request_command
 
 
-def register(sub: argparse._SubParsersAction) -> None:
+def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "bounds",
         help="bounds on the critical arrival probability and the expected error covariance (Sinopoli et al. 2004; Liu and Goldsmith 2004; Rohr, Marelli and Fu 2010)",

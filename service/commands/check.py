@@ -28,7 +28,7 @@ from ..io import add_time_budget_argument, dump_json, emit, memory_limit, run_gu
 DEFAULT_FILES = ("kfio-check.json", "kfio-check.toml")
 
 
-def register(sub: argparse._SubParsersAction) -> None:
+def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "check",
         help="judge plants and channels against requirements in a check file (JUnit, Markdown, JSON for CI)",

@@ -15,7 +15,7 @@ from .. import exitcodes
 from ..io import add_time_budget_argument, dump_json, emit, run_guarded, time_budget
 
 
-def register(sub: argparse._SubParsersAction) -> None:
+def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "fit",
         help="fit a packet channel (Bernoulli, Gilbert-Elliott, Markov) to a measured trace, with confidence intervals",

@@ -9,6 +9,7 @@ exceeded, 5 numerical failure.
 from __future__ import annotations
 
 import argparse
+from typing import Any
 
 from .. import exitcodes
 from ..io import (
@@ -26,7 +27,7 @@ from ..watchdog import run_supervised
 from .fit import TraceLoader, add_trace_arguments
 
 
-def register(sub: argparse._SubParsersAction) -> None:
+def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "loop",
         help="closed loop over lossy sensor and actuator links: exact verdict, cost, critical probabilities",
@@ -52,7 +53,7 @@ def _probability(value: float | None, exact: str | None, degree: int | None = No
     return summary_number(exact, value, degree=degree)
 
 
-def _link_name(critical: dict) -> str:
+def _link_name(critical: dict[str, Any]) -> str:
     """``critical sensor arrival probability``, ``critical recovery rate of sensor gps``, ..."""
     link, parameter = critical["link"], critical["parameter"].rsplit("/", 1)[-1].replace("_", " ")
     if link in ("sensor", "actuator"):
@@ -64,7 +65,7 @@ def _link_name(critical: dict) -> str:
     return f"critical {parameter} of sensor {link}"
 
 
-def critical_lines(report: dict) -> list[str]:
+def critical_lines(report: dict[str, Any]) -> list[str]:
     """One line per link (``critical_values`` of the report): its critical value as a decimal, always.
 
     A link whose stable set is an interval that does not reach 1 (a UDP-like estimator
@@ -95,7 +96,7 @@ def critical_lines(report: dict) -> list[str]:
     return lines
 
 
-def summary(report: dict) -> str:
+def summary(report: dict[str, Any]) -> str:
     """A few lines for people: the exact verdict first, then the cost, the critical probabilities and the bounds.
 
     Every number is read from ``report`` (the JSON of ``--json``); a test compares them.
@@ -133,7 +134,7 @@ def summary(report: dict) -> str:
     return "\n".join(lines)
 
 
-def _optimal_actuator(optimal: dict) -> str:
+def _optimal_actuator(optimal: dict[str, Any]) -> str:
     """The optimal TCP-like controller's critical actuator probability: exact, bracketed, or none."""
     crit = optimal["critical_actuator"]
     if optimal["critical_actuator_arrival_probability"] is not None:
@@ -144,14 +145,14 @@ def _optimal_actuator(optimal: dict) -> str:
     return "no probability suffices" if not crit["stabilizable"] else "unknown"
 
 
-def _optimal_sensor(optimal: dict) -> str:
+def _optimal_sensor(optimal: dict[str, Any]) -> str:
     value = optimal["critical_sensor_arrival_probability"]
     if value is None:
         return "no probability suffices"
     return "> " + _probability(value, optimal["critical_sensor_arrival_probability_exact"])
 
 
-def _lqg_lines(report: dict) -> list[str]:
+def _lqg_lines(report: dict[str, Any]) -> list[str]:
     """LQG: the optimal TCP-like controller's critical values beside those of the stationary gains, and its cost bounds."""
     lqg = report["lqg"]
     optimal = lqg["optimal"]
@@ -176,7 +177,7 @@ def _lqg_lines(report: dict) -> list[str]:
     return lines
 
 
-def _lqg_without_gains(report: dict) -> str:
+def _lqg_without_gains(report: dict[str, Any]) -> str:
     """LQG below the optimal critical values: the verdict, why, and what the optimal controller needs."""
     optimal = report["lqg"]["optimal"]
     lines = [

@@ -24,7 +24,7 @@ if TYPE_CHECKING:
 DEFAULT_EXACT_SEQUENCES_LOG2 = 16
 
 
-def register(sub: argparse._SubParsersAction) -> None:
+def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "simulate",
         help="Monte Carlo of the error covariance (mean, 95%% band, percentiles)",

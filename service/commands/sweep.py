@@ -25,7 +25,7 @@ from ..io import add_time_budget_argument, read_request_text, run_guarded, time_
 MAX_SWEEP_BYTES = 64 << 20
 
 
-def register(sub: argparse._SubParsersAction) -> None:
+def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "sweep",
         help="run analyze/bounds/simulate over a grid of points or a list of requests (Dask)",
