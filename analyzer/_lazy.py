@@ -1,4 +1,4 @@
-"""Names of a package that load on first use (PEP 562): ``kfio``, ``kfio.loop`` and ``kfio.fit`` share this."""
+"""Names of a package that load on first use (PEP 562): ``kfio``, ``kfio.loop``, ``.fit``, ``.sweep``, ``.check``."""
 
 from __future__ import annotations
 
