@@ -17,7 +17,7 @@ from kfio.model import MAX_NUMBER_TEXT
 
 from ..._version import __version__
 from .deps import BodyDep, get_body, get_dispatcher
-from .jobs import STATUS_RESPONSE, JobStoreDep, validated
+from .jobs import STATUS_RESPONSE, JobStoreDep, accepted, validated
 from .schemas import COMPONENTS, json_response, problem_responses, schema_ref
 
 FIT_EXAMPLE: dict[str, Any] = {"arrivals": "1101101110110111011011101101", "level": 0.95}
@@ -141,6 +141,19 @@ COMPONENTS.update(FIT_COMPONENTS)
 
 router = APIRouter(tags=["analysis"])
 
+#: The request body of both fit routes: a trace and a confidence level.
+_BODY: dict[str, Any] = {
+    "requestBody": {
+        "required": True,
+        "content": {
+            "application/json": {
+                "schema": schema_ref("FitRequest"),
+                "examples": {"short-trace": {"summary": "A short trace as a 0/1 string", "value": FIT_EXAMPLE}},
+            }
+        },
+    }
+}
+
 
 async def fit(request: Request) -> Response:
     dispatcher = await get_dispatcher(request)
@@ -157,17 +170,7 @@ router.add_api_route(
     "and a chi-square check of the loss-run lengths.  Returns exactly what `kfio fit --json` prints.",
     response_class=Response,
     responses={**json_response("FitReport", "The fit report"), **problem_responses(413, 415, 422, 503, 504)},
-    openapi_extra={
-        "requestBody": {
-            "required": True,
-            "content": {
-                "application/json": {
-                    "schema": schema_ref("FitRequest"),
-                    "examples": {"short-trace": {"summary": "A short trace as a 0/1 string", "value": FIT_EXAMPLE}},
-                }
-            },
-        }
-    },
+    openapi_extra=_BODY,
 )
 
 
@@ -217,10 +220,7 @@ def _checked(body: bytes) -> None:
 
 async def submit_fit_job(body: BodyDep, store: JobStoreDep) -> Response:
     await validated(_checked, body)  # a bad trace is a 422 naming the field at once, not a failed job
-    job = store.submit("fit", body)
-    return Response(
-        store.document(job), status_code=202, media_type="application/json", headers={"Location": f"/v1/jobs/{job.id}"}
-    )
+    return accepted(store, store.submit("fit", body))
 
 
 router.add_api_route(
@@ -235,17 +235,7 @@ router.add_api_route(
     "the field).",
     response_class=Response,
     responses={202: {"description": "The job was queued", **STATUS_RESPONSE}, **problem_responses(413, 422, 429, 503)},
-    openapi_extra={
-        "requestBody": {
-            "required": True,
-            "content": {
-                "application/json": {
-                    "schema": schema_ref("FitRequest"),
-                    "examples": {"short-trace": {"summary": "A short trace as a 0/1 string", "value": FIT_EXAMPLE}},
-                }
-            },
-        }
-    },
+    openapi_extra=_BODY,
 )
 
 __all__ = ["FIT_COMPONENTS", "FIT_EXAMPLE", "router"]

@@ -17,7 +17,7 @@ from fastapi.responses import Response
 from kfio import load_json
 
 from ..dispatch import INLINE_PARSE_BYTES, Dispatcher
-from ..jobstore import JobStore
+from ..jobstore import Job, JobStore
 from ..problems import Problem, ProblemError, problem_from_exception
 from .deps import BodyDep, DispatcherDep
 from .schemas import REQUEST_EXAMPLES, json_body, problem_responses
@@ -142,17 +142,18 @@ async def checked_in_worker(dispatcher: Dispatcher, kind: str, body: bytes) -> N
             raise ProblemError(problem)
 
 
+def accepted(store: JobStore, job: Job) -> Response:
+    """The ``202`` of every job route: the job's document, and ``Location`` to poll."""
+    return Response(
+        store.document(job), status_code=202, media_type="application/json", headers={"Location": f"/v1/jobs/{job.id}"}
+    )
+
+
 def _submit_route(kind: str) -> None:
     async def submit(body: BodyDep, store: JobStoreDep, dispatcher: DispatcherDep) -> Response:
         await checked_in_worker(dispatcher, kind, body)
         tree = await dispatcher._off_loop(load_json, body) if len(body) > INLINE_PARSE_BYTES else None
-        job = store.submit(kind, body, tree=tree)
-        return Response(
-            store.document(job),
-            status_code=202,
-            media_type="application/json",
-            headers={"Location": f"/v1/jobs/{job.id}"},
-        )
+        return accepted(store, store.submit(kind, body, tree=tree))
 
     submit.__name__ = f"submit_{kind}_job"
     router.add_api_route(

@@ -5,13 +5,14 @@ Same body as ``kfio loop FILE`` (a loop request, ``docs/loop.md``), same bytes a
 
 from __future__ import annotations
 
-from fastapi import APIRouter, Request
+from fastapi import APIRouter
 from fastapi.responses import Response
 
-from .deps import BodyDep, get_body, get_dispatcher
-from .jobs import JobStoreDep, validated
+from .deps import BodyDep
+from .jobs import JobStoreDep, accepted, validated
 from .loop_schemas import LOOP_EXAMPLES
-from .schemas import json_response, problem_responses, schema_ref
+from .report import report_router
+from .schemas import problem_responses, schema_ref
 
 router = APIRouter(tags=["analysis"])
 
@@ -23,22 +24,15 @@ _BODY = {
 }
 
 
-async def loop(request: Request) -> Response:
-    dispatcher = await get_dispatcher(request)
-    return await dispatcher.answer("loop", await get_body(request, dispatcher), {})
-
-
-router.add_api_route(
+report_router(
     "/v1/loop",
-    loop,
-    methods=["POST"],
+    job="loop",
+    schema="LoopReport",
     summary="Closed loop over lossy sensor and actuator links",
     description="The exact mean-square verdict of the loop (Costa, Fragoso and Marques 2005, Thm 3.9), its "
-    "stationary cost and the critical arrival probability of each link.  Takes exactly the JSON of "
-    "`kfio loop FILE` and returns exactly its `--json` report.",
-    response_class=Response,
-    responses={**json_response("LoopReport", "The loop report"), **problem_responses(413, 415, 422, 503, 504)},
-    openapi_extra=_BODY,
+    "stationary cost and the critical arrival probability of each link.",
+    body=_BODY,
+    router=router,
 )
 
 
@@ -46,10 +40,7 @@ async def submit_loop_job(body: BodyDep, store: JobStoreDep) -> Response:
     from kfio.fit import load_trace_loop_request
 
     await validated(load_trace_loop_request, body, store.settings.limits())
-    job = store.submit("loop", body)
-    return Response(
-        store.document(job), status_code=202, media_type="application/json", headers={"Location": f"/v1/jobs/{job.id}"}
-    )
+    return accepted(store, store.submit("loop", body))
 
 
 router.add_api_route(

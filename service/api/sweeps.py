@@ -19,7 +19,7 @@ from kfio.model import option_fields
 from kfio.sweep import MAX_AXIS_VALUES
 
 from .deps import BodyDep
-from .jobs import STATUS_RESPONSE, JobStoreDep, validated
+from .jobs import STATUS_RESPONSE, JobStoreDep, accepted, validated
 from .schemas import option_schema, problem_responses
 
 if TYPE_CHECKING:
@@ -170,10 +170,7 @@ async def submit_sweep(body: BodyDep, store: JobStoreDep) -> Response:
     spec = await validated(_check_shape, body, settings.max_sweep_points)
     # the body may be JSON Lines of requests (as for `kfio sweep`): the store is given the options, not the text
     options = {} if spec.time_budget_s is None else {"time_budget_s": repr(spec.time_budget_s)}
-    job = store.submit("sweep", body, tree={"options": options})
-    return Response(
-        store.document(job), status_code=202, media_type="application/json", headers={"Location": f"/v1/jobs/{job.id}"}
-    )
+    return accepted(store, store.submit("sweep", body, tree={"options": options}))
 
 
 __all__ = ["router"]
