@@ -8,6 +8,7 @@ import sys
 from typing import TYPE_CHECKING, Any, Callable, TextIO
 
 from kfio.errors import BudgetExceeded, InvalidInput, MissingDependency, NumericalFailure
+from kfio.model import read_limited
 
 if TYPE_CHECKING:  # the analyzer is imported when a command runs, not for `kfio --help`
     from kfio import Budget, Request
@@ -23,17 +24,7 @@ MAX_REQUEST_BYTES = 1 << 20
 
 def read_request_text(path: str, max_bytes: int = MAX_REQUEST_BYTES, what: str = "request") -> bytes:
     """Read a request from ``path`` (``-`` for stdin), at most ``max_bytes`` (1 MiB)."""
-    try:
-        if path == "-":
-            data = sys.stdin.buffer.read(max_bytes + 1)
-        else:
-            with open(path, "rb") as fh:
-                data = fh.read(max_bytes + 1)
-    except OSError as exc:
-        raise InvalidInput("/", f"cannot read {path!r}: {exc.strerror}") from None
-    if len(data) > max_bytes:
-        raise InvalidInput("/", f"{what} is larger than {max_bytes} bytes")
-    return data
+    return read_limited(path, max_bytes, "/", f"{what} is larger than {max_bytes} bytes")
 
 
 #: The range of ``--time-budget`` in seconds, the same for every computing command.

@@ -5,6 +5,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from ..errors import InvalidInput
+from ..model import read_limited
 from ._trace import (
     DEFAULT_MODULUS,
     DEFAULT_WINDOW,
@@ -20,18 +21,7 @@ MAX_TRACE_BYTES = 20_000_000
 
 def read_trace_text(path: str, label: str = "TRACE") -> str:
     """The text of a trace file (``-``: standard input), refusing one over :data:`MAX_TRACE_BYTES`."""
-    import sys
-
-    try:
-        if path == "-":
-            data = sys.stdin.buffer.read(MAX_TRACE_BYTES + 1)
-        else:
-            with open(path, "rb") as fh:
-                data = fh.read(MAX_TRACE_BYTES + 1)
-    except OSError as exc:
-        raise InvalidInput(label, f"cannot read {path!r}: {exc.strerror}") from None
-    if len(data) > MAX_TRACE_BYTES:
-        raise InvalidInput(label, f"a trace file may hold at most {MAX_TRACE_BYTES} bytes")
+    data = read_limited(path, MAX_TRACE_BYTES, label, f"a trace file may hold at most {MAX_TRACE_BYTES} bytes")
     try:
         return data.decode("utf-8")
     except UnicodeDecodeError as exc:

@@ -38,6 +38,7 @@ from ._fields import (
     option_field,
     option_fields,
 )
+from ._files import read_limited
 from ._limits import DEFAULT_LIMITS, Limits
 from ._pointer import json_pointer, pointer_tokens
 from ._request import (
@@ -71,6 +72,7 @@ from ._types import (
 from ._types import System as SystemRecord
 
 __all__ = [
+    "read_limited",
     "Channel",
     "DECIMAL_PATTERN",
     "DEFAULT_LIMITS",

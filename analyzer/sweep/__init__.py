@@ -50,6 +50,7 @@ _LAZY = {
     "load_sweep": "._spec",
     "MAX_AXIS_VALUES": "._spec",
     "MAX_POINTS": "._spec",
+    "MAX_SWEEP_FILE_BYTES": "._api",
     "parse_sweep": "._spec",
     "point_at": "._spec",
     "points": "._spec",
@@ -71,7 +72,7 @@ _LAZY = {
 }
 
 if TYPE_CHECKING:
-    from ._api import sweep, sweep_spec
+    from ._api import MAX_SWEEP_FILE_BYTES, sweep, sweep_spec
     from ._boundary import exact_boundary
     from ._engine import SweepResult, SweepRow, in_index_order, iter_sweep, record, run_sweep, table_columns
     from ._evaluate import cache_stats, clear_caches, evaluate_point
@@ -104,6 +105,7 @@ __all__ = [
     "FORMATS",
     "MAX_AXIS_VALUES",
     "MAX_POINTS",
+    "MAX_SWEEP_FILE_BYTES",
     "RationalRange",
     "SweepPointInvalid",
     "SweepResult",

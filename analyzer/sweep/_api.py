@@ -11,11 +11,10 @@ from __future__ import annotations
 import dataclasses
 import os
 from collections.abc import Mapping
-from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal
 
 from ..errors import InvalidInput
-from ..model import budget_seconds, option_field, python_tree
+from ..model import budget_seconds, option_field, python_tree, read_limited
 from ._engine import Progress, SweepResult, run_sweep
 from ._spec import SweepSpec, load_sweep, parse_sweep
 
@@ -25,7 +24,7 @@ if TYPE_CHECKING:
 #: The largest sweep budget in seconds, as ``options.time_budget_s`` of a sweep file.
 MAX_SWEEP_BUDGET_S = int(option_field("sweep", "time_budget_s").maximum or 0)
 
-#: The largest sweep file read from a path.
+#: The largest sweep file read from a path (larger than one request: JSON Lines of plant variants).
 MAX_SWEEP_FILE_BYTES = 64 << 20
 
 ENGINES = ("auto", "dask", "serial")
@@ -38,15 +37,10 @@ def sweep_spec(spec: SweepSpec | Mapping[str, Any] | str | os.PathLike[str]) -> 
     if isinstance(spec, Mapping):
         return parse_sweep(python_tree(dict(spec)))
     if isinstance(spec, (str, os.PathLike)):
-        path = Path(spec)
-        try:
-            with path.open("rb") as fh:
-                data = fh.read(MAX_SWEEP_FILE_BYTES + 1)
-        except OSError as exc:
-            raise InvalidInput("spec", f"cannot read the sweep file {str(path)!r}: {exc.strerror}") from None
-        if len(data) > MAX_SWEEP_FILE_BYTES:
-            raise InvalidInput("spec", f"the sweep file is larger than {MAX_SWEEP_FILE_BYTES >> 20} MiB")
-        return load_sweep(data)
+        too_large = f"the sweep file is larger than {MAX_SWEEP_FILE_BYTES >> 20} MiB"
+        return load_sweep(
+            read_limited(spec, MAX_SWEEP_FILE_BYTES, "spec", too_large, name="the sweep file ", stdin=False)
+        )
     raise InvalidInput(
         "spec", f"expected a sweep file's path, its parsed JSON object or a SweepSpec; got a {type(spec).__name__}"
     )

@@ -21,9 +21,6 @@ from typing import Any
 from .. import exitcodes
 from ..io import add_time_budget_argument, read_request_text, run_guarded, time_budget
 
-#: A sweep file may be larger than one request (JSON Lines of plant variants).
-MAX_SWEEP_BYTES = 64 << 20
-
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
@@ -95,6 +92,7 @@ def _run(args: argparse.Namespace) -> int:
 
         from kfio.errors import InvalidInput
         from kfio.sweep import (
+            MAX_SWEEP_FILE_BYTES,
             SweepResult,
             TableWriter,
             format_of,
@@ -115,7 +113,7 @@ def _run(args: argparse.Namespace) -> int:
         if args.plot and not args.plot.lower().endswith(".png"):
             raise InvalidInput("--plot", "the plot's file name must end in .png")
         seconds = time_budget(args)
-        spec = load_sweep(read_request_text(args.file, MAX_SWEEP_BYTES, "a sweep file"))
+        spec = load_sweep(read_request_text(args.file, MAX_SWEEP_FILE_BYTES, "a sweep file"))
         if seconds is not None:
             spec = dataclasses.replace(spec, time_budget_s=seconds)
         columns = table_columns(spec)
