@@ -8,7 +8,7 @@ import sys
 from typing import TYPE_CHECKING, Any, Callable, TextIO
 
 from kfio.errors import BudgetExceeded, InvalidInput, MissingDependency, NumericalFailure
-from kfio.model import read_limited
+from kfio.model import MAX_RUN_BUDGET_S, MIN_TIME_BUDGET_S, read_limited
 
 if TYPE_CHECKING:  # the analyzer is imported when a command runs, not for `kfio --help`
     from kfio import Budget, Request
@@ -28,7 +28,7 @@ def read_request_text(path: str, max_bytes: int = MAX_REQUEST_BYTES, what: str =
 
 
 #: The range of ``--time-budget`` in seconds, the same for every computing command.
-TIME_BUDGET_RANGE = (0.01, 86400)
+TIME_BUDGET_RANGE = (float(MIN_TIME_BUDGET_S), float(MAX_RUN_BUDGET_S))
 
 
 def add_time_budget_argument(p: argparse.ArgumentParser, what: str) -> None:

@@ -25,7 +25,7 @@ import sys
 from pathlib import Path
 from typing import Any, Sequence
 
-from kfio.model import MAX_CHECK_BUDGET_S, MAX_CHECK_ENTRIES
+from kfio.model import MAX_CHECK_ENTRIES, MAX_RUN_BUDGET_S
 
 DIALECT = "https://json-schema.org/draft/2020-12/schema"
 PACKAGE_DIR = Path(__file__).resolve().parent / "schemas"
@@ -81,7 +81,7 @@ def _check_components() -> dict[str, dict[str, Any]]:
         },
     }
     assert set(requirements) == set(COMMAND_OF) and set(requirements["outage"]["properties"]) == set(OUTAGE_KEYS)
-    budget = exact_number(f"seconds, in (0, {MAX_CHECK_BUDGET_S}]", exclusiveMinimum=0, maximum=MAX_CHECK_BUDGET_S)
+    budget = exact_number(f"seconds, in (0, {MAX_RUN_BUDGET_S}]", exclusiveMinimum=0, maximum=MAX_RUN_BUDGET_S)
     entry: dict[str, Any] = {
         "type": "object",
         "description": "One plant and channel and the requirements on them, or one loop request file and the "

@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Literal
 from pydantic import Field, SecretStr
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
-from kfio.model import Limits
+from kfio.model import MAX_RUN_BUDGET_S, Limits
 
 if TYPE_CHECKING:
     from kfio.simulation import SimulationLimits
@@ -149,7 +149,7 @@ class Settings(BaseSettings):
     max_outputs: int = Field(Limits.max_outputs, ge=1, le=400)
     max_sensors: int = Field(Limits.max_sensors, ge=1, le=64)
     job_workers: int = Field(1, ge=1, le=64)
-    job_time_budget_s: float = Field(3600.0, gt=0, le=86400)
+    job_time_budget_s: float = Field(3600.0, gt=0, le=MAX_RUN_BUDGET_S)
     max_jobs: int = Field(16, ge=0, le=100_000)
     job_retention: int = Field(64, ge=1, le=100_000)
     job_retention_bytes: int = Field(256 << 20, ge=0, le=1 << 40)

@@ -16,7 +16,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..errors import InvalidInput
-from ..model import MAX_CHECK_BUDGET_S, budget_seconds
+from ..model import MAX_RUN_BUDGET_S, budget_seconds
 from ._run import CheckResult, run_check
 from ._spec import CheckSpec, load_check, parse_check
 
@@ -96,7 +96,7 @@ def check(
     for name, value in (("workers", workers), ("memory_bytes", memory_bytes)):
         if value is not None and (isinstance(value, bool) or not isinstance(value, int) or value < 1):
             raise InvalidInput(name, f"expected a positive integer; got {value!r}")
-    seconds = budget_seconds(budget, MAX_CHECK_BUDGET_S)
+    seconds = budget_seconds(budget, MAX_RUN_BUDGET_S)
     dirs = _directories(allow_outside)
     parsed = _spec(spec, base, dirs)
     return run_check(parsed, workers=workers, time_budget_s=seconds, memory_bytes=memory_bytes, progress=progress)

@@ -63,8 +63,8 @@ from typing import Any, Mapping
 from ..errors import InvalidInput
 from ..model import (
     DEFAULT_LIMITS,
-    MAX_CHECK_BUDGET_S,
     MAX_CHECK_ENTRIES,
+    MAX_RUN_BUDGET_S,
     fraction_text,
     json_pointer,
     load_json,
@@ -321,8 +321,8 @@ def _budget(opts: Mapping[str, Any], key: str, default: float) -> float:
     if key not in opts:
         return default
     value = parse_number(opts[key], f"/options/{key}")
-    if not 0 < value <= MAX_CHECK_BUDGET_S:
-        raise InvalidInput(f"/options/{key}", f"must be in (0, {MAX_CHECK_BUDGET_S}] seconds")
+    if not 0 < value <= MAX_RUN_BUDGET_S:
+        raise InvalidInput(f"/options/{key}", f"must be in (0, {MAX_RUN_BUDGET_S}] seconds")
     return float(value)
 
 

@@ -26,9 +26,9 @@ from ._exact import (
     values_withheld,
 )
 from ._fields import (
-    MAX_CHECK_BUDGET_S,
     MAX_CHECK_ENTRIES,
     MAX_NUMBER_TEXT,
+    MAX_RUN_BUDGET_S,
     MAX_SENSOR_NAME,
     OPTION_FIELDS,
     OPTION_GROUP_NAMES,
@@ -77,7 +77,7 @@ __all__ = [
     "DECIMAL_PATTERN",
     "DEFAULT_LIMITS",
     "Limits",
-    "MAX_CHECK_BUDGET_S",
+    "MAX_RUN_BUDGET_S",
     "MAX_CHECK_ENTRIES",
     "MAX_NUMBER_TEXT",
     "MAX_SENSOR_NAME",

@@ -93,8 +93,9 @@ MAX_SENSOR_NAME = 64
 #: Most entries of a check file (``kfio check``).
 MAX_CHECK_ENTRIES = 1000
 
-#: Longest budget of a whole check file (its ``time_budget_s`` and ``point_budget_s``), in seconds.
-MAX_CHECK_BUDGET_S = 86400
+#: Longest budget of one whole run, in seconds (a day): a check file's ``time_budget_s`` and ``point_budget_s``,
+#: a sweep file's ``time_budget_s``, a command's ``--time-budget`` and a service job.
+MAX_RUN_BUDGET_S = 86400
 
 OPTION_FIELDS: tuple[OptionField, ...] = (
     OptionField(
@@ -321,7 +322,7 @@ OPTION_FIELDS: tuple[OptionField, ...] = (
         "number",
         "Seconds the whole sweep may take (an exact number); the points not reached are marked budget-exceeded.",
         minimum=Fraction(1, 100),
-        maximum=86400,
+        maximum=MAX_RUN_BUDGET_S,
         max_text=40,
     ),
     OptionField("sweep", "chunk_size", "integer", "Points per task sent to a worker.", minimum=1, maximum=100_000),

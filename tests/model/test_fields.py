@@ -22,9 +22,9 @@ from kfio.errors import InvalidInput
 from kfio.loop import load_loop_request
 from kfio.model import (
     DEFAULT_LIMITS,
-    MAX_CHECK_BUDGET_S,
     MAX_CHECK_ENTRIES,
     MAX_NUMBER_TEXT,
+    MAX_RUN_BUDGET_S,
     OPTION_FIELDS,
     OPTION_GROUP_NAMES,
     OPTION_KEYS,
@@ -284,7 +284,7 @@ def test_the_published_size_limits_are_the_validators() -> None:
     check = _schema("check")
     assert check["properties"]["checks"]["maxItems"] == MAX_CHECK_ENTRIES
     budget = check["properties"]["options"]["properties"]["time_budget_s"]["anyOf"][0]
-    assert budget["maximum"] == MAX_CHECK_BUDGET_S
+    assert budget["maximum"] == MAX_RUN_BUDGET_S
 
 
 def test_the_published_limits_are_the_validators_edges() -> None:
