@@ -16,7 +16,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from ..errors import InvalidInput
-from ..model import MAX_RUN_BUDGET_S, budget_seconds
+from ..model import MAX_RUN_BUDGET_S, budget_seconds, positive_ints
 from ._run import CheckResult, run_check
 from ._spec import CheckSpec, load_check, parse_check
 
@@ -93,9 +93,7 @@ def check(
     >>> result.status, result.outcomes[0].exact_of("measured"), result.outcomes[0].exact_of("required")
     ('pass', Fraction(9, 25), Fraction(2, 5))
     """
-    for name, value in (("workers", workers), ("memory_bytes", memory_bytes)):
-        if value is not None and (isinstance(value, bool) or not isinstance(value, int) or value < 1):
-            raise InvalidInput(name, f"expected a positive integer; got {value!r}")
+    positive_ints(workers=workers, memory_bytes=memory_bytes)
     seconds = budget_seconds(budget, MAX_RUN_BUDGET_S)
     dirs = _directories(allow_outside)
     parsed = _spec(spec, base, dirs)

@@ -8,7 +8,7 @@ is given); the validator's own frozen record of a plant, the type of
 """
 
 from ._channels import bernoulli, channel_tree, gilbert_elliott, markov, per_sensor
-from ._coerce import Route, budget_seconds, json_ready, python_tree, renamed
+from ._coerce import Route, budget_seconds, json_ready, positive_ints, python_tree, renamed
 from ._exact import (
     DECIMAL_PATTERN,
     MAX_EXACT_DIGITS,
@@ -72,6 +72,7 @@ from ._types import (
 from ._types import System as SystemRecord
 
 __all__ = [
+    "positive_ints",
     "read_limited",
     "Channel",
     "DECIMAL_PATTERN",

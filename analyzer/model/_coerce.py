@@ -125,6 +125,20 @@ def renamed(exc: InvalidInput, routes: Sequence[Route]) -> InvalidInput:
     return exc
 
 
+def positive_ints(**arguments: Any) -> None:
+    """Refuse any keyword argument that is given (not ``None``) and is not a positive ``int``, naming it.
+
+    >>> positive_ints(workers=2, chunk_size=None)
+    >>> positive_ints(workers=0)
+    Traceback (most recent call last):
+    ...
+    kfio.errors.InvalidInput: workers: expected a positive integer; got 0
+    """
+    for name, value in arguments.items():
+        if value is not None and (isinstance(value, bool) or not isinstance(value, int) or value < 1):
+            raise InvalidInput(name, f"expected a positive integer; got {value!r}")
+
+
 def budget_seconds(budget: Any, upper: float = 3600, field: str = "budget") -> float | None:
     """The wall-clock seconds of a ``budget`` argument: ``None`` when none is given or it has no limit.
 

@@ -14,7 +14,7 @@ from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any, Literal
 
 from ..errors import InvalidInput
-from ..model import budget_seconds, option_field, python_tree, read_limited
+from ..model import budget_seconds, option_field, positive_ints, python_tree, read_limited
 from ._engine import Progress, SweepResult, run_sweep
 from ._spec import SweepSpec, load_sweep, parse_sweep
 
@@ -111,9 +111,7 @@ def sweep(
     """
     if engine not in ENGINES:
         raise InvalidInput("engine", f"expected one of {', '.join(map(repr, ENGINES))}; got {engine!r}")
-    for name, value in (("workers", workers), ("chunk_size", chunk_size)):
-        if value is not None and (isinstance(value, bool) or not isinstance(value, int) or value < 1):
-            raise InvalidInput(name, f"expected a positive integer; got {value!r}")
+    positive_ints(workers=workers, chunk_size=chunk_size)
     if scheduler is not None and not isinstance(scheduler, str):
         raise InvalidInput("scheduler", f"expected an address such as 'tcp://127.0.0.1:8786'; got {scheduler!r}")
     seconds = budget_seconds(budget, MAX_SWEEP_BUDGET_S)
